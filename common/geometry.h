@@ -1,0 +1,49 @@
+/* Device geometry and the volume-space conventions of DESIGN.md section 3.
+ *
+ * Volume space: right-handed, y up along the rotation axis, unit = display
+ * radius. Image k of N is shown at theta_k = 2*pi*k/N (from +x towards +z);
+ * its in-plane horizontal direction is d_k = (cos theta_k, 0, sin theta_k). */
+#ifndef SPINDLE_GEOMETRY_H
+#define SPINDLE_GEOMETRY_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct geometry {
+	uint32_t width;          /* W, pixels per image row */
+	uint32_t height;         /* H, rows per image */
+	uint32_t images_per_rev; /* N, images shown per revolution */
+	bool mirrored;           /* image k + N/2 is image k mirrored (N even) */
+	float half_height;       /* h, half height / radius */
+	float rpm;               /* nominal rotor speed */
+};
+
+/* Named profiles ("perspecta", "small"). Returns 0, or -ENOENT. */
+int geometry_from_profile(const char *name, struct geometry *out);
+
+/* Checks a geometry for sanity (sizes in range, N even when mirrored).
+ * Returns 0 or -EINVAL. */
+int geometry_validate(const struct geometry *g);
+
+/* Images in one volume: N/2 when mirrored, else N. */
+uint32_t geometry_images_per_volume(const struct geometry *g);
+
+/* Angle of image k and its in-plane direction. */
+double geometry_image_angle(const struct geometry *g, uint32_t k);
+
+/* Column of signed in-plane coordinate s, row of height y, both clamped. */
+uint32_t geometry_column(const struct geometry *g, double s);
+uint32_t geometry_row(const struct geometry *g, double y);
+
+/* Image index lighting azimuth phi = atan2(z, x) with its s >= 0 lobe, and
+ * with its s < 0 lobe (round((phi - pi) / D) mod N). */
+uint32_t geometry_image_of_azimuth(const struct geometry *g, double phi);
+uint32_t geometry_image_of_azimuth_back(const struct geometry *g, double phi);
+
+/* Bytes of one bit plane row, ceil(W/8). */
+static inline uint32_t geometry_row_bytes(const struct geometry *g)
+{
+	return (g->width + 7) / 8;
+}
+
+#endif

@@ -1,0 +1,183 @@
+#include "volume.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct volume *volume_create(const struct geometry *geom)
+{
+	if (geometry_validate(geom) < 0) {
+		errno = EINVAL;
+		return NULL;
+	}
+	struct volume *vol = calloc(1, sizeof(*vol));
+	if (!vol)
+		return NULL;
+	vol->geom = *geom;
+	vol->image_count = geometry_images_per_volume(geom);
+	vol->tiles_x = (geom->width + VOLUME_TILE - 1) / VOLUME_TILE;
+	vol->tiles_y = (geom->height + VOLUME_TILE - 1) / VOLUME_TILE;
+	vol->mask_bytes = (vol->tiles_x * vol->tiles_y + 7) / 8;
+	vol->images = calloc(vol->image_count, sizeof(*vol->images));
+	uint8_t *masks = calloc(vol->image_count, vol->mask_bytes);
+	if (!vol->images || !masks) {
+		free(masks);
+		free(vol->images);
+		free(vol);
+		errno = ENOMEM;
+		return NULL;
+	}
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		vol->images[k].mask = masks + (size_t)k * vol->mask_bytes;
+	return vol;
+}
+
+void volume_destroy(struct volume *vol)
+{
+	if (!vol)
+		return;
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		free(vol->images[k].tiles);
+	if (vol->image_count)
+		free(vol->images[0].mask);
+	free(vol->images);
+	free(vol);
+}
+
+void volume_clear(struct volume *vol)
+{
+	memset(vol->images[0].mask, 0, (size_t)vol->image_count * vol->mask_bytes);
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		vol->images[k].tile_count = 0;
+	vol->seq = 0;
+	vol->shown_ns = 0;
+}
+
+int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n)
+{
+	struct volume_image *img = &vol->images[k];
+	if (n <= img->tile_cap)
+		return 0;
+	uint32_t cap = img->tile_cap ? img->tile_cap : 4;
+	while (cap < n)
+		cap *= 2;
+	if (cap > volume_tiles_per_image(vol))
+		cap = volume_tiles_per_image(vol);
+	uint8_t *tiles = realloc(img->tiles, (size_t)cap * VOLUME_TILE_BYTES);
+	if (!tiles)
+		return -ENOMEM;
+	img->tiles = tiles;
+	img->tile_cap = cap;
+	return 0;
+}
+
+static int all_zero(const uint8_t *p, size_t n)
+{
+	for (size_t i = 0; i < n; i++)
+		if (p[i])
+			return 0;
+	return 1;
+}
+
+int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *data)
+{
+	if (k >= vol->image_count || t >= volume_tiles_per_image(vol))
+		return -EINVAL;
+	struct volume_image *img = &vol->images[k];
+	/* Order check: no tile at or above t may be present yet. */
+	for (uint32_t b = t / 8; b < vol->mask_bytes; b++) {
+		uint8_t m = img->mask[b];
+		if (b == t / 8)
+			m &= (uint8_t)(0xff << (t % 8));
+		if (m)
+			return -EINVAL;
+	}
+	if (all_zero(data, VOLUME_TILE_BYTES))
+		return 0;
+	int r = volume_image_reserve(vol, k, img->tile_count + 1);
+	if (r < 0)
+		return r;
+	memcpy(img->tiles + (size_t)img->tile_count * VOLUME_TILE_BYTES, data, VOLUME_TILE_BYTES);
+	img->tile_count++;
+	img->mask[t / 8] |= (uint8_t)(1u << (t % 8));
+	return 0;
+}
+
+int volume_copy(struct volume *dst, const struct volume *src)
+{
+	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes)
+		return -EINVAL;
+	for (uint32_t k = 0; k < src->image_count; k++) {
+		const struct volume_image *s = &src->images[k];
+		struct volume_image *d = &dst->images[k];
+		int r = volume_image_reserve(dst, k, s->tile_count);
+		if (r < 0)
+			return r;
+		memcpy(d->mask, s->mask, src->mask_bytes);
+		if (s->tile_count)
+			memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
+		d->tile_count = s->tile_count;
+	}
+	dst->seq = src->seq;
+	dst->shown_ns = src->shown_ns;
+	return 0;
+}
+
+size_t volume_dense_image_bytes(const struct volume *vol)
+{
+	return 3 * (size_t)vol->geom.height * geometry_row_bytes(&vol->geom);
+}
+
+void volume_image_to_dense(const struct volume *vol, uint32_t k, uint8_t *out)
+{
+	const struct volume_image *img = &vol->images[k];
+	uint32_t rb = geometry_row_bytes(&vol->geom);
+	uint32_t w = vol->geom.width, h = vol->geom.height;
+	size_t plane = (size_t)h * rb;
+	memset(out, 0, 3 * plane);
+	const uint8_t *tile = img->tiles;
+	for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
+		if (!volume_tile_present(img, t))
+			continue;
+		uint32_t x0 = (t % vol->tiles_x) * VOLUME_TILE, y0 = (t / vol->tiles_x) * VOLUME_TILE;
+		for (int c = 0; c < 3; c++) {
+			const uint8_t *src = tile + c * VOLUME_TILE_PLANE_BYTES;
+			for (uint32_t r = 0; r < VOLUME_TILE && y0 + r < h; r++) {
+				uint8_t *dst = out + c * plane + (size_t)(y0 + r) * rb + x0 / 8;
+				uint32_t n = (w - x0 + 7) / 8;
+				if (n > 4)
+					n = 4;
+				memcpy(dst, src + r * 4, n);
+			}
+		}
+		tile += VOLUME_TILE_BYTES;
+	}
+}
+
+int volume_pixel(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int c)
+{
+	const struct volume_image *img = &vol->images[k];
+	uint32_t t = (v / VOLUME_TILE) * vol->tiles_x + u / VOLUME_TILE;
+	if (!volume_tile_present(img, t))
+		return 0;
+	uint32_t idx = 0;
+	for (uint32_t b = 0; b < t / 8; b++)
+		idx += (uint32_t)__builtin_popcount(img->mask[b]);
+	idx += (uint32_t)__builtin_popcount(img->mask[t / 8] & ((1u << (t % 8)) - 1));
+	const uint8_t *plane = img->tiles + (size_t)idx * VOLUME_TILE_BYTES + c * VOLUME_TILE_PLANE_BYTES;
+	uint32_t x = u % VOLUME_TILE, y = v % VOLUME_TILE;
+	return (plane[y * 4 + x / 8] >> (7 - x % 8)) & 1;
+}
+
+uint64_t volume_tile_count(const struct volume *vol)
+{
+	uint64_t n = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		n += vol->images[k].tile_count;
+	return n;
+}
+
+uint64_t volume_sparse_bytes(const struct volume *vol)
+{
+	return (uint64_t)vol->image_count * vol->mask_bytes + volume_tile_count(vol) * VOLUME_TILE_BYTES;
+}

@@ -1,0 +1,84 @@
+/* A packed, tile-sparse volume: what renderers produce, the projector wire
+ * codec carries, and capture turns into an .svol file.
+ *
+ * Each image is cut into 32x32-pixel tiles, tiles_x = ceil(W/32) across and
+ * tiles_y = ceil(H/32) down, numbered t = ty * tiles_x + tx. A tile holds the
+ * three bit planes R, G, B in that order, each 32 rows of 4 bytes, most
+ * significant bit = leftmost pixel (the dense convention of DESIGN.md, cut
+ * into tiles). Pixels past W or H in edge tiles are always 0. Only non-empty
+ * tiles are stored, in increasing t; the occupancy mask has bit t set
+ * (byte t / 8, bit t % 8) for each stored tile. */
+#ifndef SPINDLE_VOLUME_H
+#define SPINDLE_VOLUME_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "geometry.h"
+
+#define VOLUME_TILE 32
+#define VOLUME_TILE_PLANE_BYTES (VOLUME_TILE * VOLUME_TILE / 8) /* 128 */
+#define VOLUME_TILE_BYTES (3 * VOLUME_TILE_PLANE_BYTES)          /* 384 */
+
+struct volume_image {
+	uint32_t tile_count; /* stored (non-empty) tiles */
+	uint32_t tile_cap;   /* tiles the storage has room for */
+	uint8_t *mask;       /* mask_bytes, owned by the volume */
+	uint8_t *tiles;      /* tile_count * VOLUME_TILE_BYTES, owned */
+};
+
+struct volume {
+	struct geometry geom;
+	uint32_t image_count; /* images per volume (N/2 when mirrored) */
+	uint32_t tiles_x, tiles_y;
+	uint32_t mask_bytes;  /* ceil(tiles_x * tiles_y / 8) */
+	uint64_t seq;         /* volume sequence number */
+	uint64_t shown_ns;    /* CLOCK_MONOTONIC when first shown, 0 if never */
+	struct volume_image *images;
+};
+
+/* Creates an empty volume (every image has no tiles). NULL + errno on
+ * failure. */
+struct volume *volume_create(const struct geometry *geom);
+/* Accepts NULL. */
+void volume_destroy(struct volume *vol);
+
+/* Empties every image; keeps storage. */
+void volume_clear(struct volume *vol);
+
+static inline uint32_t volume_tiles_per_image(const struct volume *vol)
+{
+	return vol->tiles_x * vol->tiles_y;
+}
+
+static inline int volume_tile_present(const struct volume_image *img, uint32_t t)
+{
+	return (img->mask[t / 8] >> (t % 8)) & 1;
+}
+
+/* Makes room for at least n tiles in image k. Returns 0 or -ENOMEM. */
+int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n);
+
+/* Appends tile t (which must be greater than every stored tile) to image k,
+ * copying VOLUME_TILE_BYTES from data, unless those bytes are all zero.
+ * Returns 0, or -ENOMEM, or -EINVAL if t is out of range or out of order. */
+int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *data);
+
+/* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
+int volume_copy(struct volume *dst, const struct volume *src);
+
+/* Bytes of image k if stored dense: 3 planes of H rows of ceil(W/8). */
+size_t volume_dense_image_bytes(const struct volume *vol);
+
+/* Writes image k dense (plane R, G, B; H rows of ceil(W/8) bytes; MSB =
+ * leftmost) into out, which has volume_dense_image_bytes() bytes. */
+void volume_image_to_dense(const struct volume *vol, uint32_t k, uint8_t *out);
+
+/* Value (0/1) of pixel (u, v) of channel c (0 R, 1 G, 2 B) of image k. */
+int volume_pixel(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int c);
+
+/* Total stored tiles, and the sparse payload bytes (masks + tiles). */
+uint64_t volume_tile_count(const struct volume *vol);
+uint64_t volume_sparse_bytes(const struct volume *vol);
+
+#endif

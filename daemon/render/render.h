@@ -1,0 +1,55 @@
+/* Renderers: take a scene snapshot, produce a packed tile-sparse volume.
+ *
+ * Every renderer lights, for each image k of the volume, the voxels of
+ * DESIGN.md section 3: both lobes of image k's bow tie, colours combined per
+ * channel by MAX, then ordered-dithered to 1 bit per channel with a threshold
+ * phase that depends on k only, and packed. Image k + N/2 of a mirrored device
+ * is never rendered: the hardware mirrors image k. */
+#ifndef SPINDLE_RENDER_H
+#define SPINDLE_RENDER_H
+
+#include "geometry.h"
+#include "scene.h"
+#include "volume.h"
+
+struct renderer;
+
+struct renderer_impl {
+	const char *name;
+	/* Renders scene into out (same geometry as the renderer; out is
+	 * cleared first). Returns 0 or negative errno; out is then unusable. */
+	int (*render)(struct renderer *r, const struct scene *scene, struct volume *out);
+	void (*destroy)(struct renderer *r);
+};
+
+/* Base struct, embedded first in each implementation. */
+struct renderer {
+	const struct renderer_impl *impl;
+	struct geometry geom;
+};
+
+/* The exact CPU sectioning renderer, using up to threads worker threads
+ * (0 = one per core). NULL + errno on failure. */
+struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads);
+
+/* Picks a renderer by name ("cpu", "auto"). NULL + errno (ENOENT: unknown or
+ * not built) on failure. */
+struct renderer *render_create(const char *name, const struct geometry *geom);
+
+static inline int render_volume(struct renderer *r, const struct scene *s, struct volume *out)
+{
+	return r->impl->render(r, s, out);
+}
+
+/* Accepts NULL. */
+static inline void render_destroy(struct renderer *r)
+{
+	if (r)
+		r->impl->destroy(r);
+}
+
+/* The ordered-dither threshold (0..254) of pixel (u, v) in image k: a pixel
+ * of channel value c is lit iff c > threshold. 0 is never lit, 255 always. */
+uint8_t render_dither_threshold(uint32_t k, uint32_t u, uint32_t v);
+
+#endif

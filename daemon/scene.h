@@ -1,0 +1,28 @@
+/* An immutable snapshot of everything committed by every client, taken once
+ * per volume: what renderers draw. Flattened to draws in model space with
+ * their final model -> volume transform; renderers transform vertices. */
+#ifndef SPINDLE_SCENE_H
+#define SPINDLE_SCENE_H
+
+#include <stdint.h>
+
+enum scene_prim {
+	SCENE_POINTS = 0,    /* count points */
+	SCENE_LINES = 1,     /* count / 2 segments, vertices 2i, 2i+1 */
+	SCENE_TRIANGLES = 2, /* count / 3 triangles, vertices 3i..3i+2 */
+};
+
+struct scene_draw {
+	enum scene_prim prim;
+	uint32_t count;        /* vertices; a multiple of 2 (lines) or 3 (triangles) */
+	const float *xyz;      /* count * 3 floats, immutable while the scene lives */
+	float transform[16];   /* column-major 4x4, model -> volume space (affine) */
+	uint8_t rgb[3];        /* colour, alpha already applied (emissive) */
+};
+
+struct scene {
+	uint32_t draw_count;
+	const struct scene_draw *draws;
+};
+
+#endif

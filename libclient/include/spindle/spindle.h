@@ -1,0 +1,166 @@
+/* libspindle: the client library of the Spindle volumetric display daemon.
+ *
+ * A client connects to spindled, creates buffers (vertex data), display
+ * lists (retained drawing commands referring to buffers) and layers (a
+ * list's placement in the shared volume), and commits: everything set since
+ * the last commit shows together, from one volume on. Geometry conventions
+ * (volume space, y up along the rotation axis, unit = display radius) are
+ * those of Spindle's DESIGN.md and docs/protocol.md.
+ *
+ * Threading: a struct spindle and its objects are used from one thread at a
+ * time. Errors: functions returning int return 0 (or a count) on success and
+ * a negative errno on failure; constructors return NULL and set errno. Once
+ * the daemon has sent a fatal error or the connection broke, every call
+ * returns -EPIPE (constructors NULL with errno EPIPE) and
+ * spindle_get_error() tells why. The library never prints, unless a log
+ * handler is installed with spindle_set_log_handler(). */
+#ifndef SPINDLE_SPINDLE_H
+#define SPINDLE_SPINDLE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* The protocol version this library speaks at most. */
+#define SPINDLE_PROTOCOL_VERSION 1
+
+/* Default socket path, used when neither a path nor SPINDLE_SOCKET is given. */
+#define SPINDLE_DEFAULT_SOCKET "/run/spindle/spindle.sock"
+
+struct spindle;
+struct spindle_buffer;
+struct spindle_list;
+struct spindle_layer;
+
+/* The display device, as the daemon reports it at connection. */
+struct spindle_device_info {
+	uint32_t width;          /* pixels per image row (W) */
+	uint32_t height;         /* rows per image (H) */
+	uint32_t images_per_rev; /* images shown per revolution (N) */
+	bool mirrored;           /* volumes hold N/2 images */
+	float half_height;       /* h: the volume is x^2+z^2 <= 1, |y| <= h */
+	float rpm;               /* nominal rotor speed */
+	char name[64];           /* device description, NUL-terminated */
+};
+
+/* Daemon and device state (spindle_get_status()). */
+struct spindle_status {
+	float rpm;              /* measured rotor speed, 0 when not turning */
+	bool locked;            /* sync estimator locked to the rotor */
+	bool blanked;           /* projector dark */
+	bool projector_present;
+	uint64_t volumes_shown; /* volumes shown since the daemon started */
+	uint32_t clients;       /* connected clients, this one included */
+	uint64_t underruns;     /* volumes that missed their revolution */
+};
+
+/* When a committed state was first shown. */
+struct spindle_frame {
+	uint64_t volume_seq; /* sequence number of the first volume showing it */
+	uint64_t time_ns;    /* CLOCK_MONOTONIC time that volume was first shown */
+};
+
+/* Connects to the daemon at path; NULL path means $SPINDLE_SOCKET, else
+ * SPINDLE_DEFAULT_SOCKET. Performs the version handshake and waits for the
+ * device info. Returns NULL with errno set on failure (EPROTO: the daemon
+ * speaks no common version). The caller owns the result. */
+struct spindle *spindle_connect(const char *path);
+
+/* Closes the connection and frees every object made with it. Accepts NULL. */
+void spindle_disconnect(struct spindle *sp);
+
+/* Log handler for diagnostics (the library is silent without one). */
+typedef void (*spindle_log_func)(void *data, const char *message);
+void spindle_set_log_handler(struct spindle *sp, spindle_log_func func, void *data);
+
+/* The negotiated protocol version. */
+uint32_t spindle_get_version(struct spindle *sp);
+
+/* Device info; the pointer stays valid until spindle_disconnect(). */
+const struct spindle_device_info *spindle_get_device_info(struct spindle *sp);
+
+/* For event loops: the socket fd (owned by the library), to poll for
+ * POLLIN; spindle_dispatch() reads and handles whatever events are
+ * available without blocking (returns events handled, or -errno);
+ * spindle_flush() writes queued requests (0, -EAGAIN if the socket is full:
+ * poll for POLLOUT and call again, or -errno). */
+int spindle_get_fd(struct spindle *sp);
+int spindle_dispatch(struct spindle *sp);
+int spindle_flush(struct spindle *sp);
+
+/* Blocks until the daemon has handled every request sent so far, handling
+ * events on the way. 0 or -errno. */
+int spindle_roundtrip(struct spindle *sp);
+
+/* Why the connection failed: the daemon's error message, or a local one;
+ * NULL while it is healthy. Owned by the library. */
+const char *spindle_get_error(struct spindle *sp);
+
+/* A buffer of vertex data: a copy of size bytes from data, in a sealed
+ * memfd passed to the daemon. Vertices are 3 float32 (x, y, z). The caller
+ * owns the result; destroy it when no list refers to it any more (lists
+ * keep their own copy of what they drew from it). */
+struct spindle_buffer *spindle_buffer_create(struct spindle *sp, const void *data, size_t size);
+void spindle_buffer_destroy(struct spindle_buffer *buf);
+
+/* A display list: a retained command stream. Commands append; clear
+ * empties it. Changes show at the next spindle_commit(). */
+struct spindle_list *spindle_list_create(struct spindle *sp);
+void spindle_list_destroy(struct spindle_list *list);
+int spindle_list_clear(struct spindle_list *list);
+/* Colour of the primitives that follow (default opaque white). Emissive:
+ * alpha scales intensity. */
+int spindle_list_set_color(struct spindle_list *list, uint8_t r, uint8_t g, uint8_t b, uint8_t a);
+/* Transform of the primitives that follow: a column-major 4x4 affine
+ * matrix (model -> layer space); default identity. */
+int spindle_list_set_transform(struct spindle_list *list, const float m[16]);
+/* Draws count vertices from buf starting at byte offset, each stride
+ * bytes apart (0 = tightly packed, 12): count points, count/2 line
+ * segments, count/3 triangles. */
+int spindle_list_points(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
+			uint32_t count, uint32_t stride);
+int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
+		       uint32_t count, uint32_t stride);
+int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
+			   uint32_t count, uint32_t stride);
+
+/* A layer: shows a list in the shared volume. New layers are visible, with
+ * no list and the identity transform. */
+struct spindle_layer *spindle_layer_create(struct spindle *sp);
+void spindle_layer_destroy(struct spindle_layer *layer);
+/* NULL list shows nothing. */
+int spindle_layer_set_list(struct spindle_layer *layer, struct spindle_list *list);
+int spindle_layer_set_transform(struct spindle_layer *layer, const float m[16]);
+int spindle_layer_set_visible(struct spindle_layer *layer, bool visible);
+
+/* Frame callback: func is called (from spindle_dispatch()) once the state
+ * of the next commit is first shown. Call before spindle_commit(). */
+typedef void (*spindle_frame_func)(void *data, const struct spindle_frame *frame);
+int spindle_request_frame(struct spindle *sp, spindle_frame_func func, void *data);
+
+/* Makes everything set since the last commit show together. Queues the
+ * request and flushes. 0 or -errno. */
+int spindle_commit(struct spindle *sp);
+
+/* Blocking helper: requests a frame, commits, and waits until it is shown.
+ * frame (may be NULL) receives when. 0 or -errno. */
+int spindle_commit_and_wait(struct spindle *sp, struct spindle_frame *frame);
+
+/* Blocking: the daemon's current status. 0 or -errno. */
+int spindle_get_status(struct spindle *sp, struct spindle_status *out);
+
+/* Blocking: the next volume shown, as an .svol file in a memfd. On success
+ * *fd (owned by the caller, positioned at 0) holds *size bytes. Capture is
+ * restricted by the daemon (root or the daemon's own user): -EACCES
+ * otherwise. 0 or -errno. */
+int spindle_capture(struct spindle *sp, int *fd, size_t *size);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
