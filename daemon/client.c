@@ -1,0 +1,321 @@
+/* Client connections: reading, dispatching to objects, the display
+ * object's requests, and disconnecting a client that misbehaves. */
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/socket.h>
+#include <systemd/sd-event.h>
+#include <unistd.h>
+
+#include "client.h"
+#include "log.h"
+#include "server.h"
+
+/* Events a client may leave unread before it is cut off. */
+#define CLIENT_MAX_OUT (1u << 20)
+/* Reads per wake-up, so that one busy client cannot starve the others. */
+#define CLIENT_READS_PER_WAKEUP 16
+
+int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fmt, ...)
+{
+	char text[256];
+	va_list ap;
+	if (c->dead)
+		return -EPROTO;
+	va_start(ap, fmt);
+	vsnprintf(text, sizeof(text), fmt, ap);
+	va_end(ap);
+	log_info("client %d (pid %d): protocol error on object %u: %s", proto_conn_get_fd(c->conn), (int)c->pid,
+		 object, text);
+	proto_ev_display_error(c->conn, 1, object, code, text);
+	proto_conn_flush(c->conn);
+	c->dead = true;
+	server_reap_later(c->server);
+	return -EPROTO;
+}
+
+void client_flush(struct client *c)
+{
+	if (c->dead)
+		return;
+	int r = proto_conn_flush(c->conn);
+	if (r == -EAGAIN) {
+		sd_event_source_set_io_events(c->source, EPOLLIN | EPOLLOUT);
+	} else if (r < 0) {
+		log_debug("client %d: write failed: %s", proto_conn_get_fd(c->conn), strerror(-r));
+		c->dead = true;
+		server_reap_later(c->server);
+	} else {
+		sd_event_source_set_io_events(c->source, EPOLLIN);
+	}
+}
+
+/* After queueing an event: a client whose queue overflowed is cut off. */
+static void client_sent(struct client *c, int r)
+{
+	if (r == -ENOBUFS) {
+		log_info("client %d (pid %d) does not read its events: disconnected", proto_conn_get_fd(c->conn),
+			 (int)c->pid);
+		c->dead = true;
+		server_reap_later(c->server);
+	}
+}
+
+/* ---- the display object ---- */
+
+static int display_hello(void *target, const struct proto_display_hello_args *a)
+{
+	struct client *c = target;
+	struct server *srv = c->server;
+	if (c->version)
+		return client_fail(c, 1, PROTO_ERR_VERSION, "hello sent twice");
+	if (a->version == 0)
+		return client_fail(c, 1, PROTO_ERR_VERSION, "no common protocol version");
+	c->version = a->version < PROTO_VERSION ? a->version : PROTO_VERSION;
+	const struct geometry *g = &srv->geom;
+	proto_ev_display_welcome(c->conn, 1, c->version);
+	int r = proto_ev_display_device(c->conn, 1, g->width, g->height, g->images_per_rev,
+					g->mirrored ? PROTO_DISPLAY_DEVICE_FLAGS_MIRRORED : 0, g->half_height, g->rpm,
+					srv->device_name);
+	client_sent(c, r);
+	return 0;
+}
+
+static int new_waiter(struct client *c, uint32_t id, enum proto_interface type, struct link *queue)
+{
+	struct waiter *w = calloc(1, sizeof(*w));
+	if (!w)
+		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+	link_init(&w->link);
+	int r = object_register(c, &w->base, id, type);
+	if (r < 0) {
+		free(w);
+		return r;
+	}
+	link_append(queue, &w->link);
+	return 0;
+}
+
+static int display_sync(void *target, const struct proto_display_sync_args *a)
+{
+	struct client *c = target;
+	if (a->callback < 2 || a->callback > 0xfeffffffu || idmap_get(&c->objects, a->callback))
+		return client_fail(c, 1, PROTO_ERR_OBJECT, "sync: bad new id %u", a->callback);
+	client_sent(c, proto_ev_callback_done(c->conn, a->callback, 0, 0));
+	return 0;
+}
+
+static int display_create_buffer(void *target, const struct proto_display_create_buffer_args *a)
+{
+	return objects_create_buffer(target, a->id, a->size, a->fd);
+}
+
+static int display_create_list(void *target, const struct proto_display_create_list_args *a)
+{
+	return objects_create_list(target, a->id);
+}
+
+static int display_create_layer(void *target, const struct proto_display_create_layer_args *a)
+{
+	return objects_create_layer(target, a->id);
+}
+
+static int display_frame(void *target, const struct proto_display_frame_args *a)
+{
+	struct client *c = target;
+	return new_waiter(c, a->callback, PROTO_IFACE_CALLBACK, &c->frames_pending);
+}
+
+static int display_commit(void *target)
+{
+	struct client *c = target;
+	struct waiter *w, *tmp;
+	c->commit_serial++;
+	link_for_each_safe(w, tmp, &c->frames_pending, link) {
+		w->commit_serial = c->commit_serial;
+		link_remove(&w->link);
+		link_append(&c->frames, &w->link);
+	}
+	bool changed = objects_commit(c);
+	if (!c->dead)
+		server_commit(c->server, changed);
+	return 0;
+}
+
+static int display_get_status(void *target)
+{
+	struct client *c = target;
+	struct server_status st;
+	server_get_status(c->server, &st);
+	client_sent(c, proto_ev_display_status(c->conn, 1, st.rpm, st.flags, st.volumes_shown, st.underruns,
+					       st.clients));
+	return 0;
+}
+
+static int display_capture(void *target, const struct proto_display_capture_args *a)
+{
+	struct client *c = target;
+	int r = new_waiter(c, a->id, PROTO_IFACE_CAPTURE, &c->captures);
+	if (r < 0)
+		return r;
+	if (c->uid != 0 && c->uid != geteuid()) {
+		struct waiter *w = idmap_get(&c->objects, a->id);
+		client_sent(c, proto_ev_capture_failed(c->conn, a->id, PROTO_CAPTURE_FAILURE_DENIED, "capture is restricted to root and the "
+									"daemon's user"));
+		object_destroy(&w->base);
+		return 0;
+	}
+	server_capture_requested(c->server);
+	return 0;
+}
+
+static const struct proto_display_requests display_requests = {
+	.hello = display_hello,
+	.sync = display_sync,
+	.create_buffer = display_create_buffer,
+	.create_list = display_create_list,
+	.create_layer = display_create_layer,
+	.frame = display_frame,
+	.commit = display_commit,
+	.get_status = display_get_status,
+	.capture = display_capture,
+};
+
+/* ---- dispatch ---- */
+
+static int dispatch_message(struct client *c, struct proto_message *m)
+{
+	struct proto_error err = { 0 };
+	int r;
+	if (m->object == 1) {
+		if (!c->version && m->opcode != PROTO_DISPLAY_REQ_HELLO)
+			return client_fail(c, 1, PROTO_ERR_VERSION, "the first request must be hello");
+		r = proto_display_dispatch_request(&display_requests, c, m, c->version ? c->version : 1, &err);
+	} else {
+		struct object *obj = idmap_get(&c->objects, m->object);
+		if (!c->version)
+			return client_fail(c, 1, PROTO_ERR_VERSION, "the first request must be hello");
+		if (!obj)
+			return client_fail(c, m->object, PROTO_ERR_OBJECT, "no object %u", m->object);
+		switch (obj->type) {
+		case PROTO_IFACE_BUFFER:
+			r = proto_buffer_dispatch_request(&buffer_requests, obj, m, c->version, &err);
+			break;
+		case PROTO_IFACE_LIST:
+			r = proto_list_dispatch_request(&list_requests, obj, m, c->version, &err);
+			break;
+		case PROTO_IFACE_LAYER:
+			r = proto_layer_dispatch_request(&layer_requests, obj, m, c->version, &err);
+			break;
+		default:
+			return client_fail(c, m->object, PROTO_ERR_METHOD, "%s objects take no requests",
+					   proto_interface_name(obj->type));
+		}
+	}
+	if (r == -EPROTO && !c->dead)
+		return client_fail(c, m->object, err.code, "%s", err.text);
+	return r;
+}
+
+static void client_read(struct client *c)
+{
+	struct proto_error err = { 0 };
+	for (int i = 0; i < CLIENT_READS_PER_WAKEUP && !c->dead; i++) {
+		int n = proto_conn_read(c->conn, &err);
+		if (n == -EPROTO) {
+			client_fail(c, 0, err.code, "%s", err.text);
+			return;
+		}
+		if (n < 0) {
+			if (proto_conn_has_partial(c->conn))
+				log_info("client %d (pid %d) left mid-message", proto_conn_get_fd(c->conn), (int)c->pid);
+			c->dead = true;
+			server_reap_later(c->server);
+			return;
+		}
+		struct proto_message m;
+		int r;
+		while (!c->dead && (r = proto_conn_next(c->conn, &m, &err)) == 1)
+			dispatch_message(c, &m);
+		if (r < 0 && !c->dead) {
+			client_fail(c, 0, err.code, "%s", err.text);
+			return;
+		}
+		if (n == 0)
+			break;
+	}
+	client_flush(c);
+}
+
+static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data)
+{
+	struct client *c = data;
+	if (c->dead)
+		return 0;
+	if (revents & EPOLLOUT)
+		client_flush(c);
+	if (revents & (EPOLLIN | EPOLLHUP | EPOLLERR))
+		client_read(c);
+	return 0;
+}
+
+struct client *client_create(struct server *srv, int fd)
+{
+	struct client *c = calloc(1, sizeof(*c));
+	if (!c) {
+		close(fd);
+		return NULL;
+	}
+	struct ucred cred;
+	socklen_t len = sizeof(cred);
+	if (getsockopt(fd, SOL_SOCKET, SO_PEERCRED, &cred, &len) < 0) {
+		close(fd);
+		free(c);
+		return NULL;
+	}
+	c->uid = cred.uid;
+	c->gid = cred.gid;
+	c->pid = cred.pid;
+	c->server = srv;
+	link_init(&c->lists);
+	link_init(&c->layers);
+	link_init(&c->frames_pending);
+	link_init(&c->frames);
+	link_init(&c->captures);
+	c->conn = proto_conn_create(fd, CLIENT_MAX_OUT);
+	if (!c->conn)
+		goto err_free;
+	int r = sd_event_add_io(srv->event, &c->source, fd, EPOLLIN, client_event, c);
+	if (r < 0) {
+		errno = -r;
+		goto err_conn;
+	}
+	return c;
+err_conn:
+	proto_conn_destroy(c->conn);
+err_free:
+	free(c);
+	return NULL;
+}
+
+static void destroy_object(uint32_t id, void *value, void *data)
+{
+	object_destroy(value);
+}
+
+void client_destroy(struct client *c)
+{
+	/* Layers first: they hold references to lists. */
+	struct layer *y, *ytmp;
+	link_for_each_safe(y, ytmp, &c->layers, link) object_destroy(&y->base);
+	for (uint32_t i = 0; i < c->objects.cap; i++) {
+		while (c->objects.slots && c->objects.slots[i].id)
+			destroy_object(c->objects.slots[i].id, c->objects.slots[i].value, NULL);
+	}
+	idmap_finish(&c->objects);
+	sd_event_source_disable_unref(c->source);
+	proto_conn_destroy(c->conn);
+	free(c);
+}

@@ -1,0 +1,129 @@
+#include "config.h"
+
+#include <ctype.h>
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "log.h"
+
+void config_defaults(struct config *cfg)
+{
+	*cfg = (struct config){
+		.render_threads = 0,
+		.projector_buffers = 3,
+		.sim_link_bytes_per_sec = 400u * 1000 * 1000, /* ~USB 3 sustained */
+		.max_clients = 64,
+		.max_objects = 4096,
+		.max_buffer_bytes = 1ull << 30,
+		.max_vertices = 32u << 20,
+	};
+	const char *env = getenv("SPINDLE_SOCKET");
+	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s",
+		 env && *env ? env : "/run/spindle/spindle.sock");
+	strcpy(cfg->device, "sim");
+	strcpy(cfg->profile, "perspecta");
+	strcpy(cfg->renderer, "auto");
+}
+
+static int set_string(char *dst, size_t size, const char *value)
+{
+	if (!*value || strlen(value) >= size)
+		return -EINVAL;
+	strcpy(dst, value);
+	return 0;
+}
+
+static int set_u64(uint64_t *dst, const char *value, uint64_t min, uint64_t max)
+{
+	char *end;
+	errno = 0;
+	unsigned long long v = strtoull(value, &end, 10);
+	if (errno || end == value || *end || value[0] == '-' || v < min || v > max)
+		return -EINVAL;
+	*dst = v;
+	return 0;
+}
+
+static int set_u32(uint32_t *dst, const char *value, uint32_t min, uint32_t max)
+{
+	uint64_t v;
+	int r = set_u64(&v, value, min, max);
+	if (r == 0)
+		*dst = (uint32_t)v;
+	return r;
+}
+
+int config_set(struct config *cfg, const char *key, const char *value)
+{
+	if (!strcmp(key, "socket"))
+		return set_string(cfg->socket_path, sizeof(cfg->socket_path), value);
+	if (!strcmp(key, "device"))
+		return strcmp(value, "sim") ? -EINVAL : set_string(cfg->device, sizeof(cfg->device), value);
+	if (!strcmp(key, "profile"))
+		return set_string(cfg->profile, sizeof(cfg->profile), value);
+	if (!strcmp(key, "renderer"))
+		return set_string(cfg->renderer, sizeof(cfg->renderer), value);
+	if (!strcmp(key, "render-threads"))
+		return set_u32(&cfg->render_threads, value, 0, 256);
+	if (!strcmp(key, "projector-buffers"))
+		return set_u32(&cfg->projector_buffers, value, 2, 3);
+	if (!strcmp(key, "sim-link-rate"))
+		return set_u64(&cfg->sim_link_bytes_per_sec, value, 0, UINT64_MAX);
+	if (!strcmp(key, "max-clients"))
+		return set_u32(&cfg->max_clients, value, 1, 65536);
+	if (!strcmp(key, "max-objects"))
+		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
+	if (!strcmp(key, "max-buffer-bytes"))
+		return set_u64(&cfg->max_buffer_bytes, value, 0, 1ull << 40);
+	if (!strcmp(key, "max-vertices"))
+		return set_u64(&cfg->max_vertices, value, 0, 1ull << 32);
+	return -ENOENT;
+}
+
+static char *trim(char *s)
+{
+	while (isspace((unsigned char)*s))
+		s++;
+	char *e = s + strlen(s);
+	while (e > s && isspace((unsigned char)e[-1]))
+		*--e = '\0';
+	return s;
+}
+
+int config_load(struct config *cfg, const char *path, bool required)
+{
+	FILE *f = fopen(path, "re");
+	if (!f) {
+		if (errno == ENOENT && !required)
+			return 0;
+		log_error("cannot read %s: %s", path, strerror(errno));
+		return -errno;
+	}
+	char line[512];
+	int r = 0;
+	for (unsigned n = 1; fgets(line, sizeof(line), f); n++) {
+		char *hash = strchr(line, '#');
+		if (hash)
+			*hash = '\0';
+		char *s = trim(line);
+		if (!*s)
+			continue;
+		char *eq = strchr(s, '=');
+		if (!eq) {
+			log_error("%s:%u: expected key = value", path, n);
+			r = -EINVAL;
+			continue;
+		}
+		*eq = '\0';
+		char *key = trim(s), *value = trim(eq + 1);
+		int e = config_set(cfg, key, value);
+		if (e < 0) {
+			log_error("%s:%u: %s '%s'", path, n, e == -ENOENT ? "unknown key" : "bad value for", key);
+			r = -EINVAL;
+		}
+	}
+	fclose(f);
+	return r;
+}

@@ -1,0 +1,36 @@
+/* spindled's configuration: built-in defaults, then the config file, then
+ * the command line (docs/man/spindled.8 lists every key). */
+#ifndef SPINDLE_CONFIG_H
+#define SPINDLE_CONFIG_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define CONFIG_DEFAULT_PATH "/etc/spindle/spindled.conf"
+
+struct config {
+	char socket_path[108]; /* sun_path size */
+	char device[16];       /* "sim" */
+	char profile[32];      /* "perspecta", "small" */
+	char renderer[16];     /* "auto", "cpu" */
+	unsigned render_threads; /* 0 = one per core */
+	unsigned projector_buffers; /* 2 or 3 */
+	uint64_t sim_link_bytes_per_sec; /* 0 = unlimited */
+	uint32_t max_clients;
+	uint32_t max_objects;       /* per client */
+	uint64_t max_buffer_bytes;  /* per client */
+	uint64_t max_vertices;      /* per client */
+	bool verbose;
+};
+
+void config_defaults(struct config *cfg);
+
+/* Sets one key ("profile", "max-objects", ...) from text. 0, or -EINVAL
+ * (bad value) or -ENOENT (unknown key). */
+int config_set(struct config *cfg, const char *key, const char *value);
+
+/* Reads "key = value" lines ('#' comments). A missing file is fine when
+ * required is false. 0 or negative errno; errors are logged with the line. */
+int config_load(struct config *cfg, const char *path, bool required);
+
+#endif

@@ -1,0 +1,225 @@
+#include "devices.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <systemd/sd-event.h>
+
+#include "log.h"
+#include "pipeline.h"
+#include "projector.h"
+#include "server.h"
+#include "sim_rotor.h"
+#include "sync.h"
+#include "sync_estimator.h"
+
+struct devices {
+	struct server *srv;
+	struct sim_rotor *rotor;
+	struct sync_source *sync;
+	struct sync_estimator *est;
+	struct projector *proj;
+	sd_event_source *sync_source, *proj_source, *check_timer;
+	bool blanked;
+};
+
+static void set_blank(struct devices *dev, bool blank)
+{
+	if (blank == dev->blanked)
+		return;
+	int r = dev->proj->impl->blank(dev->proj, blank);
+	if (r < 0) {
+		log_error("cannot %s the projector: %s", blank ? "blank" : "light", strerror(-r));
+		if (!blank)
+			return;
+	}
+	dev->blanked = blank;
+	log_info("projector %s", blank ? "blanked" : "lit");
+}
+
+/* Lit only while locked: a stopped screen under a projector is a hazard. */
+static void lock_changed(struct devices *dev)
+{
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	if (st->locked)
+		log_info("sync locked: %.1f rpm, jitter %.1f us", st->rpm, st->jitter_ns / 1e3);
+	else
+		log_warn("sync lost (reason %d)", (int)st->unlock_reason);
+	set_blank(dev, !st->locked);
+}
+
+static void arm_check(struct devices *dev)
+{
+	int64_t deadline = sync_estimator_deadline(dev->est);
+	if (deadline == INT64_MAX) {
+		sd_event_source_set_enabled(dev->check_timer, SD_EVENT_OFF);
+		return;
+	}
+	sd_event_source_set_time(dev->check_timer, (uint64_t)(deadline > 0 ? deadline : 1) / 1000 + 1);
+	sd_event_source_set_enabled(dev->check_timer, SD_EVENT_ONESHOT);
+}
+
+static int on_check(sd_event_source *s, uint64_t usec, void *data)
+{
+	struct devices *dev = data;
+	if (sync_estimator_check(dev->est, now_ns()))
+		lock_changed(dev);
+	arm_check(dev);
+	return 0;
+}
+
+static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
+{
+	struct devices *dev = data;
+	int64_t ts[32];
+	int n = sync_read_edges(dev->sync, ts, 32);
+	if (n < 0) {
+		log_error("sync source: %s", strerror(-n));
+		return 0;
+	}
+	for (int i = 0; i < n; i++)
+		if (sync_estimator_feed(dev->est, ts[i]))
+			lock_changed(dev);
+	if (n > 0) {
+		const struct sync_state *st = sync_estimator_state(dev->est);
+		if (st->period_ns > 0)
+			dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
+		/* A capture takes the volume on display at a revolution start. */
+		server_serve_captures(dev->srv, server_shown(dev->srv));
+	}
+	arm_check(dev);
+	return 0;
+}
+
+static void on_swapped(void *data, uint32_t buffer, int64_t time_ns)
+{
+	struct devices *dev = data;
+	pipeline_swapped(dev->srv->pipe, buffer, time_ns);
+}
+
+static void on_gone(void *data, int err)
+{
+	log_error("projector gone: %s", strerror(err));
+}
+
+static const struct projector_listener proj_listener = {
+	.swapped = on_swapped,
+	.gone = on_gone,
+};
+
+static int on_projector(sd_event_source *s, int fd, uint32_t revents, void *data)
+{
+	struct devices *dev = data;
+	int r = dev->proj->impl->dispatch(dev->proj);
+	if (r < 0)
+		log_warn("projector: %s", strerror(-r));
+	return 0;
+}
+
+static int open_sim(struct devices *dev)
+{
+	const struct config *cfg = &dev->srv->cfg;
+	dev->rotor = sim_rotor_create(dev->srv->geom.rpm);
+	if (!dev->rotor)
+		return -errno;
+	dev->sync = sync_sim_create(dev->rotor);
+	if (!dev->sync)
+		return -errno;
+	struct proj_sim_config pc = {
+		.geom = dev->srv->geom,
+		.buffers = cfg->projector_buffers,
+		.link_bytes_per_sec = cfg->sim_link_bytes_per_sec,
+	};
+	dev->proj = proj_sim_create(dev->rotor, &pc, &proj_listener, dev);
+	if (!dev->proj)
+		return -errno;
+	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "simulated %s", cfg->profile);
+	return 0;
+}
+
+static int add_sources(struct devices *dev)
+{
+	sd_event *e = dev->srv->event;
+	int r = sd_event_add_io(e, &dev->sync_source, sync_get_fd(dev->sync), EPOLLIN, on_sync, dev);
+	if (r < 0)
+		return r;
+	/* Sync edges first: a swap report at the same revolution start must
+	 * not be seen before the edge that explains it. */
+	sd_event_source_set_priority(dev->sync_source, SD_EVENT_PRIORITY_IMPORTANT);
+	int pfd = dev->proj->impl->get_fd(dev->proj);
+	if (pfd >= 0 && (r = sd_event_add_io(e, &dev->proj_source, pfd, EPOLLIN, on_projector, dev)) < 0)
+		return r;
+	r = sd_event_add_time(e, &dev->check_timer, CLOCK_MONOTONIC, 0, 1000, on_check, dev);
+	if (r < 0)
+		return r;
+	return sd_event_source_set_enabled(dev->check_timer, SD_EVENT_OFF);
+}
+
+struct devices *devices_create(struct server *srv)
+{
+	struct devices *dev = calloc(1, sizeof(*dev));
+	if (!dev)
+		return NULL;
+	dev->srv = srv;
+	dev->blanked = true; /* the projector starts dark */
+	struct sync_estimator_config ec;
+	sync_estimator_config_default(&ec, srv->geom.rpm);
+	int r = -ENOMEM;
+	dev->est = sync_estimator_create(&ec);
+	if (!dev->est)
+		goto err;
+	r = open_sim(dev);
+	if (r < 0)
+		goto err;
+	r = add_sources(dev);
+	if (r < 0)
+		goto err;
+	return dev;
+err:
+	devices_destroy(dev);
+	errno = -r;
+	return NULL;
+}
+
+void devices_destroy(struct devices *dev)
+{
+	if (!dev)
+		return;
+	if (dev->proj) {
+		dev->proj->impl->blank(dev->proj, true);
+		dev->proj->impl->destroy(dev->proj);
+	}
+	sd_event_source_disable_unref(dev->sync_source);
+	sd_event_source_disable_unref(dev->proj_source);
+	sd_event_source_disable_unref(dev->check_timer);
+	sync_destroy(dev->sync);
+	sim_rotor_destroy(dev->rotor);
+	sync_estimator_destroy(dev->est);
+	free(dev);
+}
+
+struct projector *devices_projector(struct devices *dev)
+{
+	return dev->proj;
+}
+
+const struct volume *devices_shown(struct devices *dev)
+{
+	return dev->proj->impl->shown ? dev->proj->impl->shown(dev->proj) : NULL;
+}
+
+void devices_get_status(struct devices *dev, struct devices_status *out)
+{
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	struct proj_sim_stats ps = { 0 };
+	if (dev->rotor)
+		proj_sim_get_stats(dev->proj, &ps);
+	*out = (struct devices_status){
+		.rpm = st->locked ? (float)st->rpm : 0.0f,
+		.locked = st->locked,
+		.blanked = dev->blanked,
+		.projector_present = dev->proj != NULL,
+		.underruns = ps.underruns,
+	};
+}

@@ -1,0 +1,34 @@
+/* The display hardware as the daemon sees it: a rotation sync source with
+ * its estimator, and a projector; the simulated ones for --device sim. Owns
+ * the safety rule: the projector is lit only while the sync is locked, and
+ * dark at start and on exit. */
+#ifndef SPINDLE_DEVICES_H
+#define SPINDLE_DEVICES_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+struct server;
+struct projector;
+struct volume;
+
+struct devices_status {
+	float rpm; /* measured; 0 when not turning */
+	bool locked;
+	bool blanked;
+	bool projector_present;
+	uint64_t underruns;
+};
+
+/* Opens the devices of srv->cfg.device with srv->geom, and fills
+ * srv->device_name. NULL + errno on failure. */
+struct devices *devices_create(struct server *srv);
+/* Blanks the projector and closes everything. Accepts NULL. */
+void devices_destroy(struct devices *dev);
+
+struct projector *devices_projector(struct devices *dev);
+/* The volume on display as the projector holds it, if it can tell. */
+const struct volume *devices_shown(struct devices *dev);
+void devices_get_status(struct devices *dev, struct devices_status *out);
+
+#endif

@@ -1,0 +1,263 @@
+#include "pipeline.h"
+
+#include <errno.h>
+#include <pthread.h>
+#include <stdbool.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/eventfd.h>
+#include <systemd/sd-event.h>
+#include <unistd.h>
+
+#include "log.h"
+#include "projector.h"
+#include "render.h"
+#include "server.h"
+#include "snapshot.h"
+#include "volume.h"
+
+#define MAX_BUFFERS 3
+
+struct pipeline {
+	struct server *srv;
+	struct renderer *renderer;
+	struct projector *proj;
+	uint32_t buffers;
+	/* What the daemon wrote into each projector buffer. */
+	struct volume *content[MAX_BUFFERS];
+	int shown, pending, uploaded; /* buffer indices, -1 for none */
+	/* The render target; holds a finished volume while ready is set. */
+	struct volume *work;
+	bool dirty, busy, ready;
+	uint64_t next_seq;
+	struct snapshot snap;
+	struct pipeline_stats stats;
+
+	/* The render thread: takes a job when job is set, reports on done_fd. */
+	pthread_t thread;
+	pthread_mutex_t lock;
+	pthread_cond_t cond;
+	bool job, quit;
+	int result;
+	int64_t started_ns;
+	int done_fd;
+	sd_event_source *done_source;
+};
+
+static void *render_thread(void *data)
+{
+	struct pipeline *p = data;
+	pthread_mutex_lock(&p->lock);
+	for (;;) {
+		while (!p->job && !p->quit)
+			pthread_cond_wait(&p->cond, &p->lock);
+		if (p->quit)
+			break;
+		pthread_mutex_unlock(&p->lock);
+		int r = render_volume(p->renderer, &p->snap.scene, p->work);
+		pthread_mutex_lock(&p->lock);
+		p->result = r;
+		p->job = false;
+		uint64_t one = 1;
+		if (write(p->done_fd, &one, sizeof(one)) < 0)
+			log_error("render thread: cannot notify: %s", strerror(errno));
+	}
+	pthread_mutex_unlock(&p->lock);
+	return NULL;
+}
+
+static void pipeline_kick(struct pipeline *p);
+
+static bool buffer_free(const struct pipeline *p, int b)
+{
+	return b != p->shown && b != p->pending && b != p->uploaded;
+}
+
+static void upload_ready(struct pipeline *p)
+{
+	for (int b = 0; b < (int)p->buffers; b++) {
+		if (!buffer_free(p, b))
+			continue;
+		struct volume *v = p->content[b];
+		p->content[b] = p->work;
+		p->work = v;
+		int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b]);
+		if (r < 0) {
+			log_warn("projector upload failed: %s", strerror(-r));
+			return;
+		}
+		p->stats.last_upload_bytes = volume_sparse_bytes(p->content[b]);
+		p->uploaded = b;
+		p->ready = false;
+		return;
+	}
+}
+
+static void start_render(struct pipeline *p)
+{
+	uint64_t seq = p->next_seq;
+	if (snapshot_build(&p->snap, p->srv, seq) < 0) {
+		log_error("out of memory building the scene; retrying with the next change");
+		return;
+	}
+	p->next_seq++;
+	p->dirty = false;
+	p->busy = true;
+	p->work->seq = seq;
+	pthread_mutex_lock(&p->lock);
+	p->started_ns = now_ns();
+	p->job = true;
+	pthread_cond_signal(&p->cond);
+	pthread_mutex_unlock(&p->lock);
+}
+
+static void pipeline_kick(struct pipeline *p)
+{
+	if (p->ready && p->uploaded < 0)
+		upload_ready(p);
+	if (p->uploaded >= 0 && p->pending < 0) {
+		int r = p->proj->impl->swap(p->proj, (uint32_t)p->uploaded);
+		if (r == 0) {
+			p->pending = p->uploaded;
+			p->uploaded = -1;
+		} else {
+			log_warn("projector swap failed: %s", strerror(-r));
+		}
+	}
+	if (p->dirty && !p->busy && !p->ready)
+		start_render(p);
+}
+
+static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
+{
+	struct pipeline *p = data;
+	uint64_t n;
+	if (read(fd, &n, sizeof(n)) < 0)
+		return 0;
+	pthread_mutex_lock(&p->lock);
+	int r = p->result;
+	double ms = (now_ns() - p->started_ns) / 1e6;
+	pthread_mutex_unlock(&p->lock);
+	snapshot_release(&p->snap);
+	p->busy = false;
+	if (r < 0) {
+		log_error("render failed: %s", strerror(-r));
+		p->dirty = true; /* try again at the next change */
+	} else {
+		p->ready = true;
+		p->stats.volumes_rendered++;
+		p->stats.last_render_ms = ms;
+		log_debug("volume %llu rendered in %.1f ms, %llu tiles", (unsigned long long)p->work->seq, ms,
+			  (unsigned long long)volume_tile_count(p->work));
+	}
+	pipeline_kick(p);
+	return 0;
+}
+
+void pipeline_mark_dirty(struct pipeline *p)
+{
+	p->dirty = true;
+	pipeline_kick(p);
+}
+
+void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns)
+{
+	if (buffer >= p->buffers || (int)buffer != p->pending) {
+		log_warn("projector swapped to unexpected buffer %u", buffer);
+		return;
+	}
+	p->shown = (int)buffer;
+	p->pending = -1;
+	struct volume *v = p->content[buffer];
+	v->shown_ns = (uint64_t)time_ns;
+	p->stats.volumes_shown++;
+	server_volume_shown(p->srv, v->seq, time_ns);
+	pipeline_kick(p);
+}
+
+const struct volume *pipeline_shown(const struct pipeline *p)
+{
+	return p->shown >= 0 ? p->content[p->shown] : NULL;
+}
+
+void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out)
+{
+	*out = p->stats;
+}
+
+static int create_volumes(struct pipeline *p, const struct geometry *g)
+{
+	p->work = volume_create(g);
+	if (!p->work)
+		return -ENOMEM;
+	for (uint32_t b = 0; b < p->buffers; b++) {
+		p->content[b] = volume_create(g);
+		if (!p->content[b])
+			return -ENOMEM;
+	}
+	return 0;
+}
+
+struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj,
+				 uint32_t buffers)
+{
+	struct pipeline *p = calloc(1, sizeof(*p));
+	if (!p) {
+		render_destroy(renderer);
+		return NULL;
+	}
+	p->srv = srv;
+	p->renderer = renderer;
+	p->proj = proj;
+	p->buffers = buffers < 2 ? 2 : buffers > MAX_BUFFERS ? MAX_BUFFERS : buffers;
+	p->shown = p->pending = p->uploaded = -1;
+	p->next_seq = 1;
+	p->done_fd = -1;
+	pthread_mutex_init(&p->lock, NULL);
+	pthread_cond_init(&p->cond, NULL);
+	int r = create_volumes(p, &renderer->geom);
+	if (r < 0)
+		goto err;
+	p->done_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
+	if (p->done_fd < 0) {
+		r = -errno;
+		goto err;
+	}
+	r = sd_event_add_io(srv->event, &p->done_source, p->done_fd, EPOLLIN, render_done, p);
+	if (r < 0)
+		goto err;
+	r = -pthread_create(&p->thread, NULL, render_thread, p);
+	if (r < 0)
+		goto err;
+	return p;
+err:
+	sd_event_source_disable_unref(p->done_source);
+	p->done_source = NULL;
+	pipeline_destroy(p);
+	errno = -r;
+	return NULL;
+}
+
+void pipeline_destroy(struct pipeline *p)
+{
+	if (!p)
+		return;
+	if (p->done_source) {
+		pthread_mutex_lock(&p->lock);
+		p->quit = true;
+		pthread_cond_signal(&p->cond);
+		pthread_mutex_unlock(&p->lock);
+		pthread_join(p->thread, NULL);
+		sd_event_source_disable_unref(p->done_source);
+	}
+	if (p->done_fd >= 0)
+		close(p->done_fd);
+	snapshot_finish(&p->snap);
+	for (uint32_t b = 0; b < MAX_BUFFERS; b++)
+		volume_destroy(p->content[b]);
+	volume_destroy(p->work);
+	render_destroy(p->renderer);
+	pthread_mutex_destroy(&p->lock);
+	pthread_cond_destroy(&p->cond);
+	free(p);
+}

@@ -1,0 +1,40 @@
+/* The volume pipeline: committed scene -> snapshot -> render (on a worker
+ * thread) -> upload into a free projector buffer -> swap at the next
+ * revolution start -> shown. At most one render runs and one swap is
+ * pending at a time; a volume is never uploaded into the buffer on show or
+ * the one awaiting its swap, so nothing is ever shown half-written. */
+#ifndef SPINDLE_PIPELINE_H
+#define SPINDLE_PIPELINE_H
+
+#include <stdint.h>
+
+#include "geometry.h"
+
+struct server;
+struct renderer;
+struct projector;
+struct volume;
+
+struct pipeline_stats {
+	uint64_t volumes_rendered;
+	uint64_t volumes_shown;
+	double last_render_ms;
+	uint64_t last_upload_bytes;
+};
+
+/* Takes ownership of renderer; the projector stays the caller's. NULL +
+ * errno on failure. */
+struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj,
+				 uint32_t buffers);
+/* Waits for a render in flight. Accepts NULL. */
+void pipeline_destroy(struct pipeline *p);
+
+/* The committed scene changed: render a new volume. */
+void pipeline_mark_dirty(struct pipeline *p);
+/* The projector reports buffer shown from time_ns on. */
+void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns);
+/* The volume on display as the daemon sent it, or NULL before the first. */
+const struct volume *pipeline_shown(const struct pipeline *p);
+void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out);
+
+#endif

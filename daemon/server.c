@@ -1,0 +1,365 @@
+#include "server.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <sys/stat.h>
+#include <sys/un.h>
+#include <systemd/sd-daemon.h>
+#include <systemd/sd-event.h>
+#include <unistd.h>
+
+#include "client.h"
+#include "devices.h"
+#include "log.h"
+#include "pipeline.h"
+#include "render.h"
+#include "svol.h"
+
+/* ---- the listening socket ---- */
+
+/* A socket file nobody listens on is left over from a crash: remove it. */
+static int remove_stale_socket(const struct sockaddr_un *addr)
+{
+	struct stat st;
+	if (lstat(addr->sun_path, &st) < 0)
+		return errno == ENOENT ? 0 : -errno;
+	if (!S_ISSOCK(st.st_mode))
+		return -EEXIST;
+	int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
+	if (fd < 0)
+		return -errno;
+	int r = connect(fd, (const struct sockaddr *)addr, sizeof(*addr));
+	int e = errno;
+	close(fd);
+	if (r == 0)
+		return -EADDRINUSE;
+	if (e != ECONNREFUSED)
+		return -e;
+	return unlink(addr->sun_path) < 0 ? -errno : 0;
+}
+
+static int bind_socket(struct server *srv)
+{
+	struct sockaddr_un addr = { .sun_family = AF_UNIX };
+	snprintf(addr.sun_path, sizeof(addr.sun_path), "%s", srv->cfg.socket_path);
+	int r = remove_stale_socket(&addr);
+	if (r < 0) {
+		log_error("socket %s: %s", addr.sun_path,
+			  r == -EADDRINUSE ? "another spindled is listening there" : strerror(-r));
+		return r;
+	}
+	int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
+	if (fd < 0)
+		return -errno;
+	if (bind(fd, (const struct sockaddr *)&addr, sizeof(addr)) < 0 || chmod(addr.sun_path, 0660) < 0 ||
+	    listen(fd, 64) < 0) {
+		r = -errno;
+		log_error("cannot listen on %s: %s", addr.sun_path, strerror(errno));
+		close(fd);
+		return r;
+	}
+	srv->listen_fd = fd;
+	srv->listen_fd_owned = true;
+	srv->socket_path = strdup(addr.sun_path);
+	return 0;
+}
+
+/* systemd socket activation first, else our own socket. */
+static int open_socket(struct server *srv)
+{
+	int n = sd_listen_fds(1);
+	if (n > 1) {
+		log_error("systemd passed %d sockets, expected one", n);
+		return -EINVAL;
+	}
+	if (n == 1) {
+		if (sd_is_socket_unix(SD_LISTEN_FDS_START, SOCK_STREAM, 1, NULL, 0) <= 0) {
+			log_error("the socket systemd passed is not a listening Unix stream socket");
+			return -EINVAL;
+		}
+		srv->listen_fd = SD_LISTEN_FDS_START;
+		fcntl(srv->listen_fd, F_SETFL, fcntl(srv->listen_fd, F_GETFL) | O_NONBLOCK);
+		log_info("listening on the socket from systemd");
+		return 0;
+	}
+	int r = bind_socket(srv);
+	if (r == 0)
+		log_info("listening on %s", srv->cfg.socket_path);
+	return r;
+}
+
+static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
+{
+	struct server *srv = data;
+	for (;;) {
+		int cfd = accept4(fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
+		if (cfd < 0) {
+			if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
+				log_warn("accept: %s", strerror(errno));
+			return 0;
+		}
+		if (srv->client_count >= srv->cfg.max_clients) {
+			log_warn("refusing a client: %u clients already", srv->client_count);
+			close(cfd);
+			continue;
+		}
+		struct client *c = client_create(srv, cfd);
+		if (!c) {
+			log_warn("cannot set up a client: %s", strerror(errno));
+			continue;
+		}
+		link_append(&srv->clients, &c->link);
+		srv->client_count++;
+		log_debug("client %d connected (pid %d, uid %d)", cfd, (int)c->pid, (int)c->uid);
+	}
+}
+
+/* ---- clients ---- */
+
+static int reap(sd_event_source *s, void *data)
+{
+	struct server *srv = data;
+	struct client *c, *tmp;
+	bool visible = false;
+	link_for_each_safe(c, tmp, &srv->clients, link) {
+		if (!c->dead)
+			continue;
+		struct layer *y;
+		link_for_each(y, &c->layers, link) visible |= y->committed.visible && y->committed.list;
+		link_remove(&c->link);
+		srv->client_count--;
+		log_debug("client %d disconnected", proto_conn_get_fd(c->conn));
+		client_destroy(c);
+	}
+	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
+	if (visible)
+		pipeline_mark_dirty(srv->pipe);
+	return 0;
+}
+
+void server_reap_later(struct server *srv)
+{
+	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_ONESHOT);
+}
+
+void server_commit(struct server *srv, bool changed)
+{
+	/* Even an unchanged commit needs a volume for its frame callbacks. */
+	(void)changed;
+	pipeline_mark_dirty(srv->pipe);
+}
+
+void server_scene_changed(struct server *srv, bool changed)
+{
+	if (changed && srv->pipe)
+		pipeline_mark_dirty(srv->pipe);
+}
+
+void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
+{
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		if (c->dead)
+			continue;
+		struct waiter *w, *tmp;
+		link_for_each_safe(w, tmp, &c->frames, link) {
+			if (!w->volume_seq || w->volume_seq > seq)
+				continue;
+			proto_ev_callback_done(c->conn, w->base.id, seq, (uint64_t)time_ns);
+			object_destroy(&w->base);
+		}
+		client_flush(c);
+	}
+	if (srv->captures_waiting)
+		server_serve_captures(srv, server_shown(srv));
+}
+
+void server_get_status(struct server *srv, struct server_status *out)
+{
+	struct devices_status ds;
+	struct pipeline_stats ps;
+	devices_get_status(srv->dev, &ds);
+	pipeline_get_stats(srv->pipe, &ps);
+	*out = (struct server_status){
+		.rpm = ds.rpm,
+		.flags = (ds.locked ? PROTO_DISPLAY_STATUS_FLAGS_LOCKED : 0) |
+			 (ds.blanked ? PROTO_DISPLAY_STATUS_FLAGS_BLANKED : 0) |
+			 (ds.projector_present ? PROTO_DISPLAY_STATUS_FLAGS_PROJECTOR_PRESENT : 0),
+		.volumes_shown = ps.volumes_shown,
+		.underruns = ds.underruns,
+		.clients = srv->client_count,
+	};
+}
+
+/* ---- captures ---- */
+
+const struct volume *server_shown(struct server *srv)
+{
+	const struct volume *v = devices_shown(srv->dev);
+	return v ? v : pipeline_shown(srv->pipe);
+}
+
+void server_capture_requested(struct server *srv)
+{
+	srv->captures_waiting++;
+}
+
+/* The volume as an .svol file in a sealed memfd. -errno on failure. */
+static int svol_memfd(const struct volume *vol, uint64_t *size)
+{
+	int fd = memfd_create("spindle-capture", MFD_CLOEXEC | MFD_ALLOW_SEALING);
+	if (fd < 0)
+		return -errno;
+	int dup = fcntl(fd, F_DUPFD_CLOEXEC, 3);
+	FILE *f = dup >= 0 ? fdopen(dup, "w") : NULL;
+	int r = f ? svol_write(f, vol) : -errno;
+	if (f && fclose(f) != 0 && r == 0)
+		r = -EIO;
+	if (!f && dup >= 0)
+		close(dup);
+	struct stat st;
+	if (r == 0 && fstat(fd, &st) < 0)
+		r = -errno;
+	if (r == 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) < 0)
+		r = -errno;
+	if (r < 0) {
+		close(fd);
+		return r;
+	}
+	*size = (uint64_t)st.st_size;
+	return fd;
+}
+
+void server_serve_captures(struct server *srv, const struct volume *shown)
+{
+	if (!shown || !srv->captures_waiting)
+		return;
+	uint64_t size = 0;
+	int fd = svol_memfd(shown, &size);
+	if (fd < 0)
+		log_error("capture failed: %s", strerror(-fd));
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		struct waiter *w, *tmp;
+		link_for_each_safe(w, tmp, &c->captures, link) {
+			if (c->dead)
+				break;
+			if (fd >= 0)
+				proto_ev_capture_ready(c->conn, w->base.id, fd, size);
+			else
+				proto_ev_capture_failed(c->conn, w->base.id, PROTO_CAPTURE_FAILURE_ERROR, strerror(-fd));
+			object_destroy(&w->base);
+		}
+		client_flush(c);
+	}
+	srv->captures_waiting = 0;
+	if (fd >= 0)
+		close(fd);
+}
+
+/* ---- set-up and the loop ---- */
+
+static int on_signal(sd_event_source *s, const struct signalfd_siginfo *si, void *data)
+{
+	log_info("signal %u: shutting down", si->ssi_signo);
+	return sd_event_exit(sd_event_source_get_event(s), 0);
+}
+
+static int setup_loop(struct server *srv)
+{
+	sigset_t mask;
+	sigemptyset(&mask);
+	sigaddset(&mask, SIGINT);
+	sigaddset(&mask, SIGTERM);
+	sigprocmask(SIG_BLOCK, &mask, NULL);
+	signal(SIGPIPE, SIG_IGN);
+	int r = sd_event_new(&srv->event);
+	if (r < 0)
+		return r;
+	if ((r = sd_event_add_signal(srv->event, NULL, SIGINT, on_signal, srv)) < 0 ||
+	    (r = sd_event_add_signal(srv->event, NULL, SIGTERM, on_signal, srv)) < 0 ||
+	    (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
+		return r;
+	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
+	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_IDLE);
+	return sd_event_set_watchdog(srv->event, true);
+}
+
+static int setup_render(struct server *srv)
+{
+	struct renderer *r = render_create(srv->cfg.renderer, &srv->geom);
+	if (!r && strcmp(srv->cfg.renderer, "cpu") != 0) {
+		log_warn("renderer '%s' unavailable (%s): using the CPU renderer", srv->cfg.renderer,
+			 strerror(errno));
+		r = render_create("cpu", &srv->geom);
+	}
+	if (!r)
+		return -errno;
+	log_info("renderer: %s", r->impl->name);
+	srv->pipe = pipeline_create(srv, r, devices_projector(srv->dev), srv->cfg.projector_buffers);
+	return srv->pipe ? 0 : -errno;
+}
+
+static void server_finish(struct server *srv)
+{
+	struct client *c, *tmp;
+	link_for_each_safe(c, tmp, &srv->clients, link) {
+		link_remove(&c->link);
+		client_destroy(c);
+	}
+	pipeline_destroy(srv->pipe);
+	devices_destroy(srv->dev); /* blanks the projector */
+	sd_event_source_disable_unref(srv->listen_source);
+	sd_event_source_disable_unref(srv->reap_source);
+	if (srv->listen_fd >= 0)
+		close(srv->listen_fd);
+	if (srv->socket_path) {
+		unlink(srv->socket_path);
+		free(srv->socket_path);
+	}
+	sd_event_unref(srv->event);
+}
+
+int server_run(const struct config *cfg)
+{
+	struct server srv = { .cfg = *cfg, .listen_fd = -1 };
+	link_init(&srv.clients);
+	int r = geometry_from_profile(cfg->profile, &srv.geom);
+	if (r < 0) {
+		log_error("unknown profile '%s'", cfg->profile);
+		return 1;
+	}
+	if ((r = setup_loop(&srv)) < 0) {
+		log_error("event loop: %s", strerror(-r));
+		goto out;
+	}
+	srv.dev = devices_create(&srv);
+	if (!srv.dev) {
+		r = -errno;
+		log_error("devices: %s", strerror(errno));
+		goto out;
+	}
+	if ((r = setup_render(&srv)) < 0) {
+		log_error("renderer: %s", strerror(-r));
+		goto out;
+	}
+	if ((r = open_socket(&srv)) < 0)
+		goto out;
+	r = sd_event_add_io(srv.event, &srv.listen_source, srv.listen_fd, EPOLLIN, on_accept, &srv);
+	if (r < 0)
+		goto out;
+	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", srv.device_name, srv.geom.width,
+		 srv.geom.height, srv.geom.images_per_rev, srv.geom.mirrored ? " (mirrored)" : "", srv.geom.rpm);
+	sd_notify(0, "READY=1\nSTATUS=Serving clients");
+	r = sd_event_loop(srv.event);
+	sd_notify(0, "STOPPING=1");
+out:
+	server_finish(&srv);
+	return r < 0 ? 1 : 0;
+}

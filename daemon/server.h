@@ -1,0 +1,62 @@
+/* The daemon: one sd-event loop owning the listening socket, the clients,
+ * the devices and the volume pipeline. */
+#ifndef SPINDLE_SERVER_H
+#define SPINDLE_SERVER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "config.h"
+#include "geometry.h"
+#include "link.h"
+
+struct sd_event;
+struct sd_event_source;
+struct pipeline;
+struct devices;
+struct volume;
+
+struct server {
+	struct sd_event *event;
+	struct config cfg;
+	struct geometry geom;
+	char device_name[64];
+	int listen_fd;
+	bool listen_fd_owned; /* false when systemd passed it */
+	char *socket_path;    /* to unlink on exit, when we bound it */
+	struct sd_event_source *listen_source;
+	struct sd_event_source *reap_source; /* deferred: frees dead clients */
+	struct link clients;
+	uint32_t client_count;
+	struct devices *dev;
+	struct pipeline *pipe;
+	unsigned captures_waiting;
+};
+
+struct server_status {
+	float rpm;
+	uint32_t flags; /* PROTO_DISPLAY_STATUS_FLAGS_* */
+	uint64_t volumes_shown;
+	uint64_t underruns;
+	uint32_t clients;
+};
+
+/* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */
+int server_run(const struct config *cfg);
+
+/* For clients and objects. */
+void server_reap_later(struct server *srv);
+void server_commit(struct server *srv, bool changed);
+void server_scene_changed(struct server *srv, bool changed);
+void server_get_status(struct server *srv, struct server_status *out);
+void server_capture_requested(struct server *srv);
+
+/* For the pipeline: a volume was first shown at time_ns. */
+void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns);
+/* The volume on display: as the projector holds it when it can tell,
+ * else as the daemon sent it; NULL before the first. */
+const struct volume *server_shown(struct server *srv);
+/* Answers waiting captures with the volume shown now. */
+void server_serve_captures(struct server *srv, const struct volume *shown);
+
+#endif

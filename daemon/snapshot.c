@@ -1,0 +1,101 @@
+#include "snapshot.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client.h"
+#include "server.h"
+
+/* out = a * b, column-major 4x4. */
+static void mat_mul(float out[16], const float a[16], const float b[16])
+{
+	for (int c = 0; c < 4; c++)
+		for (int r = 0; r < 4; r++) {
+			float s = 0;
+			for (int k = 0; k < 4; k++)
+				s += a[k * 4 + r] * b[c * 4 + k];
+			out[c * 4 + r] = s;
+		}
+}
+
+static int snapshot_grow(struct snapshot *snap)
+{
+	uint32_t cap = snap->cap ? snap->cap * 2 : 64;
+	struct scene_draw *draws = realloc(snap->draws, cap * sizeof(*draws));
+	if (!draws)
+		return -ENOMEM;
+	snap->draws = draws;
+	struct vdata **data = realloc(snap->data, cap * sizeof(*data));
+	if (!data)
+		return -ENOMEM;
+	snap->data = data;
+	snap->cap = cap;
+	return 0;
+}
+
+static int add_layer(struct snapshot *snap, const struct layer_state *ls)
+{
+	const struct draw_array *a = &ls->list->committed;
+	for (uint32_t i = 0; i < a->count; i++) {
+		const struct list_draw *d = &a->draws[i];
+		if (snap->scene.draw_count == snap->cap && snapshot_grow(snap) < 0)
+			return -ENOMEM;
+		struct scene_draw *sd = &snap->draws[snap->scene.draw_count];
+		sd->prim = d->prim;
+		sd->count = d->data->count;
+		sd->xyz = d->data->xyz;
+		mat_mul(sd->transform, ls->transform, d->transform);
+		for (int c = 0; c < 3; c++)
+			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);
+		snap->data[snap->scene.draw_count++] = vdata_ref(d->data);
+	}
+	return 0;
+}
+
+/* Frames of commits made so far are first shown by volume seq. */
+static void tie_frames(struct client *c, uint64_t seq)
+{
+	struct waiter *w;
+	link_for_each(w, &c->frames, link) {
+		if (!w->volume_seq)
+			w->volume_seq = seq;
+	}
+}
+
+int snapshot_build(struct snapshot *snap, struct server *srv, uint64_t seq)
+{
+	struct client *c;
+	snap->scene.draw_count = 0;
+	link_for_each(c, &srv->clients, link) {
+		if (c->dead)
+			continue;
+		struct layer *y;
+		link_for_each(y, &c->layers, link) {
+			if (!y->committed.visible || !y->committed.list)
+				continue;
+			if (add_layer(snap, &y->committed) < 0) {
+				snapshot_release(snap);
+				return -ENOMEM;
+			}
+		}
+		tie_frames(c, seq);
+	}
+	snap->scene.draws = snap->draws;
+	return 0;
+}
+
+void snapshot_release(struct snapshot *snap)
+{
+	for (uint32_t i = 0; i < snap->scene.draw_count; i++)
+		vdata_unref(snap->data[i]);
+	snap->scene.draw_count = 0;
+}
+
+void snapshot_finish(struct snapshot *snap)
+{
+	snapshot_release(snap);
+	free(snap->draws);
+	free(snap->data);
+	*snap = (struct snapshot){ 0 };
+}

@@ -1,0 +1,71 @@
+/* libspindle internals shared by its files. */
+#ifndef SPINDLE_LIB_PRIVATE_H
+#define SPINDLE_LIB_PRIVATE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "link.h"
+#include "spindle-protocol.h"
+#include "spindle/spindle.h"
+
+enum lib_callback_kind {
+	LIB_CALLBACK_SYNC,
+	LIB_CALLBACK_FRAME,
+	LIB_CALLBACK_CAPTURE,
+};
+
+/* A callback or capture object waiting for its event. */
+struct lib_callback {
+	struct lib_callback *next;
+	uint32_t id;
+	enum lib_callback_kind kind;
+	bool done;
+	spindle_frame_func func;
+	void *data;
+	struct spindle_frame frame;
+	int fd; /* capture: the memfd received, owned until handed out */
+	uint64_t size;
+	int error;
+};
+
+/* Buffers, lists and layers: what spindle_disconnect() frees. */
+struct lib_object {
+	struct spindle *sp;
+	uint32_t id;
+	struct link link;
+};
+
+struct spindle {
+	struct proto_conn *conn;
+	uint32_t version;
+	uint32_t next_id;
+	bool have_info;
+	bool dead;
+	struct spindle_device_info info;
+	struct spindle_status status;
+	uint64_t status_serial;
+	struct lib_callback *callbacks;
+	struct link objects;
+	spindle_log_func log;
+	void *log_data;
+	char error[300];
+};
+
+void lib_log(struct spindle *sp, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
+/* Marks the connection broken with a reason; returns -EPIPE. */
+int lib_set_error(struct spindle *sp, int err, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
+/* A fresh object id, 0 when they ran out. */
+uint32_t lib_new_id(struct spindle *sp);
+/* After queueing a request: maps its result, flushes when much is queued. */
+int lib_sent(struct spindle *sp, int r);
+int lib_flush_blocking(struct spindle *sp);
+int lib_wait(struct spindle *sp, bool (*ready)(struct spindle *sp, void *data), void *data);
+
+struct lib_callback *lib_callback_add(struct spindle *sp, enum lib_callback_kind kind);
+void lib_callback_remove(struct spindle *sp, struct lib_callback *cb);
+int lib_wait_callback(struct spindle *sp, struct lib_callback *cb);
+
+void lib_object_free(struct lib_object *obj);
+
+#endif
