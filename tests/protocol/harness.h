@@ -1,0 +1,70 @@
+/* Protocol test suite harness: each test starts its own spindled on the
+ * simulated device (small profile) on a private socket, talks to it with
+ * libspindle or raw bytes, and reads back what was shown by capture. */
+#ifndef SPINDLE_TEST_HARNESS_H
+#define SPINDLE_TEST_HARNESS_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <sys/types.h>
+
+#include "geometry.h"
+#include "spindle/spindle.h"
+#include "volume.h"
+
+#define CHECK(cond)                                                                          \
+	do {                                                                                 \
+		if (!(cond)) {                                                               \
+			fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
+			exit(1);                                                             \
+		}                                                                            \
+	} while (0)
+
+struct daemon {
+	pid_t pid;
+	char dir[64];
+	char socket[128];
+	char log[128];
+};
+
+/* Starts spindled (path in $SPINDLED) with --device sim --profile small,
+ * and waits until its socket accepts connections. */
+void daemon_start(struct daemon *d);
+/* SIGTERM, then checks it exited 0; removes its files. */
+void daemon_stop(struct daemon *d);
+/* True while the daemon process runs. */
+bool daemon_alive(struct daemon *d);
+/* Open fds of the daemon, from /proc (for leak checks). */
+int daemon_fd_count(struct daemon *d);
+
+struct spindle *client_connect(struct daemon *d);
+/* A connected raw socket (no handshake). */
+int raw_connect(struct daemon *d);
+/* Sends a header + body; returns 0 or -errno. */
+int raw_send(int fd, uint32_t object, uint16_t opcode, const void *body, uint32_t body_size);
+/* Reads until EOF (or 3 s); returns whether an error event with the given
+ * code came before the close (code 0: any error event). */
+bool raw_expect_error_and_close(int fd, uint32_t code);
+
+/* The next volume shown, through capture. */
+struct volume *capture_volume(struct spindle *sp);
+
+/* Draws vertices as one list on one layer with a colour, commits and waits
+ * until shown. The objects stay alive until the connection is closed. */
+void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g,
+		   uint8_t b);
+
+/* Expectations from DESIGN.md section 3 (computed here, not by spindled):
+ * the volume image, column and row a point lights. */
+struct voxel {
+	uint32_t k, u, v;
+};
+struct voxel expected_point(const struct geometry *g, double x, double y, double z);
+
+/* Whether channel c has a lit voxel within radius voxels (u, v) of (k, u, v). */
+bool lit_near(const struct volume *vol, uint32_t k, int u, int v, int c, int radius);
+
+#endif

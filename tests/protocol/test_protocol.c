@@ -1,0 +1,484 @@
+/* The protocol test suite: spindled on the simulated device at the small
+ * profile, driven through libspindle and raw sockets. Every expectation is
+ * computed here from DESIGN.md section 3. Usage: test-protocol NAME. */
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <sys/socket.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "harness.h"
+
+#define W 128
+#define H 128
+#define NV 64 /* images per volume: N = 128, mirrored */
+
+static struct geometry small(void)
+{
+	struct geometry g;
+	CHECK(geometry_from_profile("small", &g) == 0);
+	return g;
+}
+
+static int col(double s)
+{
+	struct geometry g = small();
+	return (int)geometry_column(&g, s);
+}
+
+static int row(double y)
+{
+	struct geometry g = small();
+	return (int)geometry_row(&g, y);
+}
+
+/* ---- shapes ---- */
+
+static uint32_t axis_line(float *v)
+{
+	const float p[] = { 0, -0.6f, 0, 0, 0.6f, 0 };
+	memcpy(v, p, sizeof(p));
+	return 2;
+}
+
+static uint32_t disk(float *v, double r, double y, int segs)
+{
+	uint32_t n = 0;
+	for (int i = 0; i < segs; i++) {
+		double a0 = 2 * M_PI * i / segs, a1 = 2 * M_PI * (i + 1) / segs;
+		float t[] = { 0, (float)y, 0, (float)(r * cos(a0)), (float)y, (float)(r * sin(a0)),
+			      (float)(r * cos(a1)), (float)y, (float)(r * sin(a1)) };
+		memcpy(v + 3 * n, t, sizeof(t));
+		n += 3;
+	}
+	return n;
+}
+
+static void sphere_point(float *out, double r, int i, int j, int slices, int stacks)
+{
+	double th = M_PI * j / stacks, ph = 2 * M_PI * i / slices;
+	out[0] = (float)(r * sin(th) * cos(ph));
+	out[1] = (float)(r * cos(th));
+	out[2] = (float)(r * sin(th) * sin(ph));
+}
+
+static uint32_t sphere(float *v, double r, int slices, int stacks)
+{
+	uint32_t n = 0;
+	for (int j = 0; j < stacks; j++)
+		for (int i = 0; i < slices; i++) {
+			float a[3], b[3], c[3], d[3];
+			sphere_point(a, r, i, j, slices, stacks);
+			sphere_point(b, r, i + 1, j, slices, stacks);
+			sphere_point(c, r, i + 1, j + 1, slices, stacks);
+			sphere_point(d, r, i, j + 1, slices, stacks);
+			float *t = v + 3 * n;
+			memcpy(t, a, 12), memcpy(t + 3, b, 12), memcpy(t + 6, c, 12);
+			memcpy(t + 9, a, 12), memcpy(t + 12, c, 12), memcpy(t + 15, d, 12);
+			n += 6;
+		}
+	return n;
+}
+
+/* ---- checks ---- */
+
+static void check_axis_line(const struct volume *vol, int c)
+{
+	int top = row(0.6), bottom = row(-0.6);
+	for (uint32_t k = 0; k < NV; k++) {
+		for (int v = top; v <= bottom; v++)
+			CHECK(lit_near(vol, k, col(0), v, c, 1));
+		for (int v = 0; v < H; v++)
+			for (int u = 0; u < W; u++)
+				if (volume_pixel(vol, k, (uint32_t)u, (uint32_t)v, c))
+					CHECK(abs(u - col(0)) <= 1 && v >= top - 1 && v <= bottom + 1);
+	}
+}
+
+static void check_disk(const struct volume *vol, double r, double y, int c)
+{
+	double inner = r * cos(M_PI / 64) - 0.01;
+	for (uint32_t k = 0; k < NV; k++) {
+		for (int u = col(-inner); u <= col(inner); u++)
+			CHECK(lit_near(vol, k, u, row(y), c, 1));
+		for (int v = 0; v < H; v++)
+			for (int u = 0; u < W; u++)
+				if (volume_pixel(vol, k, (uint32_t)u, (uint32_t)v, c))
+					CHECK(abs(v - row(y)) <= 1 && u >= col(-r) - 1 && u <= col(r) + 1);
+	}
+}
+
+static void test_device_info(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	const struct spindle_device_info *info = spindle_get_device_info(sp);
+	CHECK(info->width == W && info->height == H && info->images_per_rev == 128 && info->mirrored);
+	CHECK(info->half_height == 1.0f && info->rpm == 1800.0f);
+	CHECK(spindle_get_version(sp) == 1);
+	struct spindle_status st;
+	CHECK(spindle_get_status(sp, &st) == 0);
+	CHECK(st.clients == 1 && st.projector_present);
+	CHECK(spindle_roundtrip(sp) == 0);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static void test_axis_line(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	float v[6];
+	show_vertices(sp, 1, v, axis_line(v), 255, 255, 255);
+	struct volume *vol = capture_volume(sp);
+	for (int c = 0; c < 3; c++)
+		check_axis_line(vol, c);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static void test_disk(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	float v[64 * 9];
+	show_vertices(sp, 2, v, disk(v, 0.7, 0.3, 64), 255, 255, 255);
+	struct volume *vol = capture_volume(sp);
+	check_disk(vol, 0.7, 0.3, 1);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* A sphere centred on the axis is edge-on to every image: each image must
+ * show its full section circle anyway. */
+static void test_sphere(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	const double r = 0.6, voxel = 2.0 / W;
+	static float v[48 * 24 * 18];
+	show_vertices(sp, 2, v, sphere(v, r, 48, 24), 0, 0, 255);
+	struct volume *vol = capture_volume(sp);
+	for (uint32_t k = 0; k < NV; k++) {
+		for (int i = 0; i < 720; i++) {
+			double a = 2 * M_PI * i / 720;
+			CHECK(lit_near(vol, k, col(r * cos(a)), row(r * sin(a)), 2, 1));
+		}
+		for (int y = 0; y < H; y++)
+			for (int u = 0; u < W; u++) {
+				if (!volume_pixel(vol, k, (uint32_t)u, (uint32_t)y, 2))
+					continue;
+				double s = (u + 0.5) * voxel - 1, yy = 1 - (y + 0.5) * voxel;
+				CHECK(fabs(hypot(s, yy) - r) <= 2.5 * voxel);
+			}
+	}
+	CHECK(!lit_near(vol, 0, col(0), row(0), 0, 3)); /* red stays dark */
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* A wall in the plane z = 0 lies in image 0's slice: filled there, only its
+ * axis edge elsewhere. */
+static void test_wall(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	const float a = 0.5f, b = 0.4f;
+	float v[] = { -a, -b, 0, a, -b, 0, a, b, 0, -a, -b, 0, a, b, 0, -a, b, 0 };
+	show_vertices(sp, 2, v, 6, 255, 255, 255);
+	struct volume *vol = capture_volume(sp);
+	for (int y = row(b); y <= row(-b); y++)
+		for (int u = col(-a); u <= col(a); u++)
+			CHECK(lit_near(vol, 0, u, y, 0, 1));
+	for (uint32_t k = 2; k < NV - 1; k++)
+		for (int y = 0; y < H; y++)
+			for (int u = 0; u < W; u++)
+				if (volume_pixel(vol, k, (uint32_t)u, (uint32_t)y, 0))
+					CHECK(abs(u - col(0)) <= 1 && y >= row(b) - 1 && y <= row(-b) + 1);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* True when p is well inside its voxel and its image's wedge, so that the
+ * expected voxel does not depend on rounding. */
+static bool point_unambiguous(const struct geometry *g, double x, double y, double z)
+{
+	double phi = atan2(z, x), d = 2 * M_PI / g->images_per_rev;
+	double f = phi / d - floor(phi / d);
+	if (fabs(f - 0.5) < 0.05)
+		return false;
+	struct voxel e = expected_point(g, x, y, z);
+	double th = geometry_image_angle(g, e.k);
+	double s = x * cos(th) + z * sin(th);
+	double fu = (s + 1) / 2 * g->width, fv = (1 - y) / 2 * g->height;
+	return fabs(fu - round(fu)) > 0.05 && fabs(fv - round(fv)) > 0.05;
+}
+
+static void test_points(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	struct geometry g = small();
+	enum { N = 400 };
+	static float v[3 * N];
+	static struct voxel e[N];
+	srand(7);
+	for (int i = 0; i < N;) {
+		double r = 0.9 * sqrt(rand() / (double)RAND_MAX), a = 2 * M_PI * rand() / (double)RAND_MAX;
+		double x = r * cos(a), z = r * sin(a), y = 1.8 * rand() / (double)RAND_MAX - 0.9;
+		if (!point_unambiguous(&g, (float)x, (float)y, (float)z))
+			continue;
+		v[3 * i] = (float)x, v[3 * i + 1] = (float)y, v[3 * i + 2] = (float)z;
+		e[i] = expected_point(&g, v[3 * i], v[3 * i + 1], v[3 * i + 2]);
+		i++;
+	}
+	show_vertices(sp, 0, v, N, 0, 255, 0);
+	struct volume *vol = capture_volume(sp);
+	for (int i = 0; i < N; i++)
+		CHECK(volume_pixel(vol, e[i].k, e[i].u, e[i].v, 1));
+	/* Nothing else: each lit voxel is some point's voxel. */
+	uint64_t lit = 0, distinct = 0;
+	for (uint32_t k = 0; k < NV; k++)
+		for (uint32_t y = 0; y < H; y++)
+			for (uint32_t u = 0; u < W; u++)
+				lit += volume_pixel(vol, k, u, y, 1);
+	for (int i = 0; i < N; i++) {
+		bool dup = false;
+		for (int j = 0; j < i && !dup; j++)
+			dup = !memcmp(&e[i], &e[j], sizeof(e[i]));
+		distinct += !dup;
+	}
+	CHECK(lit == distinct);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static void show_pair(struct daemon *d, struct spindle **a, struct spindle **b)
+{
+	static float line[6], fan[64 * 9];
+	*a = client_connect(d);
+	*b = client_connect(d);
+	show_vertices(*a, 1, line, axis_line(line), 255, 0, 0);
+	show_vertices(*b, 2, fan, disk(fan, 0.7, 0.3, 64), 0, 255, 0);
+}
+
+static void test_two_clients(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *a, *b;
+	show_pair(&d, &a, &b);
+	struct volume *vol = capture_volume(b);
+	check_axis_line(vol, 0);
+	check_disk(vol, 0.7, 0.3, 1);
+	CHECK(!lit_near(vol, 5, col(0), row(0.3), 2, 3)); /* no blue anywhere */
+	volume_destroy(vol);
+	spindle_disconnect(a);
+	spindle_disconnect(b);
+	daemon_stop(&d);
+}
+
+static uint64_t count_lit(const struct volume *vol, int c)
+{
+	uint64_t n = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		for (uint32_t y = 0; y < H; y++)
+			for (uint32_t u = 0; u < W; u++)
+				n += volume_pixel(vol, k, u, y, c);
+	return n;
+}
+
+/* Waits for a volume without red, i.e. without the departed client. */
+static struct volume *capture_until_no_red(struct spindle *sp)
+{
+	for (int i = 0; i < 100; i++) {
+		struct volume *vol = capture_volume(sp);
+		if (count_lit(vol, 0) == 0)
+			return vol;
+		volume_destroy(vol);
+	}
+	return NULL;
+}
+
+static void test_client_leaves(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *a, *b;
+	show_pair(&d, &a, &b);
+	struct volume *before = capture_volume(b);
+	CHECK(count_lit(before, 0) > 0);
+	spindle_disconnect(a);
+	struct volume *after = capture_until_no_red(b);
+	CHECK(after != NULL);
+	CHECK(count_lit(after, 1) == count_lit(before, 1));
+	check_disk(after, 0.7, 0.3, 1);
+	struct spindle_status st;
+	CHECK(spindle_get_status(b, &st) == 0 && st.clients == 1);
+	volume_destroy(before);
+	volume_destroy(after);
+	spindle_disconnect(b);
+	daemon_stop(&d);
+}
+
+/* A bad client is cut off with an error; the good one never notices. */
+static void test_garbage(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *good = client_connect(&d);
+	float fan[64 * 9];
+	show_vertices(good, 2, fan, disk(fan, 0.7, 0.3, 64), 0, 255, 0);
+	int fds_before = daemon_fd_count(&d);
+
+	int fd = raw_connect(&d);
+	uint8_t junk[64];
+	for (size_t i = 0; i < sizeof(junk); i++)
+		junk[i] = (uint8_t)(i * 37 + 11);
+	CHECK(send(fd, junk, sizeof(junk), MSG_NOSIGNAL) == sizeof(junk));
+	CHECK(raw_expect_error_and_close(fd, 0));
+	close(fd);
+
+	uint32_t version = 1;
+	fd = raw_connect(&d);
+	CHECK(raw_send(fd, 1, 0, &version, 4) == 0);
+	CHECK(raw_send(fd, 1, 99, NULL, 0) == 0);
+	CHECK(raw_expect_error_and_close(fd, 2)); /* invalid_method */
+	close(fd);
+
+	fd = raw_connect(&d);
+	CHECK(raw_send(fd, 1, 0, &version, 4) == 0);
+	CHECK(raw_send(fd, 77, 0, NULL, 0) == 0);
+	CHECK(raw_expect_error_and_close(fd, 1)); /* invalid_object */
+	close(fd);
+
+	fd = raw_connect(&d);
+	CHECK(raw_send(fd, 1, 6, NULL, 0) == 0); /* commit before hello */
+	CHECK(raw_expect_error_and_close(fd, 7)); /* version */
+	close(fd);
+
+	/* The good client is still served, its volume intact. */
+	CHECK(spindle_commit_and_wait(good, NULL) == 0);
+	struct volume *vol = capture_volume(good);
+	check_disk(vol, 0.7, 0.3, 1);
+	volume_destroy(vol);
+	struct spindle_status st;
+	CHECK(spindle_get_status(good, &st) == 0 && st.clients == 1);
+	CHECK(daemon_fd_count(&d) == fds_before);
+	spindle_disconnect(good);
+	daemon_stop(&d);
+}
+
+/* A draw past the end of its buffer is a fatal error for that client. */
+static void test_draw_out_of_range(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	float v[6] = { 0 };
+	struct spindle_buffer *buf = spindle_buffer_create(sp, v, sizeof(v));
+	struct spindle_list *list = spindle_list_create(sp);
+	CHECK(buf && list);
+	CHECK(spindle_list_lines(list, buf, 0, 4, 0) == 0); /* 4 vertices, buffer holds 2 */
+	CHECK(spindle_roundtrip(sp) == -EPIPE);
+	CHECK(strstr(spindle_get_error(sp), "past the end") != NULL);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* create_buffer with a memfd that is not sealed is refused. */
+static void test_unsealed_memfd(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	int fd = raw_connect(&d);
+	uint32_t version = 1;
+	CHECK(raw_send(fd, 1, 0, &version, 4) == 0);
+	int mfd = memfd_create("unsealed", MFD_CLOEXEC);
+	CHECK(ftruncate(mfd, 4096) == 0);
+	uint8_t msg[24];
+	uint32_t obj = 1, size = 24, id = 2;
+	uint16_t op = 2, nfds = 1;
+	uint64_t bytes = 4096;
+	memcpy(msg, &obj, 4), memcpy(msg + 4, &op, 2), memcpy(msg + 6, &nfds, 2), memcpy(msg + 8, &size, 4);
+	memcpy(msg + 12, &id, 4), memcpy(msg + 16, &bytes, 8);
+	union {
+		char buf[CMSG_SPACE(sizeof(int))];
+		struct cmsghdr align;
+	} ctl;
+	struct iovec iov = { msg, sizeof(msg) };
+	struct msghdr mh = { .msg_iov = &iov, .msg_iovlen = 1, .msg_control = ctl.buf,
+			     .msg_controllen = sizeof(ctl.buf) };
+	struct cmsghdr *c = CMSG_FIRSTHDR(&mh);
+	c->cmsg_level = SOL_SOCKET, c->cmsg_type = SCM_RIGHTS, c->cmsg_len = CMSG_LEN(sizeof(int));
+	memcpy(CMSG_DATA(c), &mfd, sizeof(int));
+	CHECK(sendmsg(fd, &mh, MSG_NOSIGNAL) == sizeof(msg));
+	CHECK(raw_expect_error_and_close(fd, 5)); /* bad_fd */
+	close(fd);
+	close(mfd);
+	daemon_stop(&d);
+}
+
+static void test_frames(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	float v[6];
+	show_vertices(sp, 1, v, axis_line(v), 255, 255, 255);
+	struct spindle_frame prev = { 0 }, f;
+	for (int i = 0; i < 5; i++) {
+		CHECK(spindle_commit_and_wait(sp, &f) == 0);
+		CHECK(f.volume_seq > prev.volume_seq && f.time_ns > prev.time_ns);
+		struct timespec ts;
+		clock_gettime(CLOCK_MONOTONIC, &ts);
+		uint64_t now = (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+		CHECK(f.time_ns <= now && now - f.time_ns < 2000000000u);
+		prev = f;
+	}
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static const struct {
+	const char *name;
+	void (*run)(void);
+} tests[] = {
+	{ "device-info", test_device_info },
+	{ "axis-line", test_axis_line },
+	{ "disk", test_disk },
+	{ "sphere", test_sphere },
+	{ "wall", test_wall },
+	{ "points", test_points },
+	{ "two-clients", test_two_clients },
+	{ "client-leaves", test_client_leaves },
+	{ "garbage", test_garbage },
+	{ "draw-out-of-range", test_draw_out_of_range },
+	{ "unsealed-memfd", test_unsealed_memfd },
+	{ "frames", test_frames },
+};
+
+int main(int argc, char **argv)
+{
+	for (size_t i = 0; i < sizeof(tests) / sizeof(tests[0]); i++) {
+		if (argc < 2 || strcmp(argv[1], tests[i].name) == 0) {
+			tests[i].run();
+			printf("ok %s\n", tests[i].name);
+		}
+	}
+	return 0;
+}
