@@ -11,6 +11,10 @@
 /* Arc samples per voxel at most: enough to smear a rim voxel of a coarse
  * profile into a continuous arc without costing much on fine ones. */
 #define PREVIEW_MAX_ARC_SAMPLES 16
+/* Floor of the |s| weight: keeps points near the axis visible (a point
+ * lights one voxel wherever it is) at the cost of a faint glow there for
+ * horizontal surfaces, whose voxels crowd the axis. */
+#define PREVIEW_MIN_WEIGHT 0.1
 
 static const float background[3] = { 6.0f, 6.0f, 10.0f };
 static const float outline_rgb[3] = { 46.0f, 50.0f, 64.0f };
@@ -181,7 +185,7 @@ static void paint_voxel(struct voxel_painter *vp, uint32_t k, uint32_t u, uint32
 	const struct geometry *g = &vp->vol->geom;
 	double s = ((u + 0.5) / g->width) * 2.0 - 1.0;
 	double y = g->half_height - (v + 0.5) / g->height * 2.0 * g->half_height;
-	float weight = (float)(vp->opt->weight_by_radius ? fmax(fabs(s), 0.5 / g->width) : 1.0);
+	float weight = (float)(vp->opt->weight_by_radius ? fmax(fabs(s), PREVIEW_MIN_WEIGHT) : 1.0);
 	float rgb[3];
 
 	weight /= (float)vp->arcs.samples;
