@@ -228,7 +228,25 @@ static int fit_to_device(struct model *m, const struct spindle_device_info *info
 	return ret;
 }
 
-static int show_model(struct spindle *sp, struct model *m, const struct ctl_args *a, int sfd)
+/* Prints "shown SEQ" and holds until SIGINT/SIGTERM. The signals are caught
+ * only from here on: until the model is shown, Ctrl-C simply kills us (the
+ * wait for the first frame may be long when the rotor is stopped). They are
+ * blocked before the line is printed, so a signal sent on reading it is
+ * caught. */
+static int announce_and_hold(struct spindle *sp, uint64_t seq)
+{
+	int sfd = open_signalfd();
+	if (sfd < 0) {
+		report_failure(NULL, "signalfd", sfd);
+		return 1;
+	}
+	printf("shown %llu\n", (unsigned long long)seq);
+	int status = fflush(stdout) == 0 ? hold_until_signal(sp, sfd) : 1;
+	close(sfd);
+	return status;
+}
+
+static int show_model(struct spindle *sp, struct model *m, const struct ctl_args *a)
 {
 	static const uint8_t white[3] = { 255, 255, 255 };
 	struct spindle_list *list = NULL;
@@ -245,13 +263,12 @@ static int show_model(struct spindle *sp, struct model *m, const struct ctl_args
 		report_failure(sp, "show", ret);
 		goto out_destroy;
 	}
-	printf("shown %llu\n", (unsigned long long)frame.volume_seq);
-	if (fflush(stdout) != 0)
-		goto out_destroy;
-	status = hold_until_signal(sp, sfd);
+	status = announce_and_hold(sp, frame.volume_seq);
 out_destroy:
-	spindle_layer_destroy(layer);
-	spindle_list_destroy(list);
+	if (layer)
+		spindle_layer_destroy(layer);
+	if (list)
+		spindle_list_destroy(list);
 	return status;
 }
 
@@ -264,18 +281,11 @@ static int cmd_show(const struct ctl_args *a)
 		fprintf(stderr, "spindlectl: %s\n", err);
 		return 1;
 	}
-	int sfd = open_signalfd();
-	if (sfd < 0) {
-		report_failure(NULL, "signalfd", sfd);
-		goto out_model;
-	}
 	struct spindle *sp = connect_daemon(a);
 	if (sp) {
-		status = show_model(sp, m, a, sfd);
+		status = show_model(sp, m, a);
 		spindle_disconnect(sp);
 	}
-	close(sfd);
-out_model:
 	model_destroy(m);
 	return status;
 }
