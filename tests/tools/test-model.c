@@ -1,0 +1,120 @@
+/* Model loading of every supported kind of file, node transforms, errors,
+ * and the fit into the display cylinder. argv[1]: tests/data. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "model.h"
+#include "testvol.h"
+
+static const char *data_dir;
+
+static struct model *load(const char *name)
+{
+	char path[4096], err[512];
+	snprintf(path, sizeof(path), "%s/%s", data_dir, name);
+	struct model *m = model_load(path, err, sizeof(err));
+	if (!m)
+		fprintf(stderr, "%s\n", err);
+	CHECK(m);
+	return m;
+}
+
+static void check_counts(const char *name, size_t tris, size_t lines, size_t points)
+{
+	struct model *m = load(name);
+	printf("%s: %zu triangles, %zu lines, %zu points\n", name, m->triangle_count,
+	       m->line_count, m->point_count);
+	CHECK(m->triangle_count == tris);
+	CHECK(m->line_count == lines);
+	CHECK(m->point_count == points);
+	model_destroy(m);
+}
+
+static void test_lines_obj(void)
+{
+	/* l 1 4 and the polyline l 2 4 3, in file order */
+	static const float want[18] = { 0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 0, 1, 0, 1, 0 };
+	struct model *m = load("lines.obj");
+	CHECK(memcmp(m->lines, want, sizeof(want)) == 0);
+	model_destroy(m);
+}
+
+static void test_node_transforms(void)
+{
+	/* parent: translate (10, 0, 0); child: scale 2; triangle (0,0,0) (1,0,0) (0,1,0) */
+	static const float want[9] = { 10, 0, 0, 12, 0, 0, 10, 2, 0 };
+	struct model *m = load("transformed.gltf");
+	CHECK(m->triangle_count == 1);
+	for (int i = 0; i < 9; i++)
+		CHECK(fabsf(m->triangles[i] - want[i]) < 1e-5f);
+	model_destroy(m);
+}
+
+static void test_errors(void)
+{
+	char err[256] = "";
+	errno = 0;
+	CHECK(model_load("/nonexistent/model.stl", err, sizeof(err)) == NULL);
+	CHECK(errno == ENOENT);
+	CHECK(strstr(err, "/nonexistent/model.stl") != NULL);
+
+	char path[4096];
+	snprintf(path, sizeof(path), "%s/convert-bunny.js", data_dir);
+	errno = 0;
+	CHECK(model_load(path, err, sizeof(err)) == NULL);
+	CHECK(errno == EINVAL || errno == ENODATA);
+	printf("error message: %s\n", err);
+}
+
+static void check_fit(const char *name, float h)
+{
+	struct model *m = load(name);
+	struct model_fit fit;
+	float min[3], max[3];
+	CHECK(model_compute_fit(m, h, 0.95f, &fit) == 0);
+	model_apply_fit(m, &fit);
+	CHECK(model_bounds(m, min, max) == 0);
+
+	double r_max = 0.0;
+	const float *arrays[3] = { m->triangles, m->lines, m->points };
+	size_t counts[3] = { 3 * m->triangle_count, 2 * m->line_count, m->point_count };
+	for (int a = 0; a < 3; a++)
+		for (size_t i = 0; i < counts[a]; i++)
+			r_max = fmax(r_max, hypot(arrays[a][3 * i], arrays[a][3 * i + 2]));
+	printf("%s fitted to h=%.2f: y [%.4f, %.4f], max radius %.4f\n", name, h, min[1], max[1], r_max);
+	CHECK(r_max <= 0.95 + 1e-5);
+	CHECK(max[1] <= 0.95f * h + 1e-5f && min[1] >= -0.95f * h - 1e-5f);
+	/* centred: the bounding box is symmetric about the origin */
+	for (int i = 0; i < 3; i++)
+		CHECK(fabsf(min[i] + max[i]) < 1e-4f);
+	/* tight: one of the two limits is reached */
+	CHECK(r_max > 0.95 - 1e-4 || max[1] > 0.95f * h - 1e-4f);
+	model_destroy(m);
+}
+
+int main(int argc, char **argv)
+{
+	CHECK(argc == 2);
+	data_dir = argv[1];
+	check_counts("cube.stl", 12, 0, 0);
+	check_counts("lines.obj", 1, 3, 0);
+	check_counts("points.ply", 0, 0, 5);
+	check_counts("bunny.ply", 3674, 0, 0);
+	test_lines_obj();
+	test_node_transforms();
+	test_errors();
+	check_fit("bunny.ply", 1.0f);
+	check_fit("bunny.ply", 0.3f);
+	check_fit("cube.stl", 1.0f);
+	check_fit("lines.obj", 2.0f);
+	check_fit("points.ply", 1.0f);
+
+	struct model_fit fit;
+	struct model *m = load("cube.stl");
+	CHECK(model_compute_fit(m, 1.0f, 0.0f, &fit) == -EINVAL);
+	CHECK(model_compute_fit(m, 0.0f, 0.95f, &fit) == -EINVAL);
+	model_destroy(m);
+	return 0;
+}

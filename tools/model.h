@@ -1,0 +1,56 @@
+/* Model files (STL, OBJ, PLY and whatever else libassimp reads) turned into
+ * flat primitive arrays ready for spindle buffers, and fitted to the display.
+ *
+ * Coordinates are the file's own, with every node transform of the file's
+ * scene graph applied. Polygons are triangulated; OBJ `l` elements become
+ * line segments (a polyline of n vertices gives n-1 segments); point clouds
+ * (a PLY with vertices only) and point primitives become points. */
+#ifndef SPINDLE_TOOLS_MODEL_H
+#define SPINDLE_TOOLS_MODEL_H
+
+#include <stddef.h>
+
+struct model {
+	float *triangles; /* 9 floats (3 vertices x, y, z) per triangle */
+	size_t triangle_count;
+	float *lines; /* 6 floats (2 vertices) per segment */
+	size_t line_count;
+	float *points; /* 3 floats per point */
+	size_t point_count;
+};
+
+/* Uniform scale about a centre: v' = (v - centre) * scale. */
+struct model_fit {
+	float centre[3];
+	float scale;
+};
+
+/* Loads a model file. Returns a model owned by the caller (free it with
+ * model_destroy()), or NULL with errno set (ENOENT, ENOMEM, EINVAL for a
+ * file assimp can't read, ENODATA for a file with no primitives). When err is
+ * not NULL it receives a one-line reason on failure (NUL-terminated, cut to
+ * err_size bytes). */
+struct model *model_load(const char *path, char *err, size_t err_size);
+
+/* Accepts NULL. */
+void model_destroy(struct model *m);
+
+/* Total vertices of all primitives. */
+size_t model_vertex_count(const struct model *m);
+
+/* Axis-aligned bounds of every vertex. 0, or -ENODATA for an empty model. */
+int model_bounds(const struct model *m, float min[3], float max[3]);
+
+/* The fit that puts the model's bounding-box centre at the origin and scales
+ * it uniformly so it fills margin (0 < margin <= 1, e.g. 0.95) of the display
+ * volume x^2 + z^2 <= 1, |y| <= half_height: the farthest vertex from the
+ * axis ends at radius <= margin, the highest/lowest at |y| <= margin * h.
+ * A model that is a single point gets scale 1. 0, -EINVAL for a bad
+ * margin or half_height, or -ENODATA for an empty model. */
+int model_compute_fit(const struct model *m, float half_height, float margin,
+		      struct model_fit *out);
+
+/* Applies a fit to every vertex in place. */
+void model_apply_fit(struct model *m, const struct model_fit *fit);
+
+#endif

@@ -1,0 +1,52 @@
+/* A picture of a volume as a person standing beside the display sees it:
+ * every lit voxel is a point of light at its place in volume space (DESIGN.md
+ * section 3), seen in perspective through the transparent, emissive volume,
+ * added up and tone-mapped onto a dark background.
+ *
+ * Voxel (k, u, v) of stored image k lies at p = s * d_k + y * (0, 1, 0),
+ * s = ((u + 0.5) / W) * 2 - 1, y = h - (v + 0.5) / H * 2h. Each stored image
+ * covers both lobes of its bow tie, so a mirrored volume (N/2 images) is drawn
+ * image by image once, like an unmirrored one. */
+#ifndef SPINDLE_TOOLS_PREVIEW_H
+#define SPINDLE_TOOLS_PREVIEW_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "volume.h"
+
+struct preview_options {
+	uint32_t width, height; /* picture size, pixels (default 640 x 640) */
+	double distance;        /* eye distance from the centre, radii (3.2) */
+	double elevation_deg;   /* eye above the horizon (20) */
+	double azimuth_deg;     /* eye azimuth from +x towards +z (90: on +z) */
+	bool outline;           /* faint outline of the display cylinder (true) */
+	/* Weight each voxel by its true volume, proportional to |s|: voxels are
+	 * denser near the axis (thin wedges), and unweighted the axis glows.
+	 * (true) */
+	bool weight_by_radius;
+};
+
+/* Fills in the defaults above. */
+void preview_default_options(struct preview_options *opt);
+
+/* Renders vol into rgb, opt->width * opt->height * 3 bytes, rows top to
+ * bottom. The view is framed so the whole display cylinder just fits.
+ * 0, -EINVAL for bad options (size 0 or over 16384, distance not outside
+ * the cylinder), or -ENOMEM. */
+int preview_render(const struct volume *vol, const struct preview_options *opt, uint8_t *rgb);
+
+/* Where volume-space point p lands in the picture preview_render() makes of
+ * a volume with half height h: pixel coordinates (x right, y down, pixel
+ * centres at +0.5). 0, or -EINVAL for bad options or a point behind the eye. */
+int preview_project(const struct preview_options *opt, double h, const double p[3], double *x,
+		    double *y);
+
+/* Writes an 8-bit RGB PNG. 0 or negative errno (-EIO for a libpng error). */
+int preview_write_png(const char *path, const uint8_t *rgb, uint32_t width, uint32_t height);
+
+/* preview_render() + preview_write_png(). opt NULL means defaults. */
+int preview_volume_to_png(const struct volume *vol, const struct preview_options *opt,
+			  const char *path);
+
+#endif

@@ -1,0 +1,530 @@
+/* spindlectl: status, show a model file, capture and preview volumes.
+ * main() parses the command line and hands over to one function per
+ * command; each returns the process exit status. */
+#include <errno.h>
+#include <fcntl.h>
+#include <getopt.h>
+#include <poll.h>
+#include <signal.h>
+#include <stdbool.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include <spindle/spindle.h>
+
+#include "model.h"
+#include "preview.h"
+#include "svol.h"
+
+#ifndef SPINDLE_VERSION
+#define SPINDLE_VERSION "unknown"
+#endif
+
+#define FIT_MARGIN 0.95f
+
+struct ctl_args {
+	const char *socket; /* NULL: libspindle's default */
+	const char *command;
+	const char *operand[2];
+	int operand_count;
+	bool no_fit;
+	bool has_color;
+	uint8_t color[3];
+	bool has_size;
+	uint32_t size;
+};
+
+static const char usage_text[] =
+	"usage: spindlectl [--socket PATH] COMMAND [ARGS]\n"
+	"\n"
+	"commands:\n"
+	"  status                          device geometry and daemon state\n"
+	"  show FILE [--no-fit] [--color RRGGBB]\n"
+	"                                  show a model (STL, OBJ, PLY, ...) until\n"
+	"                                  SIGINT/SIGTERM; prints \"shown SEQ\"\n"
+	"  capture OUT.svol                save the next volume shown\n"
+	"  preview IN.svol OUT.png [--size N]\n"
+	"                                  picture of a captured volume (no daemon)\n"
+	"\n"
+	"options:\n"
+	"  -s, --socket PATH   daemon socket (default: $SPINDLE_SOCKET, else\n"
+	"                      " SPINDLE_DEFAULT_SOCKET ")\n"
+	"  -h, --help          this help\n"
+	"  -V, --version       version\n";
+
+static int usage_error(const char *fmt, const char *arg)
+{
+	fprintf(stderr, "spindlectl: ");
+	fprintf(stderr, fmt, arg);
+	fprintf(stderr, "\nTry 'spindlectl --help'.\n");
+	return 1;
+}
+
+/* The path libspindle will use, for messages. */
+static const char *socket_path(const struct ctl_args *a)
+{
+	const char *env = getenv("SPINDLE_SOCKET");
+	if (a->socket)
+		return a->socket;
+	return env && *env ? env : SPINDLE_DEFAULT_SOCKET;
+}
+
+static struct spindle *connect_daemon(const struct ctl_args *a)
+{
+	struct spindle *sp = spindle_connect(a->socket);
+	if (!sp) {
+		int e = errno;
+		fprintf(stderr, "spindlectl: cannot connect to spindled at %s: %s\n", socket_path(a),
+			e == EPROTO ? "no common protocol version" : strerror(e));
+	}
+	return sp;
+}
+
+static void report_failure(struct spindle *sp, const char *what, int ret)
+{
+	const char *why = sp ? spindle_get_error(sp) : NULL;
+	fprintf(stderr, "spindlectl: %s: %s\n", what, why ? why : strerror(-ret));
+}
+
+/* ---- status ---- */
+
+static void print_device(const struct spindle_device_info *info)
+{
+	printf("device: %s\n", info->name);
+	printf("width: %u\n", info->width);
+	printf("height: %u\n", info->height);
+	printf("images per revolution: %u\n", info->images_per_rev);
+	printf("mirrored: %s\n", info->mirrored ? "yes" : "no");
+	printf("half height: %g\n", info->half_height);
+	printf("nominal rpm: %g\n", info->rpm);
+}
+
+static void print_status(const struct spindle_status *st)
+{
+	printf("measured rpm: %.1f\n", st->rpm);
+	printf("locked: %s\n", st->locked ? "yes" : "no");
+	printf("blanked: %s\n", st->blanked ? "yes" : "no");
+	printf("projector present: %s\n", st->projector_present ? "yes" : "no");
+	printf("volumes shown: %llu\n", (unsigned long long)st->volumes_shown);
+	printf("underruns: %llu\n", (unsigned long long)st->underruns);
+	printf("clients: %u\n", st->clients);
+}
+
+static int cmd_status(const struct ctl_args *a)
+{
+	struct spindle_status st;
+	struct spindle *sp = connect_daemon(a);
+	if (!sp)
+		return 1;
+	int ret = spindle_get_status(sp, &st);
+	if (ret < 0) {
+		report_failure(sp, "status", ret);
+		spindle_disconnect(sp);
+		return 1;
+	}
+	printf("socket: %s\n", socket_path(a));
+	printf("protocol version: %u\n", spindle_get_version(sp));
+	print_device(spindle_get_device_info(sp));
+	print_status(&st);
+	spindle_disconnect(sp);
+	return fflush(stdout) == 0 ? 0 : 1;
+}
+
+/* ---- show ---- */
+
+/* Adds one kind of primitive to the list from its own buffer; the buffer
+ * may be destroyed right away, the list keeps its copy. */
+static int draw_array(struct spindle *sp, struct spindle_list *list, const float *data,
+		      size_t vertices,
+		      int (*draw)(struct spindle_list *, struct spindle_buffer *, size_t, uint32_t,
+				  uint32_t))
+{
+	if (vertices == 0)
+		return 0;
+	if (vertices > UINT32_MAX)
+		return -E2BIG;
+	struct spindle_buffer *buf = spindle_buffer_create(sp, data, vertices * 3 * sizeof(float));
+	if (!buf)
+		return -errno;
+	int ret = draw(list, buf, 0, (uint32_t)vertices, 0);
+	spindle_buffer_destroy(buf);
+	return ret;
+}
+
+static int build_scene(struct spindle *sp, const struct model *m, const uint8_t rgb[3],
+		       struct spindle_list **list_out, struct spindle_layer **layer_out)
+{
+	struct spindle_list *list = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	int ret = list && layer ? 0 : -errno;
+
+	if (ret == 0)
+		ret = spindle_list_set_color(list, rgb[0], rgb[1], rgb[2], 255);
+	if (ret == 0)
+		ret = draw_array(sp, list, m->triangles, 3 * m->triangle_count, spindle_list_triangles);
+	if (ret == 0)
+		ret = draw_array(sp, list, m->lines, 2 * m->line_count, spindle_list_lines);
+	if (ret == 0)
+		ret = draw_array(sp, list, m->points, m->point_count, spindle_list_points);
+	if (ret == 0)
+		ret = spindle_layer_set_list(layer, list);
+	*list_out = list;
+	*layer_out = layer;
+	return ret;
+}
+
+/* SIGINT and SIGTERM as a file descriptor, so one poll() waits for both
+ * the daemon and the user. The signals are blocked first. */
+static int open_signalfd(void)
+{
+	sigset_t set;
+	sigemptyset(&set);
+	sigaddset(&set, SIGINT);
+	sigaddset(&set, SIGTERM);
+	if (sigprocmask(SIG_BLOCK, &set, NULL) < 0)
+		return -errno;
+	int fd = signalfd(-1, &set, SFD_CLOEXEC | SFD_NONBLOCK);
+	return fd < 0 ? -errno : fd;
+}
+
+/* Keeps the connection (and so the model on the display) until a signal.
+ * 0 on a signal, 1 when the connection breaks. */
+static int hold_until_signal(struct spindle *sp, int sfd)
+{
+	struct pollfd fds[2] = {
+		{ .fd = spindle_get_fd(sp), .events = POLLIN },
+		{ .fd = sfd, .events = POLLIN },
+	};
+
+	for (;;) {
+		if (poll(fds, 2, -1) < 0) {
+			if (errno == EINTR)
+				continue;
+			report_failure(NULL, "poll", -errno);
+			return 1;
+		}
+		if (fds[1].revents & POLLIN)
+			return 0;
+		if (fds[0].revents) {
+			int ret = spindle_dispatch(sp);
+			if (ret < 0 || (fds[0].revents & (POLLHUP | POLLERR))) {
+				report_failure(sp, "connection to spindled lost", ret < 0 ? ret : -EPIPE);
+				return 1;
+			}
+		}
+	}
+}
+
+static int fit_to_device(struct model *m, const struct spindle_device_info *info)
+{
+	struct model_fit fit;
+	int ret = model_compute_fit(m, info->half_height, FIT_MARGIN, &fit);
+	if (ret == 0)
+		model_apply_fit(m, &fit);
+	return ret;
+}
+
+/* Prints "shown SEQ" and holds until SIGINT/SIGTERM. The signals are caught
+ * only from here on: until the model is shown, Ctrl-C simply kills us (the
+ * wait for the first frame may be long when the rotor is stopped). They are
+ * blocked before the line is printed, so a signal sent on reading it is
+ * caught. */
+static int announce_and_hold(struct spindle *sp, uint64_t seq)
+{
+	int sfd = open_signalfd();
+	if (sfd < 0) {
+		report_failure(NULL, "signalfd", sfd);
+		return 1;
+	}
+	printf("shown %llu\n", (unsigned long long)seq);
+	int status = fflush(stdout) == 0 ? hold_until_signal(sp, sfd) : 1;
+	close(sfd);
+	return status;
+}
+
+static int show_model(struct spindle *sp, struct model *m, const struct ctl_args *a)
+{
+	static const uint8_t white[3] = { 255, 255, 255 };
+	struct spindle_list *list = NULL;
+	struct spindle_layer *layer = NULL;
+	struct spindle_frame frame;
+	int status = 1;
+
+	int ret = a->no_fit ? 0 : fit_to_device(m, spindle_get_device_info(sp));
+	if (ret == 0)
+		ret = build_scene(sp, m, a->has_color ? a->color : white, &list, &layer);
+	if (ret == 0)
+		ret = spindle_commit_and_wait(sp, &frame);
+	if (ret < 0) {
+		report_failure(sp, "show", ret);
+		goto out_destroy;
+	}
+	status = announce_and_hold(sp, frame.volume_seq);
+out_destroy:
+	if (layer)
+		spindle_layer_destroy(layer);
+	if (list)
+		spindle_list_destroy(list);
+	return status;
+}
+
+static int cmd_show(const struct ctl_args *a)
+{
+	char err[512];
+	int status = 1;
+	struct model *m = model_load(a->operand[0], err, sizeof(err));
+	if (!m) {
+		fprintf(stderr, "spindlectl: %s\n", err);
+		return 1;
+	}
+	struct spindle *sp = connect_daemon(a);
+	if (sp) {
+		status = show_model(sp, m, a);
+		spindle_disconnect(sp);
+	}
+	model_destroy(m);
+	return status;
+}
+
+/* ---- capture ---- */
+
+/* Checks the memfd holds one whole .svol file; fills hdr. */
+static int check_capture(int fd, size_t size, struct svol_header *hdr)
+{
+	uint8_t raw[SVOL_HEADER_SIZE];
+	if (size < SVOL_HEADER_SIZE || pread(fd, raw, sizeof(raw), 0) != (ssize_t)sizeof(raw))
+		return -EINVAL;
+	int ret = svol_header_decode(raw, hdr);
+	if (ret < 0)
+		return ret;
+	return svol_file_size(hdr) == size ? 0 : -EINVAL;
+}
+
+static int copy_fd(int in, int out, size_t size)
+{
+	char buf[1 << 16];
+	off_t off = 0;
+	while ((size_t)off < size) {
+		size_t want = size - (size_t)off < sizeof(buf) ? size - (size_t)off : sizeof(buf);
+		ssize_t n = pread(in, buf, want, off);
+		if (n <= 0)
+			return n < 0 ? -errno : -EIO;
+		for (ssize_t done = 0; done < n;) {
+			ssize_t w = write(out, buf + done, (size_t)(n - done));
+			if (w < 0 && errno != EINTR)
+				return -errno;
+			done += w > 0 ? w : 0;
+		}
+		off += n;
+	}
+	return 0;
+}
+
+static int save_capture(int fd, size_t size, const char *path)
+{
+	int out = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+	if (out < 0) {
+		fprintf(stderr, "spindlectl: %s: %s\n", path, strerror(errno));
+		return 1;
+	}
+	int ret = copy_fd(fd, out, size);
+	if (close(out) < 0 && ret == 0)
+		ret = -errno;
+	if (ret < 0) {
+		fprintf(stderr, "spindlectl: %s: %s\n", path, strerror(-ret));
+		unlink(path);
+		return 1;
+	}
+	return 0;
+}
+
+static int cmd_capture(const struct ctl_args *a)
+{
+	struct svol_header hdr;
+	size_t size = 0;
+	int fd = -1, status = 1;
+	struct spindle *sp = connect_daemon(a);
+	if (!sp)
+		return 1;
+	int ret = spindle_capture(sp, &fd, &size);
+	if (ret == -EACCES) {
+		fprintf(stderr, "spindlectl: capture refused: needs root or the daemon's user\n");
+		goto out_disconnect;
+	} else if (ret < 0) {
+		report_failure(sp, "capture", ret);
+		goto out_disconnect;
+	}
+	if (check_capture(fd, size, &hdr) < 0) {
+		fprintf(stderr, "spindlectl: capture: the daemon sent no valid .svol file\n");
+		goto out_close;
+	}
+	status = save_capture(fd, size, a->operand[0]);
+	if (status == 0)
+		printf("captured volume %llu: %ux%u, %u images -> %s\n", (unsigned long long)hdr.seq,
+		       hdr.width, hdr.height, hdr.image_count, a->operand[0]);
+out_close:
+	close(fd);
+out_disconnect:
+	spindle_disconnect(sp);
+	return status;
+}
+
+/* ---- preview ---- */
+
+static int cmd_preview(const struct ctl_args *a)
+{
+	struct preview_options opt;
+	FILE *f = fopen(a->operand[0], "rb");
+	if (!f) {
+		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[0], strerror(errno));
+		return 1;
+	}
+	struct volume *vol = svol_read(f);
+	int e = errno;
+	fclose(f);
+	if (!vol) {
+		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[0],
+			e == EINVAL ? "not a valid .svol file" : strerror(e));
+		return 1;
+	}
+	preview_default_options(&opt);
+	if (a->has_size)
+		opt.width = opt.height = a->size;
+	int ret = preview_volume_to_png(vol, &opt, a->operand[1]);
+	volume_destroy(vol);
+	if (ret < 0) {
+		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[1], strerror(-ret));
+		return 1;
+	}
+	return 0;
+}
+
+/* ---- command line ---- */
+
+static int parse_color(const char *s, uint8_t rgb[3])
+{
+	char *end;
+	if (*s == '#')
+		s++;
+	if (strlen(s) != 6 || strspn(s, "0123456789abcdefABCDEF") != 6)
+		return -EINVAL;
+	unsigned long v = strtoul(s, &end, 16);
+	rgb[0] = (uint8_t)(v >> 16);
+	rgb[1] = (uint8_t)(v >> 8);
+	rgb[2] = (uint8_t)v;
+	return 0;
+}
+
+static int parse_size(const char *s, uint32_t *out)
+{
+	char *end;
+	errno = 0;
+	unsigned long v = strtoul(s, &end, 10);
+	if (errno || end == s || *end || v < 16 || v > 16384)
+		return -EINVAL;
+	*out = (uint32_t)v;
+	return 0;
+}
+
+enum { OPT_NO_FIT = 256, OPT_COLOR, OPT_SIZE };
+
+static const struct option long_options[] = {
+	{ "socket", required_argument, NULL, 's' },
+	{ "help", no_argument, NULL, 'h' },
+	{ "version", no_argument, NULL, 'V' },
+	{ "no-fit", no_argument, NULL, OPT_NO_FIT },
+	{ "color", required_argument, NULL, OPT_COLOR },
+	{ "size", required_argument, NULL, OPT_SIZE },
+	{ NULL, 0, NULL, 0 },
+};
+
+/* Returns -1 to go on, else the exit status (help, version, bad usage). */
+static int parse_option(int c, struct ctl_args *a)
+{
+	switch (c) {
+	case 's':
+		a->socket = optarg;
+		return -1;
+	case 'h':
+		fputs(usage_text, stdout);
+		return 0;
+	case 'V':
+		printf("spindlectl %s (protocol %d)\n", SPINDLE_VERSION, SPINDLE_PROTOCOL_VERSION);
+		return 0;
+	case OPT_NO_FIT:
+		a->no_fit = true;
+		return -1;
+	case OPT_COLOR:
+		a->has_color = true;
+		return parse_color(optarg, a->color) < 0 ? usage_error("bad colour '%s' (want RRGGBB)", optarg) : -1;
+	case OPT_SIZE:
+		a->has_size = true;
+		return parse_size(optarg, &a->size) < 0 ? usage_error("bad size '%s' (want 16..16384)", optarg) : -1;
+	default: /* getopt has said what was wrong */
+		fprintf(stderr, "Try 'spindlectl --help'.\n");
+		return 1;
+	}
+}
+
+struct ctl_command {
+	const char *name;
+	int operands;
+	bool show_opts, preview_opts;
+	int (*run)(const struct ctl_args *a);
+};
+
+static const struct ctl_command commands[] = {
+	{ "status", 0, false, false, cmd_status },
+	{ "show", 1, true, false, cmd_show },
+	{ "capture", 1, false, false, cmd_capture },
+	{ "preview", 2, false, true, cmd_preview },
+};
+
+/* Picks the command and checks its operands and options. */
+static const struct ctl_command *check_command(const struct ctl_args *a, int *status)
+{
+	const struct ctl_command *cmd = NULL;
+	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
+		if (strcmp(commands[i].name, a->command) == 0)
+			cmd = &commands[i];
+	*status = 1;
+	if (!cmd)
+		usage_error("unknown command '%s'", a->command);
+	else if (a->operand_count != cmd->operands)
+		usage_error("wrong number of arguments for '%s'", cmd->name);
+	else if ((a->no_fit || a->has_color) && !cmd->show_opts)
+		usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
+	else if (a->has_size && !cmd->preview_opts)
+		usage_error("--size goes with 'preview', not '%s'", cmd->name);
+	else
+		return cmd;
+	return NULL;
+}
+
+int main(int argc, char **argv)
+{
+	struct ctl_args a = { 0 };
+	int c, status;
+
+	/* A closed stdout or socket must give an error return, not kill us. */
+	signal(SIGPIPE, SIG_IGN);
+
+	while ((c = getopt_long(argc, argv, "s:hV", long_options, NULL)) != -1) {
+		if ((status = parse_option(c, &a)) >= 0)
+			return status;
+	}
+	if (optind >= argc)
+		return usage_error("%s", "no command given");
+	a.command = argv[optind++];
+	for (; optind < argc; optind++) {
+		if (a.operand_count == 2)
+			return usage_error("too many arguments for '%s'", a.command);
+		a.operand[a.operand_count++] = argv[optind];
+	}
+	const struct ctl_command *cmd = check_command(&a, &status);
+	return cmd ? cmd->run(&a) : status;
+}
