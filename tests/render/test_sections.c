@@ -34,28 +34,46 @@ static void check_axis_line(const struct geometry *g)
 	rtest_mesh_free(&m);
 }
 
-/* A horizontal disk centred on the axis, radius r: every image lights its
- * row over s in [-r_in, r_in] (r_in: the polygon's inner radius) with no
- * hole, and nothing outside that row or beyond s = +-r. */
-static void check_disk(const struct geometry *g, double r, uint32_t row)
+/* Every image lights row over s in [-r_in, r_in] with no hole, and nothing
+ * outside that row or beyond s = +-r_out. */
+static void check_flat_section(const struct geometry *g, const struct rtest_mesh *m,
+			       double r_in, double r_out, uint32_t row)
 {
-	int segs = 40;
-	double r_in = r * cos(M_PI / segs);
-	struct rtest_mesh m = { 0 };
-	rtest_disk(&m, r, rtest_row_mid(g, row), segs);
-	struct scene_draw d = rtest_draw(SCENE_TRIANGLES, &m, 255, 255, 255);
+	struct scene_draw d = rtest_draw(SCENE_TRIANGLES, m, 255, 255, 255);
 	struct volume *vol = rtest_render(g, &d, 1, 2);
 	uint32_t u_in0 = geometry_column(g, -r_in), u_in1 = geometry_column(g, r_in);
-	uint32_t u0 = geometry_column(g, -r), u1 = geometry_column(g, r);
+	uint32_t u0 = geometry_column(g, -r_out), u1 = geometry_column(g, r_out);
 	for (uint32_t k = 0; k < vol->image_count; k++) {
 		for (uint32_t u = u_in0; u <= u_in1; u++)
-			CHECK_MSG(rtest_lit(vol, k, u, row, 0), "disk image %u: hole at u %u", k, u);
+			CHECK_MSG(rtest_lit(vol, k, u, row, 0), "flat image %u: hole at u %u", k, u);
 		uint64_t in_row = 0;
 		for (uint32_t u = u0; u <= u1; u++)
 			in_row += rtest_lit(vol, k, u, row, 0);
-		CHECK_MSG(in_row == rtest_count_image(vol, k, 0), "disk image %u: lit off its row/span", k);
+		CHECK_MSG(in_row == rtest_count_image(vol, k, 0), "flat image %u: lit off its row/span", k);
 	}
 	volume_destroy(vol);
+}
+
+/* A horizontal disk (triangle fan) centred on the axis, radius r; its
+ * polygon's inner radius is r cos(pi / segments). */
+static void check_disk(const struct geometry *g, double r, uint32_t row)
+{
+	int segs = 40;
+	struct rtest_mesh m = { 0 };
+	rtest_disk(&m, r, rtest_row_mid(g, row), segs);
+	check_flat_section(g, &m, r * cos(M_PI / segs), r, row);
+	rtest_mesh_free(&m);
+}
+
+/* One horizontal triangle around the axis, no vertex on it (binning must
+ * still send it to every image): inner radius r / 2. */
+static void check_triangle_around_axis(const struct geometry *g, double r, uint32_t row)
+{
+	struct rtest_mesh m = { 0 };
+	double y = rtest_row_mid(g, row);
+	for (int i = 0; i < 3; i++)
+		rtest_mesh_add(&m, r * cos(0.3 + 2 * M_PI * i / 3), y, r * sin(0.3 + 2 * M_PI * i / 3));
+	check_flat_section(g, &m, r / 2, r, row);
 	rtest_mesh_free(&m);
 }
 
@@ -173,6 +191,8 @@ int main(void)
 	check_disk(&small, 0.6, 40);
 	check_disk(&small, 0.95, 100);
 	check_disk(&odd, 0.7, 30);
+	check_triangle_around_axis(&small, 0.8, 70);
+	check_triangle_around_axis(&odd, 0.9, 20);
 	check_sphere(&small, 0.5);
 	check_sphere(&small, 0.9);
 	check_sphere(&odd, 0.6);
