@@ -9,6 +9,9 @@
 
 #include "render.h"
 
+/* x as the renderer sees it: scene vertices are floats. */
+#define F(x) ((double)(float)(x))
+
 /* The `small` profile (128x128, N = 128 mirrored, h = 1). */
 struct geometry rtest_small(void);
 /* Not mirrored, odd sizes (edge tiles, W not a multiple of 8), h != 1:

@@ -158,8 +158,8 @@ static void check_wall(const struct geometry *g, double a, double b)
 	rtest_wall(&m, a, b);
 	struct scene_draw d = rtest_draw(SCENE_TRIANGLES, &m, 255, 255, 255);
 	struct volume *vol = rtest_render(g, &d, 1, 2);
-	uint32_t u0 = geometry_column(g, -a), u1 = geometry_column(g, a);
-	uint32_t v0 = geometry_row(g, b), v1 = geometry_row(g, -b), mid = g->width / 2;
+	uint32_t u0 = geometry_column(g, -F(a)), u1 = geometry_column(g, F(a));
+	uint32_t v0 = geometry_row(g, F(b)), v1 = geometry_row(g, -F(b)), mid = g->width / 2;
 	for (uint32_t k = 0; k < vol->image_count; k++) {
 		bool in_plane = k == 0 || (!g->mirrored && 2 * k == g->images_per_rev);
 		uint64_t want = in_plane ? (uint64_t)(u1 - u0 + 1) * (v1 - v0 + 1) : 0, inside = 0;
