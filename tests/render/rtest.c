@@ -163,6 +163,26 @@ bool rtest_same(const struct volume *a, const struct volume *b)
 	return true;
 }
 
+bool rtest_padding_clear(const struct volume *vol)
+{
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		const uint8_t *tile = vol->images[k].tiles;
+		for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
+			if (!volume_tile_present(&vol->images[k], t))
+				continue;
+			uint32_t x0 = (t % vol->tiles_x) * 32, y0 = (t / vol->tiles_x) * 32;
+			for (uint32_t i = 0; i < 3 * 32 * 32; i++) {
+				uint32_t x = i % 32, y = (i / 32) % 32;
+				bool bit = (tile[i / 8] >> (7 - i % 8)) & 1;
+				if (bit && (x0 + x >= vol->geom.width || y0 + y >= vol->geom.height))
+					return false;
+			}
+			tile += VOLUME_TILE_BYTES;
+		}
+	}
+	return true;
+}
+
 double rtest_col_s0(const struct geometry *g, uint32_t u)
 {
 	return 2.0 * u / g->width - 1.0;

@@ -51,6 +51,9 @@ uint64_t rtest_count(const struct volume *vol, int c);
 /* Whether two volumes hold the same masks and tile bytes. */
 bool rtest_same(const struct volume *a, const struct volume *b);
 
+/* Whether every pixel past W or H in edge tiles is 0 (volume.h's rule). */
+bool rtest_padding_clear(const struct volume *vol);
+
 /* Left and right edge (in s) of column u, top and bottom (in y) of row v. */
 double rtest_col_s0(const struct geometry *g, uint32_t u);
 double rtest_col_s1(const struct geometry *g, uint32_t u);

@@ -88,6 +88,7 @@ static void check_enormous(const struct geometry *g)
 			in_row += rtest_lit(vol, k, u, row, 0);
 		CHECK(in_row > 0 && in_row == rtest_count_image(vol, k, 0));
 	}
+	CHECK(rtest_padding_clear(vol));
 	volume_destroy(vol);
 	struct scene_draw dm[2] = { rtest_draw(SCENE_TRIANGLES, &max, 255, 255, 255),
 				    rtest_draw(SCENE_LINES, &max, 255, 255, 255) };
@@ -95,6 +96,7 @@ static void check_enormous(const struct geometry *g)
 	dm[1].transform[12] = 3e38f;
 	vol = rtest_render(g, dm, 2, 2);
 	CHECK(volume_tile_count(vol) <= (uint64_t)vol->image_count * volume_tiles_per_image(vol));
+	CHECK(rtest_padding_clear(vol));
 	volume_destroy(vol);
 	rtest_mesh_free(&pt);
 	rtest_mesh_free(&tri);

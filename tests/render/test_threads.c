@@ -59,6 +59,7 @@ static void check_thread_counts(const struct geometry *g, bool quick)
 	busy_init(&b, 7);
 	struct volume *ref = rtest_render(g, b.draws, 4, 1);
 	CHECK(rtest_count(ref, 0) > 1000);
+	CHECK(rtest_padding_clear(ref));
 	const unsigned counts[] = { 2, 0, 3, 4, 7 };
 	for (size_t i = 0; i < (quick ? 2 : sizeof(counts) / sizeof(counts[0])); i++) {
 		struct volume *vol = rtest_render(g, b.draws, 4, counts[i]);
