@@ -109,14 +109,39 @@ static void check_garbage_points(const struct geometry *g)
 	rtest_mesh_free(&m);
 }
 
+/* The transform is column-major (translation in elements 12..14) and
+ * applied before ownership: a point moved and scaled lands where its
+ * volume-space position says. */
+static void check_transform(const struct geometry *g)
+{
+	struct rtest_mesh m = { 0 };
+	rtest_mesh_add(&m, 0.25, 0.125, -0.5);
+	struct scene_draw d = rtest_draw(SCENE_POINTS, &m, 255, 255, 255);
+	/* x' = 2x + 0.5 z + 0.125, y' = y - 0.25, z' = -x + 0.75 */
+	d.transform[0] = 2.0f, d.transform[2] = -1.0f;
+	d.transform[8] = 0.5f, d.transform[10] = 0.0f;
+	d.transform[12] = 0.125f, d.transform[13] = -0.25f, d.transform[14] = 0.75f;
+	double p[3] = { 0.5 - 0.25 + 0.125, 0.125 - 0.25, -0.25 + 0.75 };
+	struct volume *vol = rtest_render(g, &d, 1, 1);
+	struct voxel want[2];
+	int n = expect_voxels(g, p, want);
+	CHECK(rtest_count(vol, 0) == (uint64_t)n);
+	for (int i = 0; i < n; i++)
+		CHECK(rtest_lit(vol, want[i].k, want[i].u, want[i].v, 0));
+	volume_destroy(vol);
+	rtest_mesh_free(&m);
+}
+
 int main(void)
 {
 	struct geometry small = rtest_small(), odd = rtest_odd();
 	check_azimuths(&small);
 	check_axis_points(&small);
 	check_garbage_points(&small);
+	check_transform(&small);
 	check_azimuths(&odd);
 	check_axis_points(&odd);
 	check_garbage_points(&odd);
+	check_transform(&odd);
 	return check_done();
 }
