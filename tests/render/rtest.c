@@ -1,0 +1,209 @@
+#include "rtest.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+struct geometry rtest_small(void)
+{
+	struct geometry g;
+	if (geometry_from_profile("small", &g) < 0)
+		abort();
+	return g;
+}
+
+struct geometry rtest_odd(void)
+{
+	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f };
+	return g;
+}
+
+void rtest_mesh_add(struct rtest_mesh *m, double x, double y, double z)
+{
+	if (m->count == m->cap) {
+		m->cap = m->cap ? 2 * m->cap : 64;
+		m->xyz = realloc(m->xyz, (size_t)m->cap * 3 * sizeof(float));
+		if (!m->xyz)
+			abort();
+	}
+	float *p = m->xyz + (size_t)m->count * 3;
+	p[0] = (float)x;
+	p[1] = (float)y;
+	p[2] = (float)z;
+	m->count++;
+}
+
+void rtest_mesh_free(struct rtest_mesh *m)
+{
+	free(m->xyz);
+	memset(m, 0, sizeof(*m));
+}
+
+static void sphere_point(double out[3], double r, int i, int j, int slices, int stacks)
+{
+	double lat = M_PI / 2 - M_PI * j / stacks, lon = 2 * M_PI * i / slices;
+	out[0] = r * cos(lat) * cos(lon);
+	out[1] = r * sin(lat);
+	out[2] = r * cos(lat) * sin(lon);
+}
+
+static void add3(struct rtest_mesh *m, const double a[3], const double b[3], const double c[3])
+{
+	rtest_mesh_add(m, a[0], a[1], a[2]);
+	rtest_mesh_add(m, b[0], b[1], b[2]);
+	rtest_mesh_add(m, c[0], c[1], c[2]);
+}
+
+void rtest_sphere(struct rtest_mesh *m, double r, int slices, int stacks)
+{
+	for (int j = 0; j < stacks; j++) {
+		for (int i = 0; i < slices; i++) {
+			double a[3], b[3], c[3], d[3];
+			sphere_point(a, r, i, j, slices, stacks);
+			sphere_point(b, r, i + 1, j, slices, stacks);
+			sphere_point(c, r, i, j + 1, slices, stacks);
+			sphere_point(d, r, i + 1, j + 1, slices, stacks);
+			if (j > 0)
+				add3(m, a, b, d);
+			if (j < stacks - 1)
+				add3(m, a, d, c);
+		}
+	}
+}
+
+void rtest_disk(struct rtest_mesh *m, double r, double y, int segments)
+{
+	for (int i = 0; i < segments; i++) {
+		double a0 = 2 * M_PI * i / segments, a1 = 2 * M_PI * (i + 1) / segments;
+		rtest_mesh_add(m, 0, y, 0);
+		rtest_mesh_add(m, r * cos(a0), y, r * sin(a0));
+		rtest_mesh_add(m, r * cos(a1), y, r * sin(a1));
+	}
+}
+
+void rtest_wall(struct rtest_mesh *m, double a, double b)
+{
+	rtest_mesh_add(m, -a, -b, 0);
+	rtest_mesh_add(m, a, -b, 0);
+	rtest_mesh_add(m, a, b, 0);
+	rtest_mesh_add(m, -a, -b, 0);
+	rtest_mesh_add(m, a, b, 0);
+	rtest_mesh_add(m, -a, b, 0);
+}
+
+void rtest_identity(float t[16])
+{
+	memset(t, 0, 16 * sizeof(float));
+	t[0] = t[5] = t[10] = t[15] = 1.0f;
+}
+
+struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
+			     uint8_t g, uint8_t b)
+{
+	struct scene_draw d = { .prim = prim, .count = m->count, .xyz = m->xyz };
+	rtest_identity(d.transform);
+	d.rgb[0] = r;
+	d.rgb[1] = g;
+	d.rgb[2] = b;
+	return d;
+}
+
+struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws,
+			    uint32_t n, unsigned threads)
+{
+	struct scene s = { .draw_count = n, .draws = draws };
+	struct renderer *r = render_cpu_create(g, threads);
+	struct volume *vol = volume_create(g);
+	if (!r || !vol || render_volume(r, &s, vol) < 0) {
+		fprintf(stderr, "rtest_render failed\n");
+		abort();
+	}
+	render_destroy(r);
+	return vol;
+}
+
+bool rtest_lit(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int c)
+{
+	return volume_pixel(vol, k, u, v, c) != 0;
+}
+
+uint64_t rtest_count_image(const struct volume *vol, uint32_t k, int c)
+{
+	const struct volume_image *img = &vol->images[k];
+	uint64_t n = 0;
+	for (uint32_t i = 0; i < img->tile_count; i++) {
+		const uint8_t *p = img->tiles + (size_t)i * VOLUME_TILE_BYTES + c * VOLUME_TILE_PLANE_BYTES;
+		for (int b = 0; b < VOLUME_TILE_PLANE_BYTES; b++)
+			n += (uint64_t)__builtin_popcount(p[b]);
+	}
+	return n;
+}
+
+uint64_t rtest_count(const struct volume *vol, int c)
+{
+	uint64_t n = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		n += rtest_count_image(vol, k, c);
+	return n;
+}
+
+bool rtest_same(const struct volume *a, const struct volume *b)
+{
+	if (a->image_count != b->image_count || a->mask_bytes != b->mask_bytes)
+		return false;
+	for (uint32_t k = 0; k < a->image_count; k++) {
+		const struct volume_image *x = &a->images[k], *y = &b->images[k];
+		if (x->tile_count != y->tile_count || memcmp(x->mask, y->mask, a->mask_bytes) != 0)
+			return false;
+		if (x->tile_count &&
+		    memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES) != 0)
+			return false;
+	}
+	return true;
+}
+
+bool rtest_padding_clear(const struct volume *vol)
+{
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		const uint8_t *tile = vol->images[k].tiles;
+		for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
+			if (!volume_tile_present(&vol->images[k], t))
+				continue;
+			uint32_t x0 = (t % vol->tiles_x) * 32, y0 = (t / vol->tiles_x) * 32;
+			for (uint32_t i = 0; i < 3 * 32 * 32; i++) {
+				uint32_t x = i % 32, y = (i / 32) % 32;
+				bool bit = (tile[i / 8] >> (7 - i % 8)) & 1;
+				if (bit && (x0 + x >= vol->geom.width || y0 + y >= vol->geom.height))
+					return false;
+			}
+			tile += VOLUME_TILE_BYTES;
+		}
+	}
+	return true;
+}
+
+double rtest_col_s0(const struct geometry *g, uint32_t u)
+{
+	return 2.0 * u / g->width - 1.0;
+}
+
+double rtest_col_s1(const struct geometry *g, uint32_t u)
+{
+	return 2.0 * (u + 1) / g->width - 1.0;
+}
+
+double rtest_row_y0(const struct geometry *g, uint32_t v)
+{
+	return g->half_height - 2.0 * g->half_height * v / g->height;
+}
+
+double rtest_row_y1(const struct geometry *g, uint32_t v)
+{
+	return g->half_height - 2.0 * g->half_height * (v + 1) / g->height;
+}
+
+double rtest_row_mid(const struct geometry *g, uint32_t v)
+{
+	return 0.5 * (rtest_row_y0(g, v) + rtest_row_y1(g, v));
+}

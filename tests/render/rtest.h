@@ -1,0 +1,65 @@
+/* Helpers shared by the renderer tests: geometries, scenes and meshes, and
+ * reading rendered volumes back. Expectations are computed by the tests from
+ * DESIGN.md section 3 and common/geometry.c, never from the renderer's code. */
+#ifndef SPINDLE_RTEST_H
+#define SPINDLE_RTEST_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "render.h"
+
+/* x as the renderer sees it: scene vertices are floats. */
+#define F(x) ((double)(float)(x))
+
+/* The `small` profile (128x128, N = 128 mirrored, h = 1). */
+struct geometry rtest_small(void);
+/* Not mirrored, odd sizes (edge tiles, W not a multiple of 8), h != 1:
+ * 100x72, N = 50, h = 0.75. */
+struct geometry rtest_odd(void);
+
+/* A growable vertex list. */
+struct rtest_mesh {
+	float *xyz;
+	uint32_t count; /* vertices */
+	uint32_t cap;
+};
+
+void rtest_mesh_add(struct rtest_mesh *m, double x, double y, double z);
+void rtest_mesh_free(struct rtest_mesh *m);
+/* Triangles of a UV sphere at the origin: slices around, stacks pole to pole. */
+void rtest_sphere(struct rtest_mesh *m, double r, int slices, int stacks);
+/* Triangle fan of a horizontal disk of radius r at height y, centre on the axis. */
+void rtest_disk(struct rtest_mesh *m, double r, double y, int segments);
+/* Two triangles of the rectangle |x| <= a, |y| <= b in the plane z = 0. */
+void rtest_wall(struct rtest_mesh *m, double a, double b);
+
+/* A draw of m with the identity transform. */
+struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
+			     uint8_t g, uint8_t b);
+void rtest_identity(float t[16]);
+
+/* Renders draws with a fresh CPU renderer; aborts on failure. */
+struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws,
+			    uint32_t n, unsigned threads);
+
+/* Pixel (u, v) of channel c of image k, and whether any channel is lit. */
+bool rtest_lit(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int c);
+/* Lit pixels of channel c in image k, or in the whole volume. */
+uint64_t rtest_count_image(const struct volume *vol, uint32_t k, int c);
+uint64_t rtest_count(const struct volume *vol, int c);
+/* Whether two volumes hold the same masks and tile bytes. */
+bool rtest_same(const struct volume *a, const struct volume *b);
+
+/* Whether every pixel past W or H in edge tiles is 0 (volume.h's rule). */
+bool rtest_padding_clear(const struct volume *vol);
+
+/* Left and right edge (in s) of column u, top and bottom (in y) of row v. */
+double rtest_col_s0(const struct geometry *g, uint32_t u);
+double rtest_col_s1(const struct geometry *g, uint32_t u);
+double rtest_row_y0(const struct geometry *g, uint32_t v);
+double rtest_row_y1(const struct geometry *g, uint32_t v);
+/* Height at the middle of row v. */
+double rtest_row_mid(const struct geometry *g, uint32_t v);
+
+#endif

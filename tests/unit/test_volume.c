@@ -1,0 +1,129 @@
+/* common/volume: tile layout (planes R, G, B of 32 rows of 4 bytes, MSB
+ * leftmost; mask bit t at byte t / 8, bit t % 8; tiles in increasing t),
+ * append rules, dense round trips, and edge tiles of images whose size is
+ * not a multiple of 32 (or of 8). */
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "volume.h"
+
+static const struct geometry odd = { 100, 72, 50, false, 0.75f, 600.0f };
+
+static uint32_t lcg(uint32_t *s)
+{
+	*s = *s * 1664525u + 1013904223u;
+	return *s >> 8;
+}
+
+/* Sets pixel (x, y) of channel c in a tile buffer. */
+static void tile_set(uint8_t *tile, uint32_t x, uint32_t y, int c)
+{
+	tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));
+}
+
+static void check_create(void)
+{
+	struct volume *v = volume_create(&odd);
+	CHECK(v && v->image_count == 50 && v->tiles_x == 4 && v->tiles_y == 3 && v->mask_bytes == 2);
+	CHECK(volume_tiles_per_image(v) == 12);
+	CHECK(volume_dense_image_bytes(v) == 3 * 72 * 13);
+	CHECK(volume_tile_count(v) == 0 && volume_sparse_bytes(v) == 50 * 2);
+	volume_destroy(v);
+	struct geometry g;
+	geometry_from_profile("perspecta", &g);
+	v = volume_create(&g);
+	CHECK(v && v->image_count == 198 && v->tiles_x == 24 && v->mask_bytes == 72);
+	volume_destroy(v);
+	g.images_per_rev = 397;
+	errno = 0;
+	CHECK(volume_create(&g) == NULL && errno == EINVAL);
+	volume_destroy(NULL);
+}
+
+static void check_append(void)
+{
+	struct volume *v = volume_create(&odd);
+	uint8_t tile[VOLUME_TILE_BYTES] = { 0 };
+	CHECK(volume_image_append(v, 3, 2, tile) == 0); /* all zero: skipped */
+	CHECK(v->images[3].tile_count == 0 && v->images[3].mask[0] == 0);
+	tile_set(tile, 0, 0, 0);
+	CHECK(volume_image_append(v, 3, 9, tile) == 0);
+	CHECK(v->images[3].tile_count == 1 && v->images[3].mask[1] == 0x02 && v->images[3].mask[0] == 0);
+	CHECK(volume_tile_present(&v->images[3], 9));
+	CHECK(volume_image_append(v, 3, 5, tile) == -EINVAL); /* out of order */
+	CHECK(volume_image_append(v, 3, 9, tile) == -EINVAL); /* repeated */
+	CHECK(volume_image_append(v, 3, 12, tile) == -EINVAL); /* past the image */
+	CHECK(volume_image_append(v, 50, 0, tile) == -EINVAL);
+	CHECK(volume_image_append(v, 3, 11, tile) == 0);
+	CHECK(v->images[3].mask[1] == 0x0a && v->images[3].tile_count == 2);
+	CHECK(volume_tile_count(v) == 2 && volume_sparse_bytes(v) == 100 + 2 * 384);
+	volume_clear(v);
+	CHECK(volume_tile_count(v) == 0 && v->images[3].mask[1] == 0);
+	CHECK(volume_image_append(v, 3, 0, tile) == 0);
+	volume_destroy(v);
+}
+
+/* Random pixels into image k, tile by tile (never past W or H). Returns the
+ * expected image as one byte per pixel and channel. */
+static uint8_t *fill_random(struct volume *v, uint32_t k, uint32_t seed)
+{
+	uint32_t w = v->geom.width, h = v->geom.height;
+	uint8_t *want = calloc((size_t)3 * w * h, 1);
+	for (uint32_t t = 0; t < volume_tiles_per_image(v); t++) {
+		uint8_t tile[VOLUME_TILE_BYTES] = { 0 };
+		uint32_t x0 = (t % v->tiles_x) * 32, y0 = (t / v->tiles_x) * 32;
+		bool empty = lcg(&seed) % 3 == 0;
+		for (uint32_t y = 0; y < 32 && y0 + y < h && !empty; y++)
+			for (uint32_t x = 0; x < 32 && x0 + x < w; x++)
+				for (int c = 0; c < 3; c++)
+					if (lcg(&seed) % 5 == 0) {
+						tile_set(tile, x, y, c);
+						want[((size_t)c * h + y0 + y) * w + x0 + x] = 1;
+					}
+		CHECK(volume_image_append(v, k, t, tile) == 0);
+	}
+	return want;
+}
+
+static void check_pixels_and_dense(const struct geometry *g)
+{
+	struct volume *v = volume_create(g);
+	uint32_t k = v->image_count - 1, w = g->width, h = g->height, rb = geometry_row_bytes(g);
+	uint8_t *want = fill_random(v, k, 99);
+	uint8_t *dense = malloc(volume_dense_image_bytes(v));
+	memset(dense, 0xee, volume_dense_image_bytes(v));
+	volume_image_to_dense(v, k, dense);
+	for (int c = 0; c < 3; c++)
+		for (uint32_t y = 0; y < h; y++) {
+			for (uint32_t x = 0; x < w; x++) {
+				int bit = (dense[((size_t)c * h + y) * rb + x / 8] >> (7 - x % 8)) & 1;
+				int px = want[((size_t)c * h + y) * w + x];
+				CHECK(bit == px);
+				CHECK(volume_pixel(v, k, x, y, c) == px);
+			}
+			for (uint32_t x = w; x < rb * 8; x++) /* row padding stays 0 */
+				CHECK(((dense[((size_t)c * h + y) * rb + x / 8] >> (7 - x % 8)) & 1) == 0);
+		}
+	struct volume *copy = volume_create(g);
+	CHECK(volume_copy(copy, v) == 0);
+	CHECK(copy->images[k].tile_count == v->images[k].tile_count);
+	CHECK(memcmp(copy->images[k].tiles, v->images[k].tiles, (size_t)v->images[k].tile_count * 384) == 0);
+	CHECK(volume_pixel(copy, k, w - 1, h - 1, 2) == want[((size_t)2 * h + h - 1) * w + w - 1]);
+	volume_destroy(copy);
+	free(dense);
+	free(want);
+	volume_destroy(v);
+}
+
+int main(void)
+{
+	struct geometry small;
+	geometry_from_profile("small", &small);
+	check_create();
+	check_append();
+	check_pixels_and_dense(&odd);
+	check_pixels_and_dense(&small);
+	return check_done();
+}
