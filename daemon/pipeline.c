@@ -29,7 +29,7 @@ struct pipeline {
 	/* The render target; holds a finished volume while ready is set. */
 	struct volume *work;
 	bool dirty, busy, ready;
-	uint64_t next_seq;
+	uint64_t next_seq, work_seq;
 	struct snapshot snap;
 	struct pipeline_stats stats;
 
@@ -103,7 +103,7 @@ static void start_render(struct pipeline *p)
 	p->next_seq++;
 	p->dirty = false;
 	p->busy = true;
-	p->work->seq = seq;
+	p->work_seq = seq;
 	pthread_mutex_lock(&p->lock);
 	p->started_ns = now_ns();
 	p->job = true;
@@ -144,6 +144,7 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 		log_error("render failed: %s", strerror(-r));
 		p->dirty = true; /* try again at the next change */
 	} else {
+		p->work->seq = p->work_seq; /* rendering cleared it */
 		p->ready = true;
 		p->stats.volumes_rendered++;
 		p->stats.last_render_ms = ms;

@@ -1,0 +1,108 @@
+#!/usr/bin/env python3
+"""The demo path end to end: spindled on the simulated device (small profile),
+spindlectl show (the Stanford bunny), status, capture, preview; the model
+stays shown until SIGTERM, and both programs exit cleanly.
+Usage: test-spindlectl-e2e.py SPINDLED SPINDLECTL DATA_DIR WORK_DIR"""
+import os
+import signal
+import socket
+import struct
+import subprocess
+import sys
+import tempfile
+import time
+
+spindled, ctl, data_dir, work = sys.argv[1:5]
+
+
+def fail(what):
+    print('FAIL:', what)
+    sys.exit(1)
+
+
+def wait_socket(path, proc):
+    for _ in range(500):
+        if proc.poll() is not None:
+            fail(f'spindled exited with {proc.returncode}')
+        try:
+            with socket.socket(socket.AF_UNIX) as s:
+                s.connect(path)
+                return
+        except OSError:
+            time.sleep(0.01)
+    fail('spindled did not listen')
+
+
+def ctl_run(sock, *args):
+    p = subprocess.run([ctl, '--socket', sock, *args], capture_output=True, text=True, timeout=60)
+    if p.returncode != 0:
+        fail(f'spindlectl {" ".join(args)}: exit {p.returncode}: {p.stderr}')
+    return p.stdout
+
+
+def main():
+    tmp = tempfile.mkdtemp(prefix='spindle-e2e-')
+    sock = os.path.join(tmp, 'spindle.sock')
+    log = open(os.path.join(work, 'e2e-spindled.log'), 'w')
+    daemon = subprocess.Popen([spindled, '--device', 'sim', '--profile', 'small', '--socket', sock,
+                               '--config', '/dev/null'], stderr=log)
+    show = None
+    try:
+        wait_socket(sock, daemon)
+        show = subprocess.Popen([ctl, '--socket', sock, 'show', os.path.join(data_dir, 'bunny.ply'),
+                                 '--color', 'ffcc00'], stdout=subprocess.PIPE, text=True)
+        line = show.stdout.readline()
+        if not line.startswith('shown ') or int(line.split()[1]) < 1:
+            fail(f'show printed {line!r}')
+
+        status = dict(l.split(': ', 1) for l in ctl_run(sock, 'status').splitlines() if ': ' in l)
+        for key, want in (('width', '128'), ('images per revolution', '128'), ('mirrored', 'yes'),
+                          ('clients', '2'), ('projector present', 'yes')):
+            if status.get(key) != want:
+                fail(f'status {key}: {status.get(key)!r}, expected {want!r}')
+        if int(status['volumes shown']) < 1:
+            fail('no volume shown')
+
+        svol = os.path.join(work, 'e2e-bunny.svol')
+        ctl_run(sock, 'capture', svol)
+        with open(svol, 'rb') as f:
+            data = f.read()
+        magic, version, hsize, w, h, images, n = struct.unpack('<4sHHIIII', data[:24])
+        if (magic, w, h, images, n) != (b'SVOL', 128, 128, 64, 128):
+            fail(f'capture header {(magic, w, h, images, n)}')
+        if len(data) != 64 + images * 3 * h * (w // 8):
+            fail('capture size')
+        # Yellow (ffcc00): red and green planes lit, blue dark.
+        planes = [0, 0, 0]
+        stride = h * (w // 8)
+        for k in range(images):
+            for c in range(3):
+                off = 64 + (k * 3 + c) * stride
+                planes[c] += sum(bin(b).count('1') for b in data[off:off + stride])
+        if not (planes[0] > 1000 and planes[1] > 500 and planes[2] == 0):
+            fail(f'lit voxels per plane {planes}')
+
+        png = os.path.join(work, 'e2e-bunny.png')
+        subprocess.run([ctl, 'preview', svol, png], check=True, timeout=60)
+        with open(png, 'rb') as f:
+            if f.read(8) != b'\x89PNG\r\n\x1a\n':
+                fail('preview is not a PNG')
+
+        show.send_signal(signal.SIGTERM)
+        if show.wait(timeout=10) != 0:
+            fail(f'show exited {show.returncode} on SIGTERM')
+        show = None
+    finally:
+        if show:
+            show.kill()
+        daemon.send_signal(signal.SIGTERM)
+        rc = daemon.wait(timeout=10)
+        log.close()
+    if rc != 0:
+        fail(f'spindled exited {rc}')
+    if os.path.exists(sock):
+        fail('socket left behind')
+    print('1 passed, 0 failed')
+
+
+main()
