@@ -20,4 +20,10 @@ int64_t sim_rotor_next_index(const struct sim_rotor *r, int64_t t);
 /* True angle in radians [0, 2*pi) at time t. */
 double sim_rotor_angle(const struct sim_rotor *r, int64_t t);
 
+/* Number of the revolution in progress at t: 0 from creation, counting up at
+ * each revolution start (negative before creation). */
+int64_t sim_rotor_revolution(const struct sim_rotor *r, int64_t t);
+/* True start time of revolution n. */
+int64_t sim_rotor_index_time(const struct sim_rotor *r, int64_t n);
+
 #endif

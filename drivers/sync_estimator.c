@@ -1,0 +1,225 @@
+#include "sync_estimator.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* A run of this many glitches means the estimate, not the pulses, is wrong. */
+#define GLITCH_RUN_RESEED 3
+
+struct sync_estimator {
+	struct sync_estimator_config cfg;
+	struct sync_state state;
+	int64_t nominal_period;
+	int64_t hist[SYNC_ESTIMATOR_WINDOW];
+	uint32_t hist_len, hist_pos;
+	bool have_last;
+	int64_t last_edge;
+	uint32_t consecutive; /* consistent revolutions in a row */
+	uint32_t glitch_run;
+};
+
+void sync_estimator_config_default(struct sync_estimator_config *cfg, double nominal_rpm)
+{
+	*cfg = (struct sync_estimator_config){
+		.nominal_rpm = nominal_rpm,
+		.band = 0.10,
+		.tolerance = 0.02,
+		.lock_revs = 4,
+		.timeout_periods = 1.5,
+		.glitch_fraction = 0.75,
+		.max_missed = 8,
+	};
+}
+
+static bool config_valid(const struct sync_estimator_config *c)
+{
+	return c->nominal_rpm >= 1.0 && c->nominal_rpm <= 100000.0 && c->band > 0.0 && c->band < 1.0 &&
+	       c->tolerance > 0.0 && c->tolerance < 0.5 && c->lock_revs >= 1 &&
+	       c->lock_revs <= SYNC_ESTIMATOR_WINDOW && c->timeout_periods > 1.0 &&
+	       c->glitch_fraction > 0.0 && c->glitch_fraction < 1.0 && c->max_missed >= 1;
+}
+
+struct sync_estimator *sync_estimator_create(const struct sync_estimator_config *cfg)
+{
+	if (!config_valid(cfg)) {
+		errno = EINVAL;
+		return NULL;
+	}
+	struct sync_estimator *est = calloc(1, sizeof(*est));
+	if (!est)
+		return NULL;
+	est->cfg = *cfg;
+	est->nominal_period = llround(60e9 / cfg->nominal_rpm);
+	return est;
+}
+
+void sync_estimator_destroy(struct sync_estimator *est)
+{
+	free(est);
+}
+
+static void history_clear(struct sync_estimator *est)
+{
+	est->hist_len = 0;
+	est->hist_pos = 0;
+	est->consecutive = 0;
+	est->state.period_ns = 0;
+	est->state.rpm = 0.0;
+	est->state.jitter_ns = 0;
+}
+
+static bool unlock(struct sync_estimator *est, enum sync_unlock_reason why)
+{
+	est->consecutive = 0;
+	if (!est->state.locked)
+		return false;
+	est->state.locked = false;
+	est->state.unlock_reason = why;
+	est->state.unlocks++;
+	return true;
+}
+
+void sync_estimator_reset(struct sync_estimator *est)
+{
+	unlock(est, SYNC_UNLOCK_NONE);
+	history_clear(est);
+	est->have_last = false;
+	est->glitch_run = 0;
+	est->state.phase_ns = 0;
+}
+
+static int64_t expected_period(const struct sync_estimator *est)
+{
+	return est->state.period_ns ? est->state.period_ns : est->nominal_period;
+}
+
+static void history_add(struct sync_estimator *est, int64_t sample)
+{
+	est->hist[est->hist_pos] = sample;
+	est->hist_pos = (est->hist_pos + 1) % SYNC_ESTIMATOR_WINDOW;
+	if (est->hist_len < SYNC_ESTIMATOR_WINDOW)
+		est->hist_len++;
+
+	double sum = 0.0, sq = 0.0;
+	for (uint32_t i = 0; i < est->hist_len; i++)
+		sum += (double)est->hist[i];
+	double mean = sum / est->hist_len;
+	for (uint32_t i = 0; i < est->hist_len; i++)
+		sq += ((double)est->hist[i] - mean) * ((double)est->hist[i] - mean);
+	est->state.period_ns = llround(mean);
+	est->state.rpm = 60e9 / mean;
+	est->state.jitter_ns = llround(sqrt(sq / est->hist_len));
+}
+
+/* Starts over from edge t: the pulses so far say nothing about what comes. */
+static bool reseed(struct sync_estimator *est, int64_t t, enum sync_unlock_reason why)
+{
+	bool changed = unlock(est, why);
+	history_clear(est);
+	est->glitch_run = 0;
+	est->last_edge = t;
+	est->state.phase_ns = t;
+	return changed;
+}
+
+static bool update_lock(struct sync_estimator *est)
+{
+	const struct sync_estimator_config *c = &est->cfg;
+	bool in_band = fabs(est->state.rpm - c->nominal_rpm) <= c->band * c->nominal_rpm;
+	if (est->state.locked && !in_band)
+		return unlock(est, SYNC_UNLOCK_BAND);
+	if (!est->state.locked && in_band && est->consecutive >= c->lock_revs) {
+		est->state.locked = true;
+		est->state.locks++;
+		return true;
+	}
+	return false;
+}
+
+/* Adds one revolution's period; consistent ones extend the run towards lock.
+ * Out of lock an inconsistent period starts a new run from itself, so a
+ * rotor spinning up is tracked rather than averaged. */
+static void take_sample(struct sync_estimator *est, int64_t sample, bool after_gap)
+{
+	int64_t mean = est->state.period_ns;
+	bool consistent = est->hist_len == 0 ||
+			  fabs((double)(sample - mean)) <= est->cfg.tolerance * (double)mean;
+	if (after_gap || !consistent) {
+		if (!est->state.locked)
+			history_clear(est);
+		est->consecutive = after_gap ? 0 : 1;
+	} else {
+		est->consecutive++;
+	}
+	history_add(est, sample);
+}
+
+bool sync_estimator_feed(struct sync_estimator *est, int64_t t)
+{
+	est->state.edges++;
+	if (!est->have_last) {
+		est->have_last = true;
+		return reseed(est, t, SYNC_UNLOCK_NONE);
+	}
+	int64_t dt = t - est->last_edge;
+	double ratio = (double)dt / (double)expected_period(est);
+	bool judged = est->hist_len > 0; /* the first period has nothing to compare to */
+	if (dt <= 0 || (judged && ratio < est->cfg.glitch_fraction)) {
+		est->state.glitches++;
+		if (++est->glitch_run >= GLITCH_RUN_RESEED)
+			return reseed(est, t, SYNC_UNLOCK_UNSTABLE);
+		return false;
+	}
+	est->glitch_run = 0;
+	est->last_edge = t;
+	est->state.phase_ns = t;
+	if (judged && ratio >= 1.5) {
+		long k = lround(ratio);
+		if (k > (long)est->cfg.max_missed + 1)
+			return reseed(est, t, SYNC_UNLOCK_TIMEOUT); /* a stall, not missed pulses */
+		est->state.missed += (uint64_t)(k - 1);
+		take_sample(est, dt / k, true);
+	} else {
+		take_sample(est, dt, false);
+	}
+	return update_lock(est);
+}
+
+int64_t sync_estimator_deadline(const struct sync_estimator *est)
+{
+	if (!est->have_last)
+		return INT64_MAX;
+	return est->last_edge + llround(est->cfg.timeout_periods * (double)expected_period(est));
+}
+
+bool sync_estimator_check(struct sync_estimator *est, int64_t now)
+{
+	if (now <= sync_estimator_deadline(est))
+		return false;
+	return unlock(est, SYNC_UNLOCK_TIMEOUT);
+}
+
+int64_t sync_estimator_next_index(const struct sync_estimator *est)
+{
+	if (!est->state.period_ns)
+		return 0;
+	return est->state.phase_ns + est->state.period_ns;
+}
+
+int64_t sync_estimator_index_after(const struct sync_estimator *est, int64_t t)
+{
+	int64_t p = est->state.period_ns;
+	if (!p)
+		return 0;
+	if (t <= est->state.phase_ns)
+		return est->state.phase_ns;
+	int64_t n = (t - est->state.phase_ns + p - 1) / p;
+	return est->state.phase_ns + n * p;
+}
+
+const struct sync_state *sync_estimator_state(const struct sync_estimator *est)
+{
+	return &est->state;
+}

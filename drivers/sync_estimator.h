@@ -1,0 +1,85 @@
+/* The sync estimator: turns index-pulse timestamps into the rotor's period,
+ * phase, speed, jitter and a lock state, for any sync backend.
+ *
+ * Lock means "the rotor turns as it must, the projector may be lit": it is
+ * gained after lock_revs consecutive revolutions that agree within tolerance
+ * at a speed inside the band, and lost at once when the speed leaves the band
+ * or no edge comes for timeout_periods expected periods (found by
+ * sync_estimator_check(), which the owner calls from a timer armed at
+ * sync_estimator_deadline()). Edges far too early are glitches and ignored;
+ * gaps of about k periods count k - 1 missed pulses. */
+#ifndef SPINDLE_SYNC_ESTIMATOR_H
+#define SPINDLE_SYNC_ESTIMATOR_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define SYNC_ESTIMATOR_WINDOW 16 /* recent periods kept for mean and jitter */
+
+struct sync_estimator_config {
+	double nominal_rpm;
+	double band;            /* allowed relative speed deviation, e.g. 0.10 */
+	double tolerance;       /* relative period deviation of a consistent revolution */
+	uint32_t lock_revs;     /* consistent revolutions before lock */
+	double timeout_periods; /* no edge for this many periods unlocks */
+	double glitch_fraction; /* an edge sooner than this fraction of a period is a glitch */
+	uint32_t max_missed;    /* a longer gap is a stall: start over */
+};
+
+enum sync_unlock_reason {
+	SYNC_UNLOCK_NONE = 0, /* never locked yet */
+	SYNC_UNLOCK_TIMEOUT,  /* no edge in time: stopped, or pulses missing */
+	SYNC_UNLOCK_BAND,     /* speed outside nominal +/- band */
+	SYNC_UNLOCK_UNSTABLE, /* a run of glitches: the pulse train makes no sense */
+};
+
+struct sync_state {
+	bool locked;
+	enum sync_unlock_reason unlock_reason; /* why the last unlock happened */
+	int64_t period_ns; /* mean of recent periods, 0 until one is measured */
+	int64_t phase_ns;  /* time of the latest accepted index edge, 0 if none */
+	double rpm;        /* from period_ns, 0 until known */
+	int64_t jitter_ns; /* RMS deviation of recent periods from their mean */
+	uint64_t edges;    /* edges fed, glitches included */
+	uint64_t glitches; /* edges rejected as too early */
+	uint64_t missed;   /* pulses inferred missing from gaps */
+	uint64_t locks, unlocks;
+};
+
+struct sync_estimator;
+
+/* Fills cfg with defaults for nominal_rpm: band 10 %, tolerance 2 %, lock
+ * after 4 revolutions, timeout 1.5 periods, glitch before 0.75 periods,
+ * gaps of up to 8 periods counted as missed pulses. */
+void sync_estimator_config_default(struct sync_estimator_config *cfg, double nominal_rpm);
+
+/* NULL + errno (EINVAL for a bad config) on failure. */
+struct sync_estimator *sync_estimator_create(const struct sync_estimator_config *cfg);
+/* Accepts NULL. */
+void sync_estimator_destroy(struct sync_estimator *est);
+
+/* Forgets everything but the counters; unlocks. */
+void sync_estimator_reset(struct sync_estimator *est);
+
+/* Feeds one edge timestamp (ns, CLOCK_MONOTONIC, oldest first). Returns true
+ * when the lock state changed. */
+bool sync_estimator_feed(struct sync_estimator *est, int64_t t_ns);
+
+/* Unlocks if no edge came within timeout_periods expected periods before
+ * now_ns. Returns true when the lock state changed. */
+bool sync_estimator_check(struct sync_estimator *est, int64_t now_ns);
+
+/* When sync_estimator_check() should next run: the time the edge timeout
+ * expires, INT64_MAX when no edge has been seen. */
+int64_t sync_estimator_deadline(const struct sync_estimator *est);
+
+/* Predicted next index time: phase + period, 0 while the period is unknown. */
+int64_t sync_estimator_next_index(const struct sync_estimator *est);
+
+/* Predicted first index time at or after t, 0 while the period is unknown. */
+int64_t sync_estimator_index_after(const struct sync_estimator *est, int64_t t);
+
+/* The current state; owned by est, valid until it is destroyed. */
+const struct sync_state *sync_estimator_state(const struct sync_estimator *est);
+
+#endif
