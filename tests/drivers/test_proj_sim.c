@@ -252,9 +252,11 @@ static void test_device_rejects_corrupt_volume(void)
 
 int main(void)
 {
+	int fds = count_fds();
 	test_info();
 	test_upload_swap();
 	test_underrun();
 	test_device_rejects_corrupt_volume();
+	CHECK_EQ(count_fds(), fds);
 	return 0;
 }
