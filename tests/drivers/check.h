@@ -3,6 +3,7 @@
 #ifndef SPINDLE_TEST_CHECK_H
 #define SPINDLE_TEST_CHECK_H
 
+#include <dirent.h>
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -24,5 +25,18 @@
 			exit(1);                                                                \
 		}                                                                               \
 	} while (0)
+
+/* Open fds of this process, to check that objects close what they open. */
+static inline int count_fds(void)
+{
+	DIR *d = opendir("/proc/self/fd");
+	int n = 0;
+	if (!d)
+		return -1;
+	while (readdir(d))
+		n++;
+	closedir(d);
+	return n;
+}
 
 #endif

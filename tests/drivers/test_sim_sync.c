@@ -106,8 +106,10 @@ static void test_batched_read(void)
 
 int main(void)
 {
+	int fds = count_fds();
 	test_rotor();
 	test_edges_realtime();
 	test_batched_read();
+	CHECK_EQ(count_fds(), fds);
 	return 0;
 }
