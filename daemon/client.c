@@ -18,6 +18,15 @@
 /* Reads per wake-up, so that one busy client cannot starve the others. */
 #define CLIENT_READS_PER_WAKEUP 16
 
+/* Stops serving c; it is freed from the event loop soon. */
+static void client_kill(struct client *c)
+{
+	c->dead = true;
+	/* A closed socket stays readable: stop listening, or the loop spins. */
+	sd_event_source_set_enabled(c->source, SD_EVENT_OFF);
+	server_reap_later(c->server);
+}
+
 int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fmt, ...)
 {
 	char text[256];
@@ -31,8 +40,7 @@ int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fm
 		 object, text);
 	proto_ev_display_error(c->conn, 1, object, code, text);
 	proto_conn_flush(c->conn);
-	c->dead = true;
-	server_reap_later(c->server);
+	client_kill(c);
 	return -EPROTO;
 }
 
@@ -45,8 +53,7 @@ void client_flush(struct client *c)
 		sd_event_source_set_io_events(c->source, EPOLLIN | EPOLLOUT);
 	} else if (r < 0) {
 		log_debug("client %d: write failed: %s", proto_conn_get_fd(c->conn), strerror(-r));
-		c->dead = true;
-		server_reap_later(c->server);
+		client_kill(c);
 	} else {
 		sd_event_source_set_io_events(c->source, EPOLLIN);
 	}
@@ -58,8 +65,7 @@ static void client_sent(struct client *c, int r)
 	if (r == -ENOBUFS) {
 		log_info("client %d (pid %d) does not read its events: disconnected", proto_conn_get_fd(c->conn),
 			 (int)c->pid);
-		c->dead = true;
-		server_reap_later(c->server);
+		client_kill(c);
 	}
 }
 
@@ -231,8 +237,7 @@ static void client_read(struct client *c)
 		if (n < 0) {
 			if (proto_conn_has_partial(c->conn))
 				log_info("client %d (pid %d) left mid-message", proto_conn_get_fd(c->conn), (int)c->pid);
-			c->dead = true;
-			server_reap_later(c->server);
+			client_kill(c);
 			return;
 		}
 		struct proto_message m;

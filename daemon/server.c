@@ -180,6 +180,15 @@ void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
 		server_serve_captures(srv, server_shown(srv));
 }
 
+/* Clients past the handshake and not being dropped. */
+static uint32_t server_active_clients(struct server *srv)
+{
+	uint32_t n = 0;
+	struct client *c;
+	link_for_each(c, &srv->clients, link) n += c->version && !c->dead;
+	return n;
+}
+
 void server_get_status(struct server *srv, struct server_status *out)
 {
 	struct devices_status ds;
@@ -193,7 +202,7 @@ void server_get_status(struct server *srv, struct server_status *out)
 			 (ds.projector_present ? PROTO_DISPLAY_STATUS_FLAGS_PROJECTOR_PRESENT : 0),
 		.volumes_shown = ps.volumes_shown,
 		.underruns = ds.underruns,
-		.clients = srv->client_count,
+		.clients = server_active_clients(srv),
 	};
 }
 
@@ -287,7 +296,7 @@ static int setup_loop(struct server *srv)
 	    (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
 		return r;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
-	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_IDLE);
+	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_NORMAL + 10);
 	return sd_event_set_watchdog(srv->event, true);
 }
 

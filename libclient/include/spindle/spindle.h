@@ -54,7 +54,7 @@ struct spindle_status {
 	bool blanked;           /* projector dark */
 	bool projector_present;
 	uint64_t volumes_shown; /* volumes shown since the daemon started */
-	uint32_t clients;       /* connected clients, this one included */
+	uint32_t clients;       /* connected clients past the handshake, this one included */
 	uint64_t underruns;     /* volumes that missed their revolution */
 };
 
