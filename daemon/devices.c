@@ -38,8 +38,9 @@ static void set_blank(struct devices *dev, bool blank)
 	log_info("projector %s", blank ? "blanked" : "lit");
 }
 
-/* Lit only while locked: a stopped screen under a projector is a hazard. */
-static void lock_changed(struct devices *dev)
+/* Lit only while locked: a stopped screen under a projector is a hazard.
+ * time_ns: the edge or check that changed the lock. */
+static void lock_changed(struct devices *dev, int64_t time_ns)
 {
 	const struct sync_state *st = sync_estimator_state(dev->est);
 	if (st->locked)
@@ -47,6 +48,8 @@ static void lock_changed(struct devices *dev)
 	else
 		log_warn("sync lost (reason %d)", (int)st->unlock_reason);
 	set_blank(dev, !st->locked);
+	if (!dev->blanked)
+		server_projector_lit(dev->srv, time_ns);
 }
 
 static void arm_check(struct devices *dev)
@@ -63,8 +66,9 @@ static void arm_check(struct devices *dev)
 static int on_check(sd_event_source *s, uint64_t usec, void *data)
 {
 	struct devices *dev = data;
-	if (sync_estimator_check(dev->est, now_ns()))
-		lock_changed(dev);
+	int64_t now = now_ns();
+	if (sync_estimator_check(dev->est, now))
+		lock_changed(dev, now);
 	arm_check(dev);
 	return 0;
 }
@@ -80,13 +84,14 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	}
 	for (int i = 0; i < n; i++)
 		if (sync_estimator_feed(dev->est, ts[i]))
-			lock_changed(dev);
+			lock_changed(dev, ts[i]);
 	if (n > 0) {
 		const struct sync_state *st = sync_estimator_state(dev->est);
 		if (st->period_ns > 0)
 			dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
 		/* A capture takes the volume on display at a revolution start. */
-		server_serve_captures(dev->srv, server_shown(dev->srv));
+		if (!dev->blanked)
+			server_serve_captures(dev->srv, server_shown(dev->srv));
 	}
 	arm_check(dev);
 	return 0;
@@ -197,6 +202,11 @@ void devices_destroy(struct devices *dev)
 	sim_rotor_destroy(dev->rotor);
 	sync_estimator_destroy(dev->est);
 	free(dev);
+}
+
+bool devices_lit(const struct devices *dev)
+{
+	return !dev->blanked;
 }
 
 struct projector *devices_projector(struct devices *dev)

@@ -29,6 +29,8 @@ void devices_destroy(struct devices *dev);
 struct projector *devices_projector(struct devices *dev);
 /* The volume on display as the projector holds it, if it can tell. */
 const struct volume *devices_shown(struct devices *dev);
+/* Whether the projector is lit (not blanked). */
+bool devices_lit(const struct devices *dev);
 void devices_get_status(struct devices *dev, struct devices_status *out);
 
 #endif

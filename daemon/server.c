@@ -161,7 +161,8 @@ void server_scene_changed(struct server *srv, bool changed)
 		pipeline_mark_dirty(srv->pipe);
 }
 
-void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
+/* Frame callbacks of volume seq and older are done: first shown at time_ns. */
+static void frames_done(struct server *srv, uint64_t seq, int64_t time_ns)
 {
 	struct client *c;
 	link_for_each(c, &srv->clients, link) {
@@ -176,8 +177,25 @@ void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
 		}
 		client_flush(c);
 	}
+}
+
+void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
+{
+	/* Swapped in while dark is not shown: that waits for the light. */
+	if (!devices_lit(srv->dev)) {
+		srv->unseen_seq = seq;
+		return;
+	}
+	srv->unseen_seq = 0;
+	frames_done(srv, seq, time_ns);
 	if (srv->captures_waiting)
 		server_serve_captures(srv, server_shown(srv));
+}
+
+void server_projector_lit(struct server *srv, int64_t time_ns)
+{
+	if (srv->unseen_seq)
+		server_volume_shown(srv, srv->unseen_seq, time_ns);
 }
 
 /* Clients past the handshake and not being dropped. */

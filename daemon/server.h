@@ -31,6 +31,7 @@ struct server {
 	struct devices *dev;
 	struct pipeline *pipe;
 	unsigned captures_waiting;
+	uint64_t unseen_seq; /* swapped in while the projector was dark */
 };
 
 struct server_status {
@@ -51,8 +52,11 @@ void server_scene_changed(struct server *srv, bool changed);
 void server_get_status(struct server *srv, struct server_status *out);
 void server_capture_requested(struct server *srv);
 
-/* For the pipeline: a volume was first shown at time_ns. */
+/* For the pipeline: volume seq was swapped in at time_ns; shown then if
+ * the projector is lit, else once it is (server_projector_lit()). */
 void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns);
+/* For the devices: the projector was lit at time_ns. */
+void server_projector_lit(struct server *srv, int64_t time_ns);
 /* The volume on display: as the projector holds it when it can tell,
  * else as the daemon sent it; NULL before the first. */
 const struct volume *server_shown(struct server *srv);
