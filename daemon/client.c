@@ -241,7 +241,7 @@ static void client_read(struct client *c)
 			return;
 		}
 		struct proto_message m;
-		int r;
+		int r = 0;
 		while (!c->dead && (r = proto_conn_next(c->conn, &m, &err)) == 1)
 			dispatch_message(c, &m);
 		if (r < 0 && !c->dead) {

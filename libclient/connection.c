@@ -225,7 +225,7 @@ static int dispatch_buffered(struct spindle *sp)
 {
 	struct proto_message m;
 	struct proto_error err = { 0 };
-	int n = 0, r;
+	int n = 0, r = 0;
 	while (!sp->dead && (r = proto_conn_next(sp->conn, &m, &err)) == 1) {
 		dispatch_one(sp, &m);
 		n++;

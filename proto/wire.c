@@ -228,7 +228,8 @@ static void sent(struct proto_conn *conn, size_t bytes, unsigned nfds)
 {
 	for (unsigned i = 0; i < nfds; i++)
 		close(conn->out_fds[i].fd);
-	memmove(conn->out_fds, conn->out_fds + nfds, (conn->out_fd_count - nfds) * sizeof(*conn->out_fds));
+	if (nfds)
+		memmove(conn->out_fds, conn->out_fds + nfds, (conn->out_fd_count - nfds) * sizeof(*conn->out_fds));
 	conn->out_fd_count -= nfds;
 	conn->out_head += bytes;
 	if (conn->out_head == conn->out_tail) {

@@ -134,7 +134,8 @@ int raw_send(int fd, uint32_t object, uint16_t opcode, const void *body, uint32_
 	memcpy(msg + 4, &opcode, 2);
 	memcpy(msg + 6, &nfds, 2);
 	memcpy(msg + 8, &size, 4);
-	memcpy(msg + 12, body, body_size);
+	if (body_size)
+		memcpy(msg + 12, body, body_size);
 	return send(fd, msg, size, MSG_NOSIGNAL) == (ssize_t)size ? 0 : -errno;
 }
 

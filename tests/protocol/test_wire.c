@@ -229,9 +229,9 @@ static void test_strings(void)
 	/* display.error(object, code, message) with a bad message string. */
 	const struct {
 		uint32_t len;
-		const char *text;
+		char text[4];
 		bool ok;
-	} cases[] = { { 4, "abc", true }, { 4, "abcd", false }, { 0, "", false }, { 4, "a\0b", false },
+	} cases[] = { { 4, "abc", true }, { 4, { 'a', 'b', 'c', 'd' }, false }, { 0, "", false }, { 4, { 'a', 0, 'b', 0 }, false },
 		      { 200, "abc", false } };
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		int sv[2];
