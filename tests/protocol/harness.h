@@ -11,17 +11,11 @@
 #include <stdlib.h>
 #include <sys/types.h>
 
+#include "check.h"
 #include "geometry.h"
 #include "spindle/spindle.h"
 #include "volume.h"
 
-#define CHECK(cond)                                                                          \
-	do {                                                                                 \
-		if (!(cond)) {                                                               \
-			fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-			exit(1);                                                             \
-		}                                                                            \
-	} while (0)
 
 struct daemon {
 	pid_t pid;

@@ -433,6 +433,39 @@ static void test_unsealed_memfd(void)
 	daemon_stop(&d);
 }
 
+/* A client that asks for events and never reads them is cut off once its
+ * queue is full; the daemon does not stall and the others are served. */
+static void test_slow_reader(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *good = client_connect(&d);
+	int fd = raw_connect(&d);
+	uint32_t version = 1;
+	CHECK(raw_send(fd, 1, 0, &version, 4) == 0);
+	uint8_t req[12 * 256];
+	for (int i = 0; i < 256; i++) {
+		uint32_t obj = 1, size = 12;
+		uint16_t op = 7, nfds = 0; /* display.get_status */
+		memcpy(req + 12 * i, &obj, 4), memcpy(req + 12 * i + 4, &op, 2);
+		memcpy(req + 12 * i + 6, &nfds, 2), memcpy(req + 12 * i + 8, &size, 4);
+	}
+	bool cut_off = false;
+	for (int i = 0; i < 4000 && !cut_off; i++) {
+		if (send(fd, req, sizeof(req), MSG_NOSIGNAL) < 0)
+			cut_off = errno == EPIPE || errno == ECONNRESET;
+		struct spindle_status st;
+		if (i % 100 == 0)
+			CHECK(spindle_get_status(good, &st) == 0);
+	}
+	CHECK(cut_off);
+	struct spindle_status st;
+	CHECK(spindle_get_status(good, &st) == 0 && st.clients == 1);
+	close(fd);
+	spindle_disconnect(good);
+	daemon_stop(&d);
+}
+
 static void test_frames(void)
 {
 	struct daemon d;
@@ -470,6 +503,7 @@ static const struct {
 	{ "draw-out-of-range", test_draw_out_of_range },
 	{ "unsealed-memfd", test_unsealed_memfd },
 	{ "frames", test_frames },
+	{ "slow-reader", test_slow_reader },
 };
 
 int main(int argc, char **argv)
@@ -480,5 +514,5 @@ int main(int argc, char **argv)
 			printf("ok %s\n", tests[i].name);
 		}
 	}
-	return 0;
+	return check_done();
 }

@@ -9,15 +9,9 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include "check.h"
 #include "spindle-protocol.h"
 
-#define CHECK(cond)                                                                          \
-	do {                                                                                 \
-		if (!(cond)) {                                                               \
-			fprintf(stderr, "%s:%d: check failed: %s\n", __FILE__, __LINE__, #cond); \
-			exit(1);                                                             \
-		}                                                                            \
-	} while (0)
 
 static struct proto_conn *a, *b;
 
@@ -271,6 +265,5 @@ int main(void)
 	test_rejects();
 	test_strings();
 	test_backpressure();
-	printf("6 passed, 0 failed\n");
-	return 0;
+	return check_done();
 }

@@ -1,0 +1,112 @@
+#!/usr/bin/env python3
+"""spindled as a service: sd_notify readiness and stopping, systemd socket
+activation (through systemd-socket-activate when installed), the config file
+and its errors. Usage: test-service.py SPINDLED SPINDLECTL"""
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import time
+
+spindled, ctl = sys.argv[1:3]
+tmp = tempfile.mkdtemp(prefix='spindle-service-')
+checks = 0
+
+
+def check(cond, what):
+    global checks
+    if not cond:
+        print('FAIL:', what)
+        sys.exit(1)
+    checks += 1
+
+
+def status(sock):
+    p = subprocess.run([ctl, '--socket', sock, 'status'], capture_output=True, text=True, timeout=30)
+    check(p.returncode == 0, f'spindlectl status: {p.stderr}')
+    return dict(l.split(': ', 1) for l in p.stdout.splitlines() if ': ' in l)
+
+
+def test_notify():
+    """READY=1 once serving, STOPPING=1 on SIGTERM, exit 0."""
+    path = os.path.join(tmp, 'notify')
+    sock = os.path.join(tmp, 'n.sock')
+    notify = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+    notify.bind(path)
+    notify.settimeout(10)
+    env = dict(os.environ, NOTIFY_SOCKET=path)
+    d = subprocess.Popen([spindled, '-p', 'small', '-s', sock, '-c', '/dev/null'], env=env,
+                         stderr=subprocess.DEVNULL)
+    msg = notify.recv(4096).decode()
+    check('READY=1' in msg, f'first notification {msg!r}')
+    check(status(sock)['width'] == '128', 'serving once ready')
+    d.send_signal(signal.SIGTERM)
+    msgs = ''
+    while 'STOPPING=1' not in msgs:
+        msgs += notify.recv(4096).decode()
+    check(d.wait(timeout=10) == 0, 'exit status 0 on SIGTERM')
+    check(not os.path.exists(sock), 'socket removed')
+    notify.close()
+
+
+def test_socket_activation():
+    """systemd passes the listening socket; spindled serves on it."""
+    activate = shutil.which('systemd-socket-activate')
+    if not activate:
+        print('systemd-socket-activate not installed: socket activation not tested')
+        return
+    sock = os.path.join(tmp, 'a.sock')
+    log = os.path.join(tmp, 'a.log')
+    with open(log, 'w') as f:
+        d = subprocess.Popen([activate, '-l', sock, spindled, '-p', 'small', '-c', '/dev/null'],
+                             stderr=f)
+    for _ in range(500):
+        if os.path.exists(sock):
+            break
+        time.sleep(0.01)
+    check(status(sock)['images per revolution'] == '128', 'status over the activated socket')
+    d.send_signal(signal.SIGTERM)
+    check(d.wait(timeout=10) == 0, 'activated daemon exits 0')
+    with open(log) as f:
+        check('socket from systemd' in f.read(), 'took the socket from systemd')
+
+
+def test_config():
+    """Keys from the file, overridden by options; bad files refused."""
+    sock = os.path.join(tmp, 'c.sock')
+    conf = os.path.join(tmp, 'spindled.conf')
+    with open(conf, 'w') as f:
+        f.write('# test\nprofile = small\n  max-clients = 8  # trailing comment\nrenderer=cpu\n')
+    d = subprocess.Popen([spindled, '-c', conf, '-s', sock], stderr=subprocess.DEVNULL)
+    for _ in range(500):
+        if os.path.exists(sock):
+            break
+        time.sleep(0.01)
+    check(status(sock)['width'] == '128', 'profile from the config file')
+    d.send_signal(signal.SIGTERM)
+    check(d.wait(timeout=10) == 0, 'exit 0')
+
+    for text, needle in (('profile small\n', 'expected key = value'),
+                         ('colour = blue\n', "unknown key 'colour'"),
+                         ('max-clients = -3\n', "bad value for 'max-clients'"),
+                         ('projector-buffers = 7\n', "bad value for 'projector-buffers'")):
+        with open(conf, 'w') as f:
+            f.write(text)
+        p = subprocess.run([spindled, '-c', conf, '-s', sock], capture_output=True, text=True, timeout=10)
+        check(p.returncode == 2 and needle in p.stderr, f'{text!r}: exit 2 with {needle!r}: {p.stderr!r}')
+    p = subprocess.run([spindled, '-c', os.path.join(tmp, 'missing.conf')], capture_output=True,
+                       text=True, timeout=10)
+    check(p.returncode == 2, 'a named config file that is missing is an error')
+    p = subprocess.run([spindled, '-p', 'huge', '-s', sock, '-c', '/dev/null'], capture_output=True,
+                       text=True, timeout=10)
+    check(p.returncode != 0 and "unknown profile 'huge'" in p.stderr, f'unknown profile: {p.stderr!r}')
+
+
+test_notify()
+test_socket_activation()
+test_config()
+shutil.rmtree(tmp, ignore_errors=True)
+print(f'{checks} passed, 0 failed')
