@@ -144,9 +144,10 @@ static int display_commit(void *target)
 		link_remove(&w->link);
 		link_append(&c->frames, &w->link);
 	}
+	bool frames = !link_empty(&c->frames);
 	bool changed = objects_commit(c);
-	if (!c->dead)
-		server_commit(c->server, changed);
+	if (!c->dead && (changed || frames))
+		server_commit(c->server);
 	return 0;
 }
 
@@ -305,20 +306,15 @@ err_free:
 	return NULL;
 }
 
-static void destroy_object(uint32_t id, void *value, void *data)
-{
-	object_destroy(value);
-}
-
 void client_destroy(struct client *c)
 {
 	/* Layers first: they hold references to lists. */
 	struct layer *y, *ytmp;
 	link_for_each_safe(y, ytmp, &c->layers, link) object_destroy(&y->base);
-	for (uint32_t i = 0; i < c->objects.cap; i++) {
-		while (c->objects.slots && c->objects.slots[i].id)
-			destroy_object(c->objects.slots[i].id, c->objects.slots[i].value, NULL);
-	}
+	/* Each removal may shift later entries back into slot i. */
+	for (uint32_t i = 0; i < c->objects.cap; i++)
+		while (c->objects.slots[i].id)
+			object_destroy(c->objects.slots[i].value);
 	idmap_finish(&c->objects);
 	sd_event_source_disable_unref(c->source);
 	proto_conn_destroy(c->conn);

@@ -148,10 +148,8 @@ void server_reap_later(struct server *srv)
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_ONESHOT);
 }
 
-void server_commit(struct server *srv, bool changed)
+void server_commit(struct server *srv)
 {
-	/* Even an unchanged commit needs a volume for its frame callbacks. */
-	(void)changed;
 	pipeline_mark_dirty(srv->pipe);
 }
 

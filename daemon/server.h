@@ -47,7 +47,9 @@ int server_run(const struct config *cfg);
 
 /* For clients and objects. */
 void server_reap_later(struct server *srv);
-void server_commit(struct server *srv, bool changed);
+/* A commit changed what is visible, or waits for frame callbacks: a new
+ * volume is needed. */
+void server_commit(struct server *srv);
 void server_scene_changed(struct server *srv, bool changed);
 void server_get_status(struct server *srv, struct server_status *out);
 void server_capture_requested(struct server *srv);
