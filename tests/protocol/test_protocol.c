@@ -292,13 +292,20 @@ static void test_two_clients(void)
 	daemon_stop(&d);
 }
 
+static uint64_t count_lit_image(const struct volume *vol, uint32_t k, int c)
+{
+	uint64_t n = 0;
+	for (uint32_t y = 0; y < H; y++)
+		for (uint32_t u = 0; u < W; u++)
+			n += volume_pixel(vol, k, u, y, c);
+	return n;
+}
+
 static uint64_t count_lit(const struct volume *vol, int c)
 {
 	uint64_t n = 0;
 	for (uint32_t k = 0; k < vol->image_count; k++)
-		for (uint32_t y = 0; y < H; y++)
-			for (uint32_t u = 0; u < W; u++)
-				n += volume_pixel(vol, k, u, y, c);
+		n += count_lit_image(vol, k, c);
 	return n;
 }
 
@@ -433,6 +440,54 @@ static void test_unsealed_memfd(void)
 	daemon_stop(&d);
 }
 
+/* List and layer transforms, visibility, and commit being atomic. */
+static void test_layers(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	float v[6];
+	struct spindle_buffer *buf = spindle_buffer_create(sp, v, axis_line(v) * 12);
+	struct spindle_list *list = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	CHECK(buf && list && layer);
+	const float half_y[16] = { 1, 0, 0, 0, 0, 0.5f, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
+	CHECK(spindle_list_set_transform(list, half_y) == 0);
+	CHECK(spindle_list_lines(list, buf, 0, 2, 0) == 0);
+	CHECK(spindle_layer_set_list(layer, list) == 0);
+	CHECK(spindle_commit_and_wait(sp, NULL) == 0);
+	struct volume *vol = capture_volume(sp);
+	for (uint32_t k = 0; k < NV; k++) {
+		CHECK(lit_near(vol, k, col(0), row(0.29), 0, 1) && lit_near(vol, k, col(0), row(-0.29), 0, 1));
+		CHECK(!lit_near(vol, k, col(0), row(0.4), 0, 1) && !lit_near(vol, k, col(0), row(-0.4), 0, 1));
+	}
+	volume_destroy(vol);
+
+	CHECK(spindle_layer_set_visible(layer, false) == 0);
+	CHECK(spindle_commit_and_wait(sp, NULL) == 0);
+	vol = capture_volume(sp);
+	CHECK(count_lit(vol, 0) + count_lit(vol, 1) + count_lit(vol, 2) == 0);
+	volume_destroy(vol);
+
+	/* Pending changes show nothing until the commit, then all at once. */
+	const float shift_x[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0.5f, 0, 0, 1 };
+	CHECK(spindle_layer_set_visible(layer, true) == 0);
+	CHECK(spindle_layer_set_transform(layer, shift_x) == 0);
+	CHECK(spindle_roundtrip(sp) == 0);
+	vol = capture_volume(sp);
+	CHECK(count_lit(vol, 0) == 0);
+	volume_destroy(vol);
+	CHECK(spindle_commit_and_wait(sp, NULL) == 0);
+	vol = capture_volume(sp);
+	for (double y = -0.28; y <= 0.28; y += 0.01)
+		CHECK(lit_near(vol, 0, col(0.5), row(y), 0, 1));
+	for (uint32_t k = 2; k < NV - 1; k++)
+		CHECK(count_lit_image(vol, k, 0) == 0);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 /* A client that asks for events and never reads them is cut off once its
  * queue is full; the daemon does not stall and the others are served. */
 static void test_slow_reader(void)
@@ -504,6 +559,7 @@ static const struct {
 	{ "unsealed-memfd", test_unsealed_memfd },
 	{ "frames", test_frames },
 	{ "slow-reader", test_slow_reader },
+	{ "layers", test_layers },
 };
 
 int main(int argc, char **argv)
