@@ -429,11 +429,14 @@ void object_destroy(struct object *obj)
 	case PROTO_IFACE_LIST:
 		list_unref((struct list *)obj);
 		break;
-	case PROTO_IFACE_LAYER:
-		server_scene_changed(c->server, ((struct layer *)obj)->committed.visible &&
-							((struct layer *)obj)->committed.list);
-		layer_free((struct layer *)obj);
+	case PROTO_IFACE_LAYER: {
+		struct layer *y = (struct layer *)obj;
+		/* A departing client's layers are accounted for by the reaper. */
+		if (!c->dead)
+			server_scene_changed(c->server, y->committed.visible && y->committed.list);
+		layer_free(y);
 		break;
+	}
 	case PROTO_IFACE_CALLBACK:
 	case PROTO_IFACE_CAPTURE: {
 		struct waiter *w = (struct waiter *)obj;

@@ -335,6 +335,7 @@ static void server_finish(struct server *srv)
 {
 	struct client *c, *tmp;
 	link_for_each_safe(c, tmp, &srv->clients, link) {
+		c->dead = true; /* no new volumes for departing clients */
 		link_remove(&c->link);
 		client_destroy(c);
 	}
