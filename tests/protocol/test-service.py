@@ -24,6 +24,14 @@ def check(cond, what):
     checks += 1
 
 
+def wait_for(path):
+    for _ in range(500):
+        if os.path.exists(path):
+            return
+        time.sleep(0.01)
+    check(False, f'{path} never appeared')
+
+
 def status(sock):
     p = subprocess.run([ctl, '--socket', sock, 'status'], capture_output=True, text=True, timeout=30)
     check(p.returncode == 0, f'spindlectl status: {p.stderr}')
@@ -63,10 +71,7 @@ def test_socket_activation():
     with open(log, 'w') as f:
         d = subprocess.Popen([activate, '-l', sock, spindled, '-p', 'small', '-c', '/dev/null'],
                              stderr=f)
-    for _ in range(500):
-        if os.path.exists(sock):
-            break
-        time.sleep(0.01)
+    wait_for(sock)
     check(status(sock)['images per revolution'] == '128', 'status over the activated socket')
     d.send_signal(signal.SIGTERM)
     check(d.wait(timeout=10) == 0, 'activated daemon exits 0')
@@ -81,10 +86,7 @@ def test_config():
     with open(conf, 'w') as f:
         f.write('# test\nprofile = small\n  max-clients = 8  # trailing comment\nrenderer=cpu\n')
     d = subprocess.Popen([spindled, '-c', conf, '-s', sock], stderr=subprocess.DEVNULL)
-    for _ in range(500):
-        if os.path.exists(sock):
-            break
-        time.sleep(0.01)
+    wait_for(sock)
     check(status(sock)['width'] == '128', 'profile from the config file')
     d.send_signal(signal.SIGTERM)
     check(d.wait(timeout=10) == 0, 'exit 0')
