@@ -64,7 +64,8 @@ int config_set(struct config *cfg, const char *key, const char *value)
 	if (!strcmp(key, "profile"))
 		return set_string(cfg->profile, sizeof(cfg->profile), value);
 	if (!strcmp(key, "renderer"))
-		return set_string(cfg->renderer, sizeof(cfg->renderer), value);
+		return strcmp(value, "auto") && strcmp(value, "cpu") ? -EINVAL
+								      : set_string(cfg->renderer, sizeof(cfg->renderer), value);
 	if (!strcmp(key, "render-threads"))
 		return set_u32(&cfg->render_threads, value, 0, 256);
 	if (!strcmp(key, "projector-buffers"))

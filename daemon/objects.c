@@ -101,14 +101,15 @@ out_close:
 	return r;
 }
 
-static int buffer_destroy_req(void *target)
+/* The destroy request of buffers, lists and layers. */
+static int destroy_req(void *target)
 {
 	object_destroy(target);
 	return 0;
 }
 
 const struct proto_buffer_requests buffer_requests = {
-	.destroy = buffer_destroy_req,
+	.destroy = destroy_req,
 };
 
 /* ---- lists ---- */
@@ -194,12 +195,6 @@ int objects_create_list(struct client *c, uint32_t id)
 	return 0;
 }
 
-static int list_destroy_req(void *target)
-{
-	object_destroy(target);
-	return 0;
-}
-
 static int list_clear(void *target)
 {
 	struct list *l = target;
@@ -220,21 +215,24 @@ static int list_set_color(void *target, const struct proto_list_set_color_args *
 	return 0;
 }
 
-/* Finite, affine (bottom row 0 0 0 1), entries within a sane range. */
-static bool matrix_valid(const float m[16])
+/* A transform must be finite, affine (bottom row 0 0 0 1) and within a sane
+ * range; anything else is a fatal error of obj's client. */
+static int check_transform(struct object *obj, const float m[16])
 {
 	for (int i = 0; i < 16; i++)
 		if (!isfinite(m[i]) || fabsf(m[i]) > 1e6f)
-			return false;
-	return m[3] == 0 && m[7] == 0 && m[11] == 0 && m[15] == 1;
+			goto bad;
+	if (m[3] == 0 && m[7] == 0 && m[11] == 0 && m[15] == 1)
+		return 0;
+bad:
+	return client_fail(obj->client, obj->id, PROTO_ERR_VALUE, "transform is not a finite affine matrix");
 }
 
 static int list_set_transform(void *target, const struct proto_list_set_transform_args *a)
 {
 	struct list *l = target;
-	if (!matrix_valid(a->matrix))
-		return client_fail(l->base.client, l->base.id, PROTO_ERR_VALUE,
-				   "transform is not a finite affine matrix");
+	if (check_transform(&l->base, a->matrix) < 0)
+		return -EPROTO;
 	memcpy(l->transform, a->matrix, sizeof(l->transform));
 	return 0;
 }
@@ -305,7 +303,7 @@ static int list_draw(void *target, const struct proto_list_draw_args *a)
 }
 
 const struct proto_list_requests list_requests = {
-	.destroy = list_destroy_req,
+	.destroy = destroy_req,
 	.clear = list_clear,
 	.set_color = list_set_color,
 	.set_transform = list_set_transform,
@@ -340,12 +338,6 @@ static void layer_free(struct layer *y)
 	free(y);
 }
 
-static int layer_destroy_req(void *target)
-{
-	object_destroy(target);
-	return 0;
-}
-
 static int layer_set_list(void *target, const struct proto_layer_set_list_args *a)
 {
 	struct layer *y = target;
@@ -365,9 +357,8 @@ static int layer_set_list(void *target, const struct proto_layer_set_list_args *
 static int layer_set_transform(void *target, const struct proto_layer_set_transform_args *a)
 {
 	struct layer *y = target;
-	if (!matrix_valid(a->matrix))
-		return client_fail(y->base.client, y->base.id, PROTO_ERR_VALUE,
-				   "transform is not a finite affine matrix");
+	if (check_transform(&y->base, a->matrix) < 0)
+		return -EPROTO;
 	memcpy(y->pending.transform, a->matrix, sizeof(y->pending.transform));
 	y->changed = true;
 	return 0;
@@ -384,7 +375,7 @@ static int layer_set_visible(void *target, const struct proto_layer_set_visible_
 }
 
 const struct proto_layer_requests layer_requests = {
-	.destroy = layer_destroy_req,
+	.destroy = destroy_req,
 	.set_list = layer_set_list,
 	.set_transform = layer_set_transform,
 	.set_visible = layer_set_visible,

@@ -199,9 +199,15 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 	return 0;
 }
 
-struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj,
-				 uint32_t buffers)
+struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj)
 {
+	struct projector_info info;
+	int r = proj->impl->get_info(proj, &info);
+	if (r < 0) {
+		render_destroy(renderer);
+		errno = -r;
+		return NULL;
+	}
 	struct pipeline *p = calloc(1, sizeof(*p));
 	if (!p) {
 		render_destroy(renderer);
@@ -210,13 +216,14 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 	p->srv = srv;
 	p->renderer = renderer;
 	p->proj = proj;
-	p->buffers = buffers < 2 ? 2 : buffers > MAX_BUFFERS ? MAX_BUFFERS : buffers;
+	/* A device with more buffers than we use is fine: we use three. */
+	p->buffers = info.buffers > MAX_BUFFERS ? MAX_BUFFERS : info.buffers;
 	p->shown = p->pending = p->uploaded = -1;
 	p->next_seq = 1;
 	p->done_fd = -1;
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->cond, NULL);
-	int r = create_volumes(p, &renderer->geom);
+	r = info.buffers < 2 ? -ENODEV : create_volumes(p, &renderer->geom);
 	if (r < 0)
 		goto err;
 	p->done_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);

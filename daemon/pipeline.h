@@ -22,10 +22,9 @@ struct pipeline_stats {
 	uint64_t last_upload_bytes;
 };
 
-/* Takes ownership of renderer; the projector stays the caller's. NULL +
- * errno on failure. */
-struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj,
-				 uint32_t buffers);
+/* Takes ownership of renderer; the projector stays the caller's and says
+ * how many volume buffers it has. NULL + errno on failure. */
+struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj);
 /* Waits for a render in flight. Accepts NULL. */
 void pipeline_destroy(struct pipeline *p);
 

@@ -318,16 +318,16 @@ static int setup_loop(struct server *srv)
 
 static int setup_render(struct server *srv)
 {
-	struct renderer *r = render_create(srv->cfg.renderer, &srv->geom);
-	if (!r && strcmp(srv->cfg.renderer, "cpu") != 0) {
-		log_warn("renderer '%s' unavailable (%s): using the CPU renderer", srv->cfg.renderer,
-			 strerror(errno));
-		r = render_create("cpu", &srv->geom);
+	const struct config *cfg = &srv->cfg;
+	struct renderer *r = render_create(cfg->renderer, &srv->geom, cfg->render_threads);
+	if (!r && strcmp(cfg->renderer, "cpu") != 0) {
+		log_warn("renderer '%s' unavailable (%s): using the CPU renderer", cfg->renderer, strerror(errno));
+		r = render_create("cpu", &srv->geom, cfg->render_threads);
 	}
 	if (!r)
 		return -errno;
 	log_info("renderer: %s", r->impl->name);
-	srv->pipe = pipeline_create(srv, r, devices_projector(srv->dev), srv->cfg.projector_buffers);
+	srv->pipe = pipeline_create(srv, r, devices_projector(srv->dev));
 	return srv->pipe ? 0 : -errno;
 }
 

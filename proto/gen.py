@@ -24,8 +24,9 @@ C_TYPES = {
 }
 WIRE_SIZE = {"uint": 4, "int": 4, "uint64": 8, "float": 4, "object": 4,
              "new_id": 4, "fd": 0, "matrix": 64}
-READERS = {"uint": "u32", "int": "i32", "uint64": "u64", "float": "f32",
-           "object": "u32", "new_id": "u32", "fd": "fd"}
+# The wire.h accessor of each type: proto_get_X / proto_put_X.
+ACCESSORS = {"uint": "u32", "int": "i32", "uint64": "u64", "float": "f32", "object": "u32",
+             "new_id": "u32", "fd": "fd", "string": "string", "matrix": "matrix"}
 
 
 class Arg:
@@ -81,6 +82,11 @@ def load(path):
             [Interface(i) for i in root.findall("interface")])
 
 
+def opcode_const(iface, msg, kind):
+    """The C name of a message's opcode; kind is 'request' or 'event'."""
+    return f"PROTO_{iface.name.upper()}_{'REQ' if kind == 'request' else 'EV'}_{msg.name.upper()}"
+
+
 def c_params(msg):
     out = []
     for a in msg.args:
@@ -108,12 +114,12 @@ def header(version, ifaces):
             for n, v, _ in e.entries:
                 o.append(f"\tPROTO_{I}_{e.name.upper()}_{n.upper()} = {v},")
             o += ["};", ""]
-        for kind, msgs in (("REQ", iface.requests), ("EV", iface.events)):
+        for kind, msgs in (("request", iface.requests), ("event", iface.events)):
             if not msgs:
                 continue
-            o.append(f"enum proto_{iface.name}_{'request' if kind == 'REQ' else 'event'} {{")
+            o.append(f"enum proto_{iface.name}_{kind} {{")
             for m in msgs:
-                o.append(f"\tPROTO_{I}_{kind}_{m.name.upper()} = {m.opcode},")
+                o.append(f"\t{opcode_const(iface, m, kind)} = {m.opcode},")
             o += ["};", ""]
         for kind, msgs in (("requests", iface.requests), ("events", iface.events)):
             if not msgs:
@@ -146,33 +152,54 @@ def header(version, ifaces):
     return "\n".join(o)
 
 
-def decode_body(iface, m, kind):
-    o = []
-    has_args = bool(m.args)
-    o.append(f"\tcase PROTO_{iface.name.upper()}_{'REQ' if kind == 'request' else 'EV'}_{m.name.upper()}: {{")
-    if has_args:
+def read_arg(a):
+    if a.type == "matrix":
+        return f"\t\tproto_get_matrix(&r, a.{a.name});"
+    if a.type == "string":
+        return f"\t\ta.{a.name} = proto_get_string(&r, {'true' if a.allow_null else 'false'});"
+    return f"\t\ta.{a.name} = proto_get_{ACCESSORS[a.type]}(&r);"
+
+
+def decode_case(iface, m, kind):
+    """One case of a dispatcher: version check, strict decode, handler call."""
+    o = [f"\tcase {opcode_const(iface, m, kind)}: {{"]
+    if m.args:
         o.append(f"\t\tstruct proto_{iface.name}_{m.name}_args a;")
-    o.append(f"\t\tif (version < {m.since})")
-    o.append(f'\t\t\treturn proto_fail(err, PROTO_ERR_METHOD, "{iface.name}.{m.name} needs version {m.since}");')
-    o.append("\t\tproto_reader_init(&r, msg);")
-    for a in m.args:
-        if a.type == "string":
-            o.append(f"\t\ta.{a.name} = proto_get_string(&r, {'true' if a.allow_null else 'false'});")
-        elif a.type == "matrix":
-            o.append(f"\t\tproto_get_matrix(&r, a.{a.name});")
-        else:
-            o.append(f"\t\ta.{a.name} = proto_get_{READERS[a.type]}(&r);")
-    o.append(f'\t\tif (proto_reader_finish(&r, err, "{iface.name}.{m.name}") < 0)')
-    o.append("\t\t\treturn -EPROTO;")
-    o.append(f"\t\tif (!handlers->{m.name})")
+    o += [f"\t\tif (version < {m.since})",
+          f'\t\t\treturn proto_fail(err, PROTO_ERR_METHOD, "{iface.name}.{m.name} needs version {m.since}");',
+          "\t\tproto_reader_init(&r, msg);"]
+    o += [read_arg(a) for a in m.args]
+    o += [f'\t\tif (proto_reader_finish(&r, err, "{iface.name}.{m.name}") < 0)',
+          "\t\t\treturn -EPROTO;",
+          f"\t\tif (!handlers->{m.name})"]
     if kind == "request":
         o.append(f'\t\t\treturn proto_fail(err, PROTO_ERR_METHOD, "{iface.name}.{m.name} is not handled");')
     else:
         o.append("\t\t\treturn proto_message_close_fds(msg);")
-    o.append("\t\tproto_message_take_fds(msg);")
-    o.append(f"\t\treturn handlers->{m.name}(target{', &a' if has_args else ''});")
-    o.append("\t}")
+    o += ["\t\tproto_message_take_fds(msg);",
+          f"\t\treturn handlers->{m.name}(target{', &a' if m.args else ''});",
+          "\t}"]
     return o
+
+
+def dispatcher(iface, msgs, kind):
+    o = [f"int proto_{iface.name}_dispatch_{kind}(const struct proto_{iface.name}_{kind}s *handlers,",
+         "\t\tvoid *target, struct proto_message *msg, uint32_t version, struct proto_error *err)",
+         "{", "\tstruct proto_reader r;", "", "\tswitch (msg->opcode) {"]
+    for m in msgs:
+        o += decode_case(iface, m, kind)
+    return o + ["\t}",
+                f'\treturn proto_fail(err, PROTO_ERR_METHOD, "{iface.name} has no {kind} with opcode %u", msg->opcode);',
+                "}", ""]
+
+
+def sender(iface, m, kind):
+    prefix = "req" if kind == "request" else "ev"
+    params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + c_params(m))
+    o = [f"int proto_{prefix}_{iface.name}_{m.name}({params})", "{", "\tstruct proto_writer w;", "",
+         f"\tproto_writer_begin(&w, conn, target_id, {opcode_const(iface, m, kind)});"]
+    o += [f"\tproto_put_{ACCESSORS[a.type]}(&w, {a.name});" for a in m.args]
+    return o + ["\treturn proto_writer_end(&w);", "}", ""]
 
 
 def code(version, ifaces):
@@ -185,31 +212,10 @@ def code(version, ifaces):
     o += ["\t}", '\treturn "unknown";', "}", ""]
     for iface in ifaces:
         for kind, msgs in (("request", iface.requests), ("event", iface.events)):
-            if not msgs:
-                continue
-            o.append(f"int proto_{iface.name}_dispatch_{kind}(const struct proto_{iface.name}_{kind}s *handlers,")
-            o.append("\t\tvoid *target, struct proto_message *msg, uint32_t version, struct proto_error *err)")
-            o += ["{", "\tstruct proto_reader r;", "", "\tswitch (msg->opcode) {"]
-            for m in msgs:
-                o += decode_body(iface, m, kind)
-            o += ["\t}",
-                  f'\treturn proto_fail(err, PROTO_ERR_METHOD, "{iface.name} has no {kind} with opcode %u", msg->opcode);',
-                  "}", ""]
-            prefix = "req" if kind == "request" else "ev"
-            for m in msgs:
-                params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + c_params(m))
-                opc = f"PROTO_{iface.name.upper()}_{'REQ' if kind == 'request' else 'EV'}_{m.name.upper()}"
-                o += [f"int proto_{prefix}_{iface.name}_{m.name}({params})", "{",
-                      "\tstruct proto_writer w;", "",
-                      f"\tproto_writer_begin(&w, conn, target_id, {opc});"]
-                for a in m.args:
-                    if a.type == "matrix":
-                        o.append(f"\tproto_put_matrix(&w, {a.name});")
-                    elif a.type == "string":
-                        o.append(f"\tproto_put_string(&w, {a.name});")
-                    else:
-                        o.append(f"\tproto_put_{READERS[a.type]}(&w, {a.name});")
-                o += ["\treturn proto_writer_end(&w);", "}", ""]
+            if msgs:
+                o += dispatcher(iface, msgs, kind)
+                for m in msgs:
+                    o += sender(iface, m, kind)
     return "\n".join(o)
 
 

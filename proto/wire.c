@@ -440,10 +440,21 @@ static const uint8_t *get(struct proto_reader *r, uint32_t n)
 	return p;
 }
 
+/* Copies n bytes of the next argument into out; zeroes after an error. */
+static void get_copy(struct proto_reader *r, void *out, uint32_t n)
+{
+	const uint8_t *p = get(r, n);
+	if (p)
+		memcpy(out, p, n);
+	else
+		memset(out, 0, n);
+}
+
 uint32_t proto_get_u32(struct proto_reader *r)
 {
-	const uint8_t *p = get(r, 4);
-	return p ? load32(p) : 0;
+	uint32_t v;
+	get_copy(r, &v, 4);
+	return v;
 }
 
 int32_t proto_get_i32(struct proto_reader *r)
@@ -453,29 +464,21 @@ int32_t proto_get_i32(struct proto_reader *r)
 
 uint64_t proto_get_u64(struct proto_reader *r)
 {
-	uint64_t v = 0;
-	const uint8_t *p = get(r, 8);
-	if (p)
-		memcpy(&v, p, 8);
+	uint64_t v;
+	get_copy(r, &v, 8);
 	return v;
 }
 
 float proto_get_f32(struct proto_reader *r)
 {
-	float v = 0;
-	const uint8_t *p = get(r, 4);
-	if (p)
-		memcpy(&v, p, 4);
+	float v;
+	get_copy(r, &v, 4);
 	return v;
 }
 
 void proto_get_matrix(struct proto_reader *r, float m[16])
 {
-	const uint8_t *p = get(r, 64);
-	if (p)
-		memcpy(m, p, 64);
-	else
-		memset(m, 0, 64);
+	get_copy(r, m, 64);
 }
 
 const char *proto_get_string(struct proto_reader *r, bool allow_null)

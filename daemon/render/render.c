@@ -3,11 +3,11 @@
 #include <errno.h>
 #include <string.h>
 
-struct renderer *render_create(const char *name, const struct geometry *geom)
+struct renderer *render_create(const char *name, const struct geometry *geom, unsigned threads)
 {
 	/* "auto" will prefer a GL renderer once one is built; CPU until then. */
 	if (!name || strcmp(name, "auto") == 0 || strcmp(name, "cpu") == 0)
-		return render_cpu_create(geom, 0);
+		return render_cpu_create(geom, threads);
 	errno = ENOENT;
 	return NULL;
 }

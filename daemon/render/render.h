@@ -32,9 +32,10 @@ struct renderer {
  * (0 = one per core). NULL + errno on failure. */
 struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads);
 
-/* Picks a renderer by name ("cpu", "auto"). NULL + errno (ENOENT: unknown or
- * not built) on failure. */
-struct renderer *render_create(const char *name, const struct geometry *geom);
+/* Picks a renderer by name ("cpu", "auto"), with up to threads worker
+ * threads (0 = one per core). NULL + errno (ENOENT: unknown or not built)
+ * on failure. */
+struct renderer *render_create(const char *name, const struct geometry *geom, unsigned threads);
 
 static inline int render_volume(struct renderer *r, const struct scene *s, struct volume *out)
 {

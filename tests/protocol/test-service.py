@@ -84,7 +84,8 @@ def test_config():
     sock = os.path.join(tmp, 'c.sock')
     conf = os.path.join(tmp, 'spindled.conf')
     with open(conf, 'w') as f:
-        f.write('# test\nprofile = small\n  max-clients = 8  # trailing comment\nrenderer=cpu\n')
+        f.write('# test\nprofile = small\n  max-clients = 8  # trailing comment\nrenderer=cpu\n'
+                'render-threads = 1\nprojector-buffers = 2\n')
     d = subprocess.Popen([spindled, '-c', conf, '-s', sock], stderr=subprocess.DEVNULL)
     wait_for(sock)
     check(status(sock)['width'] == '128', 'profile from the config file')
@@ -94,7 +95,8 @@ def test_config():
     for text, needle in (('profile small\n', 'expected key = value'),
                          ('colour = blue\n', "unknown key 'colour'"),
                          ('max-clients = -3\n', "bad value for 'max-clients'"),
-                         ('projector-buffers = 7\n', "bad value for 'projector-buffers'")):
+                         ('projector-buffers = 7\n', "bad value for 'projector-buffers'"),
+                         ('renderer = egl\n', "bad value for 'renderer'")):
         with open(conf, 'w') as f:
             f.write(text)
         p = subprocess.run([spindled, '-c', conf, '-s', sock], capture_output=True, text=True, timeout=10)

@@ -76,7 +76,7 @@ static void check_repeat(const struct geometry *g)
 	busy_init(&a, 1);
 	busy_init(&b, 2);
 	struct scene sa = { 4, a.draws }, sb = { 4, b.draws };
-	struct renderer *r = render_create("cpu", g);
+	struct renderer *r = render_create("cpu", g, 0);
 	struct volume *v1 = volume_create(g), *v2 = volume_create(g), *vb = volume_create(g);
 	CHECK(r && v1 && v2 && vb);
 	CHECK(render_volume(r, &sa, v1) == 0);
@@ -100,7 +100,7 @@ static void check_repeat(const struct geometry *g)
 static void check_create(void)
 {
 	struct geometry g = rtest_small(), other = rtest_odd(), bad = g;
-	struct renderer *r = render_create("auto", &g);
+	struct renderer *r = render_create("auto", &g, 0);
 	CHECK(r && r->impl && r->impl->name);
 	struct volume *vol = volume_create(&other);
 	struct scene empty = { 0, NULL };
@@ -109,7 +109,7 @@ static void check_create(void)
 	volume_destroy(vol);
 	render_destroy(NULL);
 	errno = 0;
-	CHECK(render_create("no-such-renderer", &g) == NULL && errno == ENOENT);
+	CHECK(render_create("no-such-renderer", &g, 0) == NULL && errno == ENOENT);
 	bad.images_per_rev = 7; /* odd but mirrored */
 	errno = 0;
 	CHECK(render_cpu_create(&bad, 1) == NULL && errno == EINVAL);
