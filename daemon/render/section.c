@@ -12,8 +12,8 @@
 int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 {
 	c->geom = *g;
-	c->tiles_x = (g->width + 31) / 32;
-	c->tiles_y = (g->height + 31) / 32;
+	c->tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
+	c->tiles_y = (g->height + VOLUME_TILE - 1) / VOLUME_TILE;
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
 	c->rgb = calloc(tiles, SECTION_TILE_RGB_BYTES);
 	c->touched = calloc(tiles, 1);

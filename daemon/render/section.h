@@ -13,6 +13,7 @@
 #include <stdint.h>
 
 #include "geometry.h"
+#include "volume.h"
 
 /* An 8-bit RGB accumulation buffer for one image, stored tile by tile (32x32
  * pixels, row-major inside a tile, 3 bytes a pixel) so that halftoning and
@@ -25,7 +26,7 @@ struct section_canvas {
 	uint8_t *touched; /* tiles_x * tiles_y flags */
 };
 
-#define SECTION_TILE_RGB_BYTES (32 * 32 * 3)
+#define SECTION_TILE_RGB_BYTES (VOLUME_TILE * VOLUME_TILE * 3)
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz
  * plane; the s < 0 lobe is their negation. */

@@ -28,6 +28,17 @@ static int feed_regular(struct sync_estimator *est, int64_t *t, int n, int64_t p
 	return changes;
 }
 
+/* An estimator locked by 7 regular edges from T0; *t is the last edge. */
+static struct sync_estimator *make_locked(int64_t *t)
+{
+	struct sync_estimator *est = make();
+	*t = T0;
+	sync_estimator_feed(est, *t);
+	feed_regular(est, t, 6, P);
+	CHECK(sync_estimator_state(est)->locked);
+	return est;
+}
+
 static void test_lock_after_consistent_revolutions(void)
 {
 	struct sync_estimator *est = make();
@@ -70,12 +81,9 @@ static void test_jitter(void)
 
 static void test_glitch_rejected(void)
 {
-	struct sync_estimator *est = make();
+	int64_t t;
+	struct sync_estimator *est = make_locked(&t);
 	const struct sync_state *s = sync_estimator_state(est);
-	int64_t t = T0;
-	sync_estimator_feed(est, t);
-	feed_regular(est, &t, 6, P);
-	CHECK(s->locked);
 	CHECK(!sync_estimator_feed(est, t + P / 3));
 	CHECK_EQ(s->glitches, 1);
 	CHECK_EQ(s->phase_ns, t); /* the glitch moved nothing */
@@ -93,12 +101,9 @@ static void test_glitch_rejected(void)
 
 static void test_missed_pulses(void)
 {
-	struct sync_estimator *est = make();
+	int64_t t;
+	struct sync_estimator *est = make_locked(&t);
 	const struct sync_state *s = sync_estimator_state(est);
-	int64_t t = T0;
-	sync_estimator_feed(est, t);
-	feed_regular(est, &t, 6, P);
-	CHECK(s->locked);
 	t += 2 * P; /* one pulse missing */
 	sync_estimator_feed(est, t);
 	CHECK_EQ(s->missed, 1);
