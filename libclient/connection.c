@@ -42,11 +42,20 @@ int lib_set_error(struct spindle *sp, int err, const char *fmt, ...)
 	return -EPIPE;
 }
 
-uint32_t lib_new_id(struct spindle *sp)
+void *lib_alloc(struct spindle *sp, size_t size, uint32_t *id)
 {
-	if (sp->next_id > 0xfeffffffu)
-		return 0;
-	return sp->next_id++;
+	if (sp->dead) {
+		errno = EPIPE;
+		return NULL;
+	}
+	if (sp->next_id > 0xfeffffffu) {
+		errno = ENOSPC;
+		return NULL;
+	}
+	void *p = calloc(1, size);
+	if (p)
+		*id = sp->next_id++;
+	return p;
 }
 
 int lib_sent(struct spindle *sp, int r)
@@ -62,17 +71,10 @@ int lib_sent(struct spindle *sp, int r)
 
 struct lib_callback *lib_callback_add(struct spindle *sp, enum lib_callback_kind kind)
 {
-	if (sp->dead) {
-		errno = EPIPE;
+	uint32_t id;
+	struct lib_callback *cb = lib_alloc(sp, sizeof(*cb), &id);
+	if (!cb)
 		return NULL;
-	}
-	uint32_t id = lib_new_id(sp);
-	struct lib_callback *cb = calloc(1, sizeof(*cb));
-	if (!id || !cb) {
-		free(cb);
-		errno = id ? ENOMEM : ENOSPC;
-		return NULL;
-	}
 	cb->id = id;
 	cb->kind = kind;
 	cb->fd = -1;

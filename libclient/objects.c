@@ -23,17 +23,10 @@ struct spindle_layer {
 
 static void *object_new(struct spindle *sp, size_t size)
 {
-	if (sp->dead) {
-		errno = EPIPE;
+	uint32_t id;
+	struct lib_object *obj = lib_alloc(sp, size, &id);
+	if (!obj)
 		return NULL;
-	}
-	uint32_t id = lib_new_id(sp);
-	struct lib_object *obj = calloc(1, size);
-	if (!id || !obj) {
-		free(obj);
-		errno = id ? ENOMEM : ENOSPC;
-		return NULL;
-	}
 	obj->sp = sp;
 	obj->id = id;
 	link_append(&sp->objects, &obj->link);

@@ -55,8 +55,9 @@ struct spindle {
 void lib_log(struct spindle *sp, const char *fmt, ...) __attribute__((format(printf, 2, 3)));
 /* Marks the connection broken with a reason; returns -EPIPE. */
 int lib_set_error(struct spindle *sp, int err, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
-/* A fresh object id, 0 when they ran out. */
-uint32_t lib_new_id(struct spindle *sp);
+/* Zeroed memory for a new object and a fresh id for it; NULL + errno
+ * (EPIPE: connection broken, ENOSPC: ids ran out, ENOMEM). */
+void *lib_alloc(struct spindle *sp, size_t size, uint32_t *id);
 /* After queueing a request: maps its result, flushes when much is queued. */
 int lib_sent(struct spindle *sp, int r);
 int lib_flush_blocking(struct spindle *sp);
