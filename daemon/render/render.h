@@ -14,6 +14,29 @@
 
 struct renderer;
 
+/* What the last render cost and produced. Times in ns; the per-stage times
+ * are summed over the threads that ran them (divide by threads for a wall
+ * share), total_ns is wall time. */
+struct render_stats {
+	uint64_t total_ns;     /* wall: the whole render_volume() call */
+	uint64_t bin_ns;       /* transform + outcodes + binning + sort */
+	uint64_t raster_ns;    /* sectioning and conservative raster */
+	uint64_t pack_ns;      /* halftone + pack + canvas clear */
+	uint64_t prims;        /* primitives after transform (finite) */
+	uint64_t prim_images;  /* (primitive, image) pairs sectioned */
+	uint64_t canvas_tiles; /* tiles halftoned (something touched them) */
+	uint64_t tiles;        /* non-empty tiles packed */
+	unsigned threads;      /* threads that rendered images */
+};
+
+/* CPU renderer variants, for tests and benchmarks: every variant gives
+ * bit-identical output. */
+struct render_cpu_options {
+	unsigned threads;    /* worker threads; 0 = one per core */
+	const char *simd;    /* halftone+pack variant: NULL or "auto" (best this
+			      * CPU runs), "scalar", "sse2", "avx2", "avx512" */
+};
+
 struct renderer_impl {
 	const char *name;
 	/* Renders scene into out (same geometry as the renderer; out is
@@ -26,11 +49,16 @@ struct renderer_impl {
 struct renderer {
 	const struct renderer_impl *impl;
 	struct geometry geom;
+	struct render_stats stats; /* of the last render */
 };
 
 /* The exact CPU sectioning renderer, using up to threads worker threads
  * (0 = one per core). NULL + errno on failure. */
 struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads);
+/* The same with explicit options (ENOENT: simd variant unknown or not
+ * runnable on this CPU). */
+struct renderer *render_cpu_create_opts(const struct geometry *geom,
+					const struct render_cpu_options *opts);
 
 /* Picks a renderer by name ("cpu", "auto"), with up to threads worker
  * threads (0 = one per core). NULL + errno (ENOENT: unknown or not built)

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "bin.h"
+#include "halftone.h"
 #include "render.h"
 #include "section.h"
 
@@ -184,6 +185,18 @@ static unsigned pick_threads(const struct geometry *geom, unsigned threads)
 
 struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads)
 {
+	struct render_cpu_options o = { .threads = threads };
+	return render_cpu_create_opts(geom, &o);
+}
+
+struct renderer *render_cpu_create_opts(const struct geometry *geom,
+					const struct render_cpu_options *opts)
+{
+	unsigned threads = opts->threads;
+	if (!halftone_pick(opts->simd)) {
+		errno = ENOENT;
+		return NULL;
+	}
 	if (geometry_validate(geom) < 0) {
 		errno = EINVAL;
 		return NULL;

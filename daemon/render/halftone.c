@@ -1,0 +1,162 @@
+#include "halftone.h"
+
+#include <stddef.h>
+#include <pthread.h>
+#include <string.h>
+
+#include "render.h"
+#include "volume.h"
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define HALFTONE_X86 1
+#endif
+
+void halftone_table_init(struct halftone_table *t, uint32_t k)
+{
+	/* Tile origins are multiples of 32, so a tile's local coordinates
+	 * have the image's phase. */
+	for (uint32_t y = 0; y < 16; y++)
+		for (uint32_t x = 0; x < HALFTONE_ROW_BYTES; x++)
+			t->thr[y][halftone_pos(x)] = render_dither_threshold(k, x, y);
+}
+
+/* The packed row is the little-endian 32-bit word whose bit j says whether
+ * canvas byte j beats its threshold: byte j holds pixel x = j ^ 7, which
+ * packs into byte x / 8 = j / 8 at bit 7 - x % 8 = j % 8. */
+static inline void put_row(uint8_t *out, uint32_t word)
+{
+	out[0] = (uint8_t)word;
+	out[1] = (uint8_t)(word >> 8);
+	out[2] = (uint8_t)(word >> 16);
+	out[3] = (uint8_t)(word >> 24);
+}
+
+static int halftone_scalar(const uint8_t *canvas, uint32_t rows,
+			   const struct halftone_table *t, uint8_t *out)
+{
+	uint32_t any = 0;
+	for (int c = 0; c < 3; c++) {
+		for (uint32_t y = 0; y < 32; y++) {
+			uint32_t word = 0;
+			if (rows & (1u << y)) {
+				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+				const uint8_t *thr = t->thr[y & 15];
+				for (uint32_t j = 0; j < 32; j++)
+					word |= (uint32_t)(row[j] > thr[j]) << j;
+			}
+			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
+			any |= word;
+		}
+	}
+	return any != 0;
+}
+
+#ifdef HALFTONE_X86
+/* c > t for unsigned bytes is "c - t saturated is not zero". */
+__attribute__((target("sse2"))) static int halftone_sse2(const uint8_t *canvas, uint32_t rows,
+							   const struct halftone_table *t, uint8_t *out)
+{
+	const __m128i zero = _mm_setzero_si128();
+	uint32_t any = 0;
+	for (int c = 0; c < 3; c++) {
+		for (uint32_t y = 0; y < 32; y++) {
+			uint32_t word = 0;
+			if (rows & (1u << y)) {
+				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+				const uint8_t *thr = t->thr[y & 15];
+				__m128i a = _mm_loadu_si128((const __m128i *)row);
+				__m128i b = _mm_loadu_si128((const __m128i *)(row + 16));
+				__m128i ta = _mm_loadu_si128((const __m128i *)thr);
+				__m128i tb = _mm_loadu_si128((const __m128i *)(thr + 16));
+				uint32_t lo = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(a, ta), zero));
+				uint32_t hi = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(b, tb), zero));
+				word = ~(lo | hi << 16);
+			}
+			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
+			any |= word;
+		}
+	}
+	return any != 0;
+}
+
+__attribute__((target("avx2"))) static int halftone_avx2(const uint8_t *canvas, uint32_t rows,
+							   const struct halftone_table *t, uint8_t *out)
+{
+	const __m256i zero = _mm256_setzero_si256();
+	uint32_t any = 0;
+	for (int c = 0; c < 3; c++) {
+		for (uint32_t y = 0; y < 32; y++) {
+			uint32_t word = 0;
+			if (rows & (1u << y)) {
+				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+				__m256i a = _mm256_loadu_si256((const __m256i *)row);
+				__m256i th = _mm256_loadu_si256((const __m256i *)t->thr[y & 15]);
+				word = ~(uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, th), zero));
+			}
+			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
+			any |= word;
+		}
+	}
+	return any != 0;
+}
+
+/* Two rows at a time: rows y and y + 1 (y even) are 64 contiguous bytes in
+ * the canvas and in the table. */
+__attribute__((target("avx512f,avx512bw"))) static int halftone_avx512(const uint8_t *canvas, uint32_t rows,
+									 const struct halftone_table *t, uint8_t *out)
+{
+	uint64_t any = 0;
+	for (int c = 0; c < 3; c++) {
+		for (uint32_t y = 0; y < 32; y += 2) {
+			uint64_t m = 0;
+			if (rows & (3u << y)) {
+				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+				__m512i a = _mm512_loadu_si512((const void *)row);
+				__m512i th = _mm512_loadu_si512((const void *)t->thr[y & 15]);
+				m = _mm512_cmpgt_epu8_mask(a, th);
+			}
+			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, (uint32_t)m);
+			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4 + 4, (uint32_t)(m >> 32));
+			any |= m;
+		}
+	}
+	return any != 0;
+}
+#endif
+
+static struct halftone_variant variants[5];
+
+static void init_variants(void)
+{
+	int n = 0;
+#ifdef HALFTONE_X86
+	__builtin_cpu_init();
+	if (__builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512f"))
+		variants[n++] = (struct halftone_variant){ "avx512", halftone_avx512 };
+	if (__builtin_cpu_supports("avx2"))
+		variants[n++] = (struct halftone_variant){ "avx2", halftone_avx2 };
+	if (__builtin_cpu_supports("sse2"))
+		variants[n++] = (struct halftone_variant){ "sse2", halftone_sse2 };
+#endif
+	variants[n++] = (struct halftone_variant){ "scalar", halftone_scalar };
+	variants[n] = (struct halftone_variant){ NULL, NULL };
+}
+
+const struct halftone_variant *halftone_variants(void)
+{
+	static pthread_once_t once = PTHREAD_ONCE_INIT;
+	pthread_once(&once, init_variants);
+	return variants;
+}
+
+halftone_fn halftone_pick(const char *name)
+{
+	const struct halftone_variant *v = halftone_variants();
+	if (!name || strcmp(name, "auto") == 0)
+		return v[0].fn;
+	for (; v->name; v++)
+		if (strcmp(v->name, name) == 0)
+			return v->fn;
+	return NULL;
+}

@@ -1,0 +1,54 @@
+/* Halftone + pack of one canvas tile: 8-bit RGB in, 1 bit per channel out
+ * (DESIGN.md section 3), in several bit-identical variants chosen at run
+ * time by what the CPU supports.
+ *
+ * Canvas tile layout: planes R, G, B, each 32 rows of 32 bytes. Pixel x
+ * (0..31) of a row is stored at byte halftone_pos(x) = x ^ 7, i.e. reversed
+ * inside each group of 8, so that one SIMD byte-compare and one byte-mask
+ * movement give the packed row (4 bytes, MSB = leftmost pixel) directly.
+ * Output: the packed tile of volume.h (planes R, G, B of 32 rows of 4
+ * bytes). */
+#ifndef SPINDLE_HALFTONE_H
+#define SPINDLE_HALFTONE_H
+
+#include <stdint.h>
+
+#define HALFTONE_ROW_BYTES 32
+#define HALFTONE_PLANE_BYTES (32 * HALFTONE_ROW_BYTES)   /* 1024 */
+#define HALFTONE_TILE_BYTES (3 * HALFTONE_PLANE_BYTES)   /* 3072 */
+
+static inline uint32_t halftone_pos(uint32_t x)
+{
+	return x ^ 7u;
+}
+
+/* Image k's thresholds for tile rows y % 16, in canvas byte order (the
+ * 16-periodic matrix repeated to 32 columns). A pixel of value c is lit
+ * iff c > threshold. */
+struct halftone_table {
+	uint8_t thr[16][HALFTONE_ROW_BYTES];
+};
+
+void halftone_table_init(struct halftone_table *t, uint32_t k);
+
+/* Halftones the rows of canvas (a tile in the layout above) whose bit is set
+ * in rows (bit y = row y, in every plane); rows not set are zero in the
+ * canvas and come out zero. Writes all VOLUME_TILE_BYTES of out. Returns
+ * nonzero iff some output bit is set. */
+typedef int (*halftone_fn)(const uint8_t *canvas, uint32_t rows,
+			   const struct halftone_table *t, uint8_t *out);
+
+struct halftone_variant {
+	const char *name;
+	halftone_fn fn;
+};
+
+/* The variants this CPU can run, best first, ending with "scalar" and then
+ * an entry whose name is NULL. */
+const struct halftone_variant *halftone_variants(void);
+
+/* The variant called name (NULL or "auto": the best), or NULL if unknown or
+ * not runnable here. */
+halftone_fn halftone_pick(const char *name);
+
+#endif
