@@ -50,26 +50,6 @@ double geometry_image_angle(const struct geometry *g, uint32_t k)
 	return 2.0 * M_PI * (double)k / (double)g->images_per_rev;
 }
 
-static uint32_t clamp_index(double f, uint32_t n)
-{
-	if (!(f >= 0.0)) /* also catches NaN */
-		return 0;
-	if (f >= (double)n)
-		return n - 1;
-	return (uint32_t)f;
-}
-
-uint32_t geometry_column(const struct geometry *g, double s)
-{
-	return clamp_index(floor((s + 1.0) / 2.0 * g->width), g->width);
-}
-
-uint32_t geometry_row(const struct geometry *g, double y)
-{
-	double h = g->half_height;
-	return clamp_index(floor((h - y) / (2.0 * h) * g->height), g->height);
-}
-
 static uint32_t wrap_image(double idx, uint32_t n)
 {
 	long long k = llround(idx) % (long long)n;

@@ -31,9 +31,28 @@ uint32_t geometry_images_per_volume(const struct geometry *g);
 /* Angle of image k and its in-plane direction. */
 double geometry_image_angle(const struct geometry *g, uint32_t k);
 
-/* Column of signed in-plane coordinate s, row of height y, both clamped. */
-uint32_t geometry_column(const struct geometry *g, double s);
-uint32_t geometry_row(const struct geometry *g, double y);
+/* Column of signed in-plane coordinate s, row of height y, both clamped:
+ * floor(f) clamped to 0..n-1, where truncation is floor for f >= 0 and
+ * everything below 0 clamps to 0 anyway. */
+static inline uint32_t geometry_clamp_index_(double f, uint32_t n)
+{
+	if (!(f >= 0.0)) /* also catches NaN */
+		return 0;
+	if (f >= (double)n)
+		return n - 1;
+	return (uint32_t)f;
+}
+
+static inline uint32_t geometry_column(const struct geometry *g, double s)
+{
+	return geometry_clamp_index_((s + 1.0) / 2.0 * g->width, g->width);
+}
+
+static inline uint32_t geometry_row(const struct geometry *g, double y)
+{
+	double h = g->half_height;
+	return geometry_clamp_index_((h - y) / (2.0 * h) * g->height, g->height);
+}
 
 /* Image index lighting azimuth phi = atan2(z, x) with its s >= 0 lobe, and
  * with its s < 0 lobe (round((phi - pi) / D) mod N). */

@@ -48,7 +48,7 @@ void volume_clear(struct volume *vol)
 {
 	memset(vol->images[0].mask, 0, (size_t)vol->image_count * vol->mask_bytes);
 	for (uint32_t k = 0; k < vol->image_count; k++)
-		vol->images[k].tile_count = 0;
+		vol->images[k].tile_count = vol->images[k].next_tile = 0;
 	vol->seq = 0;
 	vol->shown_ns = 0;
 }
@@ -84,21 +84,34 @@ int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_
 	if (k >= vol->image_count || t >= volume_tiles_per_image(vol))
 		return -EINVAL;
 	struct volume_image *img = &vol->images[k];
-	/* Order check: no tile at or above t may be present yet. */
-	for (uint32_t b = t / 8; b < vol->mask_bytes; b++) {
-		uint8_t m = img->mask[b];
-		if (b == t / 8)
-			m &= (uint8_t)(0xff << (t % 8));
-		if (m)
-			return -EINVAL;
-	}
+	if (t < img->next_tile)
+		return -EINVAL; /* out of order */
 	if (all_zero(data, VOLUME_TILE_BYTES))
 		return 0;
-	int r = volume_image_reserve(vol, k, img->tile_count + 1);
-	if (r < 0)
-		return r;
-	memcpy(img->tiles + (size_t)img->tile_count * VOLUME_TILE_BYTES, data, VOLUME_TILE_BYTES);
+	uint8_t *dst = volume_image_next(vol, k);
+	if (!dst)
+		return -ENOMEM;
+	memcpy(dst, data, VOLUME_TILE_BYTES);
+	return volume_image_push(vol, k, t);
+}
+
+uint8_t *volume_image_next(struct volume *vol, uint32_t k)
+{
+	struct volume_image *img = &vol->images[k];
+	if (volume_image_reserve(vol, k, img->tile_count + 1) < 0)
+		return NULL;
+	return img->tiles + (size_t)img->tile_count * VOLUME_TILE_BYTES;
+}
+
+int volume_image_push(struct volume *vol, uint32_t k, uint32_t t)
+{
+	if (k >= vol->image_count || t >= volume_tiles_per_image(vol))
+		return -EINVAL;
+	struct volume_image *img = &vol->images[k];
+	if (t < img->next_tile || img->tile_count >= img->tile_cap)
+		return -EINVAL;
 	img->tile_count++;
+	img->next_tile = t + 1;
 	img->mask[t / 8] |= (uint8_t)(1u << (t % 8));
 	return 0;
 }
@@ -117,6 +130,7 @@ int volume_copy(struct volume *dst, const struct volume *src)
 		if (s->tile_count)
 			memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
 		d->tile_count = s->tile_count;
+		d->next_tile = s->next_tile;
 	}
 	dst->seq = src->seq;
 	dst->shown_ns = src->shown_ns;

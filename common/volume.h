@@ -23,6 +23,7 @@
 struct volume_image {
 	uint32_t tile_count; /* stored (non-empty) tiles */
 	uint32_t tile_cap;   /* tiles the storage has room for */
+	uint32_t next_tile;  /* 1 + the last stored tile's number, 0 if none */
 	uint8_t *mask;       /* mask_bytes, owned by the volume */
 	uint8_t *tiles;      /* tile_count * VOLUME_TILE_BYTES, owned */
 };
@@ -63,6 +64,14 @@ int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n);
  * copying VOLUME_TILE_BYTES from data, unless those bytes are all zero.
  * Returns 0, or -ENOMEM, or -EINVAL if t is out of range or out of order. */
 int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *data);
+
+/* Appending in place, for renderers: the storage for image k's next tile
+ * (VOLUME_TILE_BYTES to fill), or NULL when out of memory. Nothing is
+ * stored until volume_image_push() commits it as tile t. */
+uint8_t *volume_image_next(struct volume *vol, uint32_t k);
+/* Commits the bytes at volume_image_next(vol, k) as tile t, which must be
+ * greater than every stored tile and not all zero. 0 or -EINVAL. */
+int volume_image_push(struct volume *vol, uint32_t k, uint32_t t);
 
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
 int volume_copy(struct volume *dst, const struct volume *src);

@@ -6,31 +6,100 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "section.h"
+#include "pool.h"
+
+#define KEY_NONE UINT32_MAX
+
+struct bin_work {
+	const struct scene *scene;
+	unsigned threads;
+	uint64_t prim_items, point_items;
+	uint64_t *prim_base, *point_base; /* per draw: first item of the draw */
+	size_t draw_cap;
+	/* Two staging entries per item (a primitive or point may need two
+	 * records); unused ones have key KEY_NONE. */
+	struct bin_prim *stage_prims;
+	uint32_t *prim_keys;
+	size_t prim_stage_cap;
+	struct bin_point *stage_points;
+	uint32_t *point_keys;
+	size_t point_stage_cap;
+	uint32_t *hist;      /* threads x (prim keys + point keys) */
+	size_t hist_cap;
+	size_t prim_cap, point_cap; /* of the sorted arrays */
+};
+
+static uint32_t prim_keys(const struct bin_set *b)
+{
+	return b->classes * b->images;
+}
+
+static unsigned ceil_log2(uint32_t x)
+{
+	unsigned c = 0;
+	while ((1u << c) < x)
+		c++;
+	return c;
+}
 
 int bin_init(struct bin_set *b, const struct geometry *g)
 {
 	memset(b, 0, sizeof(*b));
-	b->image_count = geometry_images_per_volume(g);
-	b->start = calloc(b->image_count + 1, sizeof(*b->start));
-	b->stamp = calloc(b->image_count, sizeof(*b->stamp));
-	if (!b->start || !b->stamp) {
+	b->geom = *g;
+	b->images = geometry_images_per_volume(g);
+	b->classes = ceil_log2(b->images) + 1;
+	b->dir = malloc(2 * sizeof(double) * b->images);
+	b->prim_start = calloc(prim_keys(b) + 1, sizeof(*b->prim_start));
+	b->point_start = calloc(b->images + 1, sizeof(*b->point_start));
+	b->work = calloc(1, sizeof(*b->work));
+	if (!b->dir || !b->prim_start || !b->point_start || !b->work ||
+	    slot_table_init(&b->slots, g->images_per_rev) < 0) {
 		bin_finish(b);
 		return -ENOMEM;
+	}
+	for (uint32_t k = 0; k < b->images; k++) {
+		double theta = geometry_image_angle(g, k);
+		b->dir[2 * k] = cos(theta);
+		b->dir[2 * k + 1] = sin(theta);
 	}
 	return 0;
 }
 
 void bin_finish(struct bin_set *b)
 {
+	struct bin_work *w = b->work;
+	if (w) {
+		free(w->prim_base);
+		free(w->point_base);
+		free(w->stage_prims);
+		free(w->prim_keys);
+		free(w->stage_points);
+		free(w->point_keys);
+		free(w->hist);
+		free(w);
+	}
+	slot_table_finish(&b->slots);
+	free(b->dir);
 	free(b->prims);
-	free(b->start);
-	free(b->index);
-	free(b->stamp);
+	free(b->prim_start);
+	free(b->points);
+	free(b->point_start);
 	memset(b, 0, sizeof(*b));
 }
 
-/* Column-major affine transform; false if the result is not finite. */
+/* ---- per item ---- */
+
+static int draw_verts(const struct scene_draw *d)
+{
+	switch (d->prim) {
+	case SCENE_POINTS: return 1;
+	case SCENE_LINES: return 2;
+	case SCENE_TRIANGLES: return 3;
+	}
+	return 0;
+}
+
+/* Column-major affine transform in double; false if not finite. */
 static bool transform(const float m[16], const float *xyz, double out[3])
 {
 	double x = xyz[0], y = xyz[1], z = xyz[2];
@@ -42,164 +111,329 @@ static bool transform(const float m[16], const float *xyz, double out[3])
 	return true;
 }
 
-static int grow_prims(struct bin_set *b, size_t need)
+/* The closed arc of slots [*first, *first + *len) (mod N) holding the
+ * xz projection of the n vertices (negated when neg: the s < 0 lobe).
+ * False when the projection may touch the axis: every slot. */
+static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool neg, uint32_t *first,
+		     uint32_t *len)
 {
-	if (need <= b->prim_cap)
+	uint32_t s[3], N = b->slots.n;
+	bool near = false;
+	float sign = neg ? -1.0f : 1.0f;
+	for (int i = 0; i < n; i++) {
+		s[i] = slot_of(&b->slots, sign * v[i][0], sign * v[i][2], &near);
+		if (s[i] == SLOT_AXIS)
+			return false;
+		for (int j = i; j > 0 && s[j - 1] > s[j]; j--) {
+			uint32_t t = s[j];
+			s[j] = s[j - 1];
+			s[j - 1] = t;
+		}
+	}
+	/* The largest circular gap between the vertices' slots; vertex angles
+	 * are within half a slot of their slot's centre, or one slot more
+	 * when near a boundary. The hull misses the axis iff some angular gap
+	 * exceeds pi. */
+	uint32_t gap = s[0] + N - s[n - 1], start = s[0], end = s[n - 1];
+	for (int i = 0; i + 1 < n; i++) {
+		if (s[i + 1] - s[i] > gap) {
+			gap = s[i + 1] - s[i];
+			start = s[i + 1];
+			end = s[i];
+		}
+	}
+	uint32_t slack = near ? 3 : 1;
+	if (gap <= slack || 2 * (gap - slack) <= N)
+		return false;
+	*len = (end + N - start) % N + 1;
+	*first = start;
+	if (near) {
+		*first = (start + N - 1) % N;
+		*len += 2;
+	}
+	return *len < N;
+}
+
+static uint32_t prim_key(const struct bin_set *b, struct bin_prim *p, uint32_t first, uint32_t count)
+{
+	if (count >= b->images) {
+		first = 0;
+		count = b->images;
+	}
+	p->first = (uint16_t)first;
+	p->count = (uint16_t)count;
+	return ceil_log2(count) * b->images + first;
+}
+
+/* Records (one or two) of one segment or triangle; returns keys in k. */
+static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const float *xyz, int n,
+			 struct bin_prim *out, uint32_t *k)
+{
+	double t[3][3];
+	k[0] = k[1] = KEY_NONE;
+	for (int i = 0; i < n; i++)
+		if (!transform(d->transform, xyz + 3 * i, t[i]))
+			return; /* NaN or infinite: nothing sensible to light */
+	struct bin_prim *p = &out[0];
+	for (int i = 0; i < n; i++)
+		for (int j = 0; j < 3; j++)
+			p->v[i][j] = (float)t[i][j];
+	p->nverts = (uint8_t)n;
+	memcpy(p->rgb, d->rgb, 3);
+	uint32_t M = b->images, first, len;
+	if (!prim_arc(b, (const float (*)[3])p->v, n, false, &first, &len)) {
+		k[0] = prim_key(b, p, 0, M);
+	} else if (b->geom.mirrored) {
+		k[0] = prim_key(b, p, first % M, len); /* both lobes fold onto M images */
+	} else {
+		uint32_t bf, bl;
+		if (!prim_arc(b, (const float (*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
+			k[0] = prim_key(b, p, 0, M);
+			return;
+		}
+		out[1] = *p;
+		k[0] = prim_key(b, &out[0], first, len);
+		k[1] = prim_key(b, &out[1], bf, bl);
+	}
+}
+
+static uint32_t point_key(const struct bin_set *b, const double p[3], uint32_t k, const uint8_t rgb[3],
+			  struct bin_point *out)
+{
+	const struct geometry *g = &b->geom;
+	out->u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
+	out->v = (uint16_t)geometry_row(g, p[1]);
+	memcpy(out->rgb, rgb, 3);
+	out->pad = 0;
+	return k;
+}
+
+/* A point lights one voxel in each lobe's image (DESIGN.md section 3); on a
+ * mirrored device both usually fold onto one volume image. */
+static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz,
+			  struct bin_point *out, uint32_t *k)
+{
+	double p[3];
+	k[0] = k[1] = KEY_NONE;
+	if (!transform(d->transform, xyz, p))
+		return;
+	const struct geometry *g = &b->geom;
+	uint32_t N = g->images_per_rev, M = b->images, front, back;
+	bool near = false;
+	front = slot_of(&b->slots, (float)p[0], (float)p[2], &near);
+	if (near || front == SLOT_AXIS || N % 2 != 0) {
+		/* Close to a boundary: the exact rule decides. */
+		double phi = atan2(p[2], p[0]);
+		front = geometry_image_of_azimuth(g, phi);
+		back = geometry_image_of_azimuth_back(g, phi);
+	} else {
+		back = (front + N / 2) % N;
+	}
+	k[0] = point_key(b, p, front % M, d->rgb, &out[0]);
+	if (back % M != front % M)
+		k[1] = point_key(b, p, back % M, d->rgb, &out[1]);
+}
+
+/* ---- the parallel build ---- */
+
+struct chunk {
+	uint64_t lo, hi;
+};
+
+static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
+{
+	return (struct chunk){ items * w / threads, items * (w + 1) / threads };
+}
+
+/* Calls fn for every item of one kind (points or not) in [c.lo, c.hi). */
+#define FOR_ITEMS(b, points, c, d, nv, i, body)                                                  \
+	do {                                                                                     \
+		const struct bin_work *w_ = (b)->work;                                            \
+		const uint64_t *base_ = (points) ? w_->point_base : w_->prim_base;                \
+		for (uint32_t di_ = 0; di_ < w_->scene->draw_count; di_++) {                      \
+			const struct scene_draw *d = &w_->scene->draws[di_];                       \
+			int nv = draw_verts(d);                                                    \
+			if (nv == 0 || !d->xyz || (nv == 1) != (points))                           \
+				continue;                                                          \
+			uint64_t n_ = d->count / (uint32_t)nv;                                     \
+			uint64_t lo_ = base_[di_] > (c).lo ? base_[di_] : (c).lo;                   \
+			uint64_t hi_ = base_[di_] + n_ < (c).hi ? base_[di_] + n_ : (c).hi;         \
+			for (uint64_t i = lo_; i < hi_; i++) {                                     \
+				const float *xyz_ = d->xyz + (i - base_[di_]) * (uint64_t)nv * 3;   \
+				body                                                               \
+			}                                                                          \
+		}                                                                                  \
+	} while (0)
+
+static void count_job(void *arg, unsigned t)
+{
+	struct bin_set *b = arg;
+	struct bin_work *w = b->work;
+	uint32_t pk = prim_keys(b);
+	uint32_t *hist = w->hist + (size_t)t * (pk + b->images);
+	struct chunk c = chunk_of(w->prim_items, w->threads, t);
+	FOR_ITEMS(b, false, c, d, nv, i, {
+		uint32_t *k = &w->prim_keys[2 * i];
+		bin_one_prim(b, d, xyz_, nv, &w->stage_prims[2 * i], k);
+		if (k[0] != KEY_NONE)
+			hist[k[0]]++;
+		if (k[1] != KEY_NONE)
+			hist[k[1]]++;
+	});
+	c = chunk_of(w->point_items, w->threads, t);
+	FOR_ITEMS(b, true, c, d, nv, i, {
+		uint32_t *k = &w->point_keys[2 * i];
+		bin_one_point(b, d, xyz_, &w->stage_points[2 * i], k);
+		if (k[0] != KEY_NONE)
+			hist[pk + k[0]]++;
+		if (k[1] != KEY_NONE)
+			hist[pk + k[1]]++;
+		(void)nv;
+	});
+}
+
+/* Each thread's records go, in item order, to its own offsets: the result
+ * is the same whatever the thread count. */
+static void scatter_job(void *arg, unsigned t)
+{
+	struct bin_set *b = arg;
+	struct bin_work *w = b->work;
+	uint32_t pk = prim_keys(b);
+	uint32_t *off = w->hist + (size_t)t * (pk + b->images);
+	struct chunk c = chunk_of(w->prim_items, w->threads, t);
+	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+		if (w->prim_keys[i] != KEY_NONE)
+			b->prims[off[w->prim_keys[i]]++] = w->stage_prims[i];
+	c = chunk_of(w->point_items, w->threads, t);
+	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+		if (w->point_keys[i] != KEY_NONE)
+			b->points[off[pk + w->point_keys[i]]++] = w->stage_points[i];
+}
+
+static int grow(void **p, size_t *cap, size_t need, size_t size)
+{
+	if (need <= *cap)
 		return 0;
-	if (need > UINT32_MAX - 1)
-		return -E2BIG;
-	size_t cap = b->prim_cap ? b->prim_cap : 256;
-	while (cap < need)
-		cap *= 2;
-	struct bin_prim *p = realloc(b->prims, cap * sizeof(*p));
-	if (!p)
+	size_t n = *cap ? *cap : 256;
+	while (n < need)
+		n *= 2;
+	void *q = realloc(*p, n * size);
+	if (!q)
 		return -ENOMEM;
-	b->prims = p;
-	b->prim_cap = cap;
+	*p = q;
+	*cap = n;
 	return 0;
 }
 
-static int add_draw(struct bin_set *b, const struct scene_draw *d)
+/* Counts items and sizes the work space. */
+static int prepare(struct bin_set *b, const struct scene *scene, unsigned threads)
 {
-	int nv = d->prim == SCENE_POINTS ? 1 : d->prim == SCENE_LINES ? 2
-		: d->prim == SCENE_TRIANGLES ? 3 : 0;
-	if (nv == 0 || !d->xyz)
-		return 0;
-	uint32_t n = d->count / (uint32_t)nv;
-	int r = grow_prims(b, (size_t)b->prim_count + n);
+	struct bin_work *w = b->work;
+	uint32_t draws = scene ? scene->draw_count : 0;
+	size_t cap = w->draw_cap, n2;
+	int r = grow((void **)&w->prim_base, &cap, draws, sizeof(uint64_t));
+	if (r == 0)
+		r = grow((void **)&w->point_base, &w->draw_cap, draws, sizeof(uint64_t));
 	if (r < 0)
 		return r;
-	for (uint32_t i = 0; i < n; i++) {
-		struct bin_prim *p = &b->prims[b->prim_count];
-		bool ok = true;
-		for (int j = 0; j < nv && ok; j++)
-			ok = transform(d->transform, d->xyz + ((size_t)i * nv + j) * 3, p->v[j]);
-		if (!ok)
-			continue; /* NaN or infinite: nothing sensible to light */
-		p->nverts = (uint8_t)nv;
-		memcpy(p->rgb, d->rgb, 3);
-		b->prim_count++;
+	w->scene = scene;
+	w->threads = threads;
+	w->prim_items = w->point_items = 0;
+	for (uint32_t i = 0; i < draws; i++) {
+		const struct scene_draw *d = &scene->draws[i];
+		int nv = draw_verts(d);
+		w->prim_base[i] = w->prim_items;
+		w->point_base[i] = w->point_items;
+		if (nv == 0 || !d->xyz)
+			continue;
+		if (nv == 1)
+			w->point_items += d->count;
+		else
+			w->prim_items += d->count / (uint32_t)nv;
 	}
+	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
+		return -E2BIG;
+	size_t pcap = w->prim_stage_cap, qcap = w->point_stage_cap, keys = prim_keys(b) + b->images;
+	n2 = 2 * w->prim_items;
+	if ((r = grow((void **)&w->stage_prims, &pcap, n2, sizeof(struct bin_prim))) < 0 ||
+	    (r = grow((void **)&w->prim_keys, &w->prim_stage_cap, n2, sizeof(uint32_t))) < 0)
+		return r;
+	n2 = 2 * w->point_items;
+	if ((r = grow((void **)&w->stage_points, &qcap, n2, sizeof(struct bin_point))) < 0 ||
+	    (r = grow((void **)&w->point_keys, &w->point_stage_cap, n2, sizeof(uint32_t))) < 0)
+		return r;
+	if ((r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
+		return r;
+	memset(w->hist, 0, threads * keys * sizeof(uint32_t));
 	return 0;
 }
 
-/* The smallest arc of azimuths [*lo, *hi] (hi - lo < pi) holding the
- * primitive's xz projection. False when that projection may contain or touch
- * the axis: then every image can see it. */
-static bool azimuth_arc(const struct bin_prim *p, double *lo, double *hi)
+/* Turns the per-thread counts into per-thread offsets, key-major, and the
+ * per-key starts; returns the totals. */
+static void prefix(struct bin_set *b, uint64_t *prims, uint64_t *points)
 {
-	double a[3] = { 0.0, 0.0, 0.0 };
-	int n = p->nverts;
-	for (int i = 0; i < n; i++) {
-		if (p->v[i][0] == 0.0 && p->v[i][2] == 0.0)
-			return false;
-		a[i] = atan2(p->v[i][2], p->v[i][0]);
-		for (int j = i; j > 0 && a[j - 1] > a[j]; j--) {
-			double t = a[j];
-			a[j] = a[j - 1];
-			a[j - 1] = t;
+	struct bin_work *w = b->work;
+	uint32_t pk = prim_keys(b), keys = pk + b->images;
+	uint64_t run = 0;
+	for (uint32_t key = 0; key < keys; key++) {
+		if (key == pk) {
+			*prims = run;
+			run = 0;
+		}
+		if (key < pk)
+			b->prim_start[key] = (uint32_t)run;
+		else
+			b->point_start[key - pk] = (uint32_t)run;
+		for (unsigned t = 0; t < w->threads; t++) {
+			uint32_t *h = &w->hist[(size_t)t * keys + key];
+			uint32_t n = *h;
+			*h = (uint32_t)run;
+			run += n;
 		}
 	}
-	/* The convex hull misses the axis iff some angular gap exceeds pi. */
-	double gap = a[0] + 2.0 * M_PI - a[n - 1];
-	*lo = a[0];
-	*hi = a[n - 1];
-	for (int i = 0; i + 1 < n; i++) {
-		if (a[i + 1] - a[i] > gap) {
-			gap = a[i + 1] - a[i];
-			*lo = a[i + 1];
-			*hi = a[i] + 2.0 * M_PI;
-		}
-	}
-	return gap > M_PI + 1e-9;
+	*points = run;
+	b->prim_start[pk] = (uint32_t)*prims;
+	b->point_start[b->images] = (uint32_t)*points;
 }
 
-static void add(struct bin_set *b, uint32_t k, uint32_t prim, uint32_t *cursor)
+int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
 {
-	if (b->stamp[k] == prim + 1)
-		return;
-	b->stamp[k] = prim + 1;
-	if (cursor)
-		b->index[cursor[k]++] = prim;
-	else
-		b->start[k + 1]++;
-}
-
-/* Images j (of N) whose closed wedge [jD - D/2, jD + D/2] meets [lo, hi],
- * widened by one image each side against rounding. */
-static void add_arc(struct bin_set *b, const struct geometry *g, double lo, double hi,
-		    uint32_t prim, uint32_t *cursor)
-{
-	long long n = g->images_per_rev;
-	double d = 2.0 * M_PI / (double)n;
-	long long j0 = (long long)ceil(lo / d - 0.5) - 1;
-	long long j1 = (long long)floor(hi / d + 0.5) + 1;
-	if (j1 - j0 + 1 >= n)
-		j1 = j0 + n - 1;
-	for (long long j = j0; j <= j1; j++)
-		add(b, (uint32_t)(((j % n) + n) % n) % b->image_count, prim, cursor);
-}
-
-static void bin_prim(struct bin_set *b, const struct geometry *g, uint32_t prim,
-		     uint32_t *cursor)
-{
-	const struct bin_prim *p = &b->prims[prim];
-	double lo, hi;
-	if (p->nverts == 1) {
-		uint32_t img[2];
-		section_point_images(g, p->v[0], img);
-		add(b, img[0], prim, cursor);
-		add(b, img[1], prim, cursor);
-	} else if (!azimuth_arc(p, &lo, &hi)) {
-		for (uint32_t k = 0; k < b->image_count; k++)
-			add(b, k, prim, cursor);
-	} else {
-		add_arc(b, g, lo, hi, prim, cursor);               /* lobe s >= 0 */
-		add_arc(b, g, lo - M_PI, hi - M_PI, prim, cursor); /* lobe s < 0 */
-	}
-}
-
-/* Counts per image, then fills: index entries of one image come out in
- * increasing primitive order, so renders are deterministic. */
-static int fill_bins(struct bin_set *b, const struct geometry *g)
-{
-	uint32_t m = b->image_count;
-	memset(b->start, 0, (m + 1) * sizeof(*b->start));
-	memset(b->stamp, 0, m * sizeof(*b->stamp));
-	for (uint32_t i = 0; i < b->prim_count; i++)
-		bin_prim(b, g, i, NULL);
-	uint64_t total = 0;
-	for (uint32_t k = 0; k < m; k++) {
-		total += b->start[k + 1];
-		if (total > UINT32_MAX)
-			return -E2BIG;
-		b->start[k + 1] = (uint32_t)total;
-	}
-	if (total > b->index_cap) {
-		uint32_t *idx = realloc(b->index, total * sizeof(*idx));
-		if (!idx)
-			return -ENOMEM;
-		b->index = idx;
-		b->index_cap = total;
-	}
-	uint32_t *cursor = malloc(m * sizeof(*cursor));
-	if (!cursor)
-		return -ENOMEM;
-	memcpy(cursor, b->start, m * sizeof(*cursor));
-	memset(b->stamp, 0, m * sizeof(*b->stamp));
-	for (uint32_t i = 0; i < b->prim_count; i++)
-		bin_prim(b, g, i, cursor);
-	free(cursor);
+	static const struct scene empty;
+	struct bin_work *w = b->work;
+	if (!scene)
+		scene = &empty;
+	int r = prepare(b, scene, pool_workers(pool));
+	if (r < 0)
+		return r;
+	pool_run(pool, count_job, b);
+	uint64_t prims = 0, points = 0;
+	prefix(b, &prims, &points);
+	if ((r = grow((void **)&b->prims, &w->prim_cap, prims, sizeof(struct bin_prim))) < 0 ||
+	    (r = grow((void **)&b->points, &w->point_cap, points, sizeof(struct bin_point))) < 0)
+		return r;
+	b->prim_count = (uint32_t)prims;
+	b->point_count = (uint32_t)points;
+	pool_run(pool, scatter_job, b);
 	return 0;
 }
 
-int bin_build(struct bin_set *b, const struct geometry *g, const struct scene *scene)
+unsigned bin_runs(const struct bin_set *b, uint32_t k, struct bin_run *out)
 {
-	b->prim_count = 0;
-	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
-		int r = add_draw(b, &scene->draws[i]);
-		if (r < 0)
-			return r;
+	uint32_t M = b->images;
+	unsigned n = 0;
+	for (unsigned c = 0; c < b->classes; c++) {
+		const uint32_t *st = &b->prim_start[c * M];
+		if (st[0] == st[M])
+			continue;
+		uint32_t window = 1u << c;
+		if (window >= M) {
+			out[n++] = (struct bin_run){ st[0], st[M] };
+		} else if (k + 1 >= window) {
+			out[n++] = (struct bin_run){ st[k + 1 - window], st[k + 1] };
+		} else {
+			out[n++] = (struct bin_run){ st[0], st[k + 1] };
+			out[n++] = (struct bin_run){ st[M + k + 1 - window], st[M] };
+		}
 	}
-	return fill_bins(b, g);
+	return n;
 }

@@ -1,7 +1,18 @@
-/* Per-volume preparation for the CPU renderer: every draw's vertices
- * transformed to volume space once, primitives with a non-finite vertex
- * dropped, and each primitive binned to the volume images whose bow tie it
- * can reach (conservatively: never a missed image, sometimes one too many). */
+/* Per-volume binning (DESIGN.md section 5), shared by the renderers.
+ *
+ * Every draw's vertices are transformed to volume space once per volume and
+ * primitives with a non-finite vertex are dropped. Each vertex gets its
+ * azimuth slot from its outcode octant and slope (slot.h); a primitive's
+ * slots give the closed arc of slots it spans, or "every image" when its
+ * projection may touch the axis. Primitives are then sorted (a stable
+ * counting sort, in parallel) by the length class of their image range and
+ * by its first image, so image k finds everything it may need in a few
+ * contiguous runs: for class c (ranges of at most 2^c images) the
+ * primitives whose first image lies in [k - 2^c + 1, k]. Points are reduced
+ * at binning time to the voxel they light, sorted by image.
+ *
+ * Conservative: a primitive is in the range of every image whose bow tie it
+ * meets (sometimes one more); the renderer's sectioning decides exactly. */
 #ifndef SPINDLE_BIN_H
 #define SPINDLE_BIN_H
 
@@ -10,32 +21,70 @@
 
 #include "geometry.h"
 #include "scene.h"
+#include "slot.h"
 
+struct pool;
+
+/* A segment (nverts 2) or triangle (3) in volume space, with the volume
+ * images it may light: first, first + 1, ..., first + count - 1 (mod M). */
 struct bin_prim {
-	double v[3][3];  /* volume-space vertices */
-	uint8_t nverts;  /* 1 point, 2 segment, 3 triangle */
+	float v[3][3];
+	uint8_t nverts;
 	uint8_t rgb[3];
+	uint16_t first;
+	uint16_t count;
 };
+
+/* A point, already reduced to the voxel (u, v) of its image. */
+struct bin_point {
+	uint16_t u, v;
+	uint8_t rgb[3];
+	uint8_t pad;
+};
+
+/* A contiguous run of b->prims that image k must look at; entries whose
+ * range does not hold k are skipped with bin_prim_in_image(). */
+struct bin_run {
+	uint32_t begin, end;
+};
+
+#define BIN_MAX_CLASSES 16 /* 2^15 >= 16384 images */
 
 /* Storage is kept between builds and only grows. */
 struct bin_set {
-	uint32_t image_count;
+	struct geometry geom;
+	uint32_t images;       /* M: images per volume */
+	unsigned classes;      /* length classes: 0 .. classes - 1 */
+	struct slot_table slots;
+	double *dir;           /* per volume image: cos, sin of its angle */
+
 	uint32_t prim_count;
-	size_t prim_cap;
-	struct bin_prim *prims;
-	uint32_t *start;  /* image_count + 1 offsets into index */
-	uint32_t *index;  /* primitive numbers, grouped by image, increasing */
-	size_t index_cap;
-	uint32_t *stamp;  /* per image: last primitive (+1) binned there */
+	struct bin_prim *prims;   /* sorted by (class, first) */
+	uint32_t *prim_start;     /* classes * M + 1 offsets into prims */
+	uint32_t point_count;
+	struct bin_point *points; /* sorted by image */
+	uint32_t *point_start;    /* M + 1 offsets into points */
+
+	/* Work space of a build. */
+	struct bin_work *work;
 };
 
 /* Returns 0 or -ENOMEM. */
 int bin_init(struct bin_set *b, const struct geometry *g);
 void bin_finish(struct bin_set *b);
 
-/* Transforms and bins scene. Returns 0, or -ENOMEM / -E2BIG. */
-int bin_build(struct bin_set *b, const struct geometry *g, const struct scene *scene);
+/* Transforms and bins scene on the pool's workers. Returns 0, or -ENOMEM
+ * or -E2BIG (more than 2^31 primitives). */
+int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool);
 
-/* The primitives of image k: b->index[b->start[k] .. b->start[k + 1]). */
+/* The runs of prims image k must look at; fills out (2 * BIN_MAX_CLASSES
+ * entries at most) and returns how many. */
+unsigned bin_runs(const struct bin_set *b, uint32_t k, struct bin_run *out);
+
+static inline int bin_prim_in_image(const struct bin_set *b, const struct bin_prim *p, uint32_t k)
+{
+	uint32_t off = k >= p->first ? k - p->first : k + b->images - p->first;
+	return off < p->count;
+}
 
 #endif

@@ -85,15 +85,14 @@ __attribute__((target("avx2"))) static int halftone_avx2(const uint8_t *canvas, 
 {
 	const __m256i zero = _mm256_setzero_si256();
 	uint32_t any = 0;
-	for (int c = 0; c < 3; c++) {
-		for (uint32_t y = 0; y < 32; y++) {
-			uint32_t word = 0;
-			if (rows & (1u << y)) {
-				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
-				__m256i a = _mm256_loadu_si256((const __m256i *)row);
-				__m256i th = _mm256_loadu_si256((const __m256i *)t->thr[y & 15]);
-				word = ~(uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, th), zero));
-			}
+	memset(out, 0, VOLUME_TILE_BYTES);
+	for (; rows; rows &= rows - 1) {
+		uint32_t y = (uint32_t)__builtin_ctz(rows);
+		__m256i th = _mm256_loadu_si256((const __m256i *)t->thr[y & 15]);
+		for (int c = 0; c < 3; c++) {
+			const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+			__m256i a = _mm256_loadu_si256((const __m256i *)row);
+			uint32_t word = ~(uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, th), zero));
 			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
 			any |= word;
 		}
@@ -107,15 +106,17 @@ __attribute__((target("avx512f,avx512bw"))) static int halftone_avx512(const uin
 									 const struct halftone_table *t, uint8_t *out)
 {
 	uint64_t any = 0;
-	for (int c = 0; c < 3; c++) {
-		for (uint32_t y = 0; y < 32; y += 2) {
-			uint64_t m = 0;
-			if (rows & (3u << y)) {
-				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
-				__m512i a = _mm512_loadu_si512((const void *)row);
-				__m512i th = _mm512_loadu_si512((const void *)t->thr[y & 15]);
-				m = _mm512_cmpgt_epu8_mask(a, th);
-			}
+	/* Pairs of rows with something set: bit p for rows 2p, 2p + 1. */
+	uint32_t pairs = 0;
+	for (uint32_t p = 0; p < 16; p++)
+		pairs |= ((rows >> (2 * p)) & 3u ? 1u : 0u) << p;
+	memset(out, 0, VOLUME_TILE_BYTES);
+	for (; pairs; pairs &= pairs - 1) {
+		uint32_t y = 2 * (uint32_t)__builtin_ctz(pairs);
+		__m512i th = _mm512_loadu_si512((const void *)t->thr[y & 15]);
+		for (int c = 0; c < 3; c++) {
+			const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
+			uint64_t m = _mm512_cmpgt_epu8_mask(_mm512_loadu_si512((const void *)row), th);
 			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, (uint32_t)m);
 			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4 + 4, (uint32_t)(m >> 32));
 			any |= m;

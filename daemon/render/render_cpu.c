@@ -1,10 +1,10 @@
 /* The exact CPU sectioning renderer: the reference every other renderer is
- * measured against (DESIGN.md section 5). Per volume, primitives are
- * transformed and binned once; then worker threads take images one at a
- * time, section their binned primitives into an 8-bit canvas, and halftone
- * and pack only the tiles something touched. */
+ * measured against, and the fast path without a GPU (DESIGN.md section 5).
+ * Per volume, a persistent pool of workers transforms and bins the scene
+ * (bin.h); then the workers take images one at a time, light the points
+ * binned there, section the primitives of the image's runs into an 8-bit
+ * canvas, and halftone and pack only the tiles something touched. */
 #include <errno.h>
-#include <pthread.h>
 #include <stdatomic.h>
 #include <stdlib.h>
 #include <string.h>
@@ -12,102 +12,98 @@
 
 #include "bin.h"
 #include "halftone.h"
+#include "log.h"
+#include "pool.h"
 #include "render.h"
 #include "section.h"
 
 struct cpu_worker {
-	struct render_cpu *r;
 	struct section_canvas canvas;
-	pthread_t thread;
 	int err;
+	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
 };
 
 struct render_cpu {
 	struct renderer base;
-	unsigned worker_count;
+	struct pool *pool;
 	struct cpu_worker *workers;
 	struct bin_set bins;
+	halftone_fn halftone;
 	/* Per render: */
 	struct volume *out;
 	atomic_uint next_image;
 };
 
-/* Halftones one canvas tile of image k into the packed tile layout of
- * volume.h: planes R, G, B of 32 rows of 4 bytes, MSB leftmost. */
-static void halftone_tile(const uint8_t *rgb, const uint8_t *thr, uint8_t *tile)
+/* Halftones and packs the touched tiles of image k in increasing order and
+ * leaves the canvas all zero again, whether or not packing succeeded. */
+static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
-	for (int c = 0; c < 3; c++) {
-		uint8_t *plane = tile + c * VOLUME_TILE_PLANE_BYTES;
-		for (int y = 0; y < 32; y++) {
-			const uint8_t *row = rgb + y * 32 * 3 + c;
-			for (int xb = 0; xb < 4; xb++) {
-				uint8_t byte = 0;
-				for (int bit = 0; bit < 8; bit++) {
-					int x = xb * 8 + bit;
-					if (row[x * 3] > thr[(y & 15) * 16 + (x & 15)])
-						byte |= (uint8_t)(0x80u >> bit);
-				}
-				plane[y * 4 + xb] = byte;
-			}
-		}
-	}
-}
-
-/* Packs the touched tiles of image k in increasing order and leaves the
- * canvas all zero again, whether or not packing succeeded. */
-static int pack_image(struct section_canvas *c, struct volume *out, uint32_t k)
-{
-	uint8_t thr[256], tile[VOLUME_TILE_BYTES];
+	struct section_canvas *c = &w->canvas;
+	struct halftone_table thr;
 	int err = 0;
-	/* Tile origins are multiples of 32, so the phase table of the tile's
-	 * local coordinates is the image's. */
-	for (uint32_t y = 0; y < 16; y++)
-		for (uint32_t x = 0; x < 16; x++)
-			thr[y * 16 + x] = render_dither_threshold(k, x, y);
+	halftone_table_init(&thr, k);
 	uint32_t tiles = c->tiles_x * c->tiles_y;
 	for (uint32_t t = 0; t < tiles; t++) {
-		if (!c->touched[t])
+		if (!c->rows[t])
 			continue;
-		if (err == 0) {
-			halftone_tile(c->rgb + (size_t)t * SECTION_TILE_RGB_BYTES, thr, tile);
-			err = volume_image_append(out, k, t, tile);
+		w->canvas_tiles++;
+		/* Halftoned straight into the volume's storage. */
+		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
+		if (!dst && err == 0)
+			err = -ENOMEM;
+		if (dst && r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], &thr, dst)) {
+			err = volume_image_push(r->out, k, t);
+			w->tiles++;
 		}
 		section_canvas_clear_tile(c, t);
 	}
 	return err;
 }
 
-static int render_image(struct render_cpu *r, struct section_canvas *c, uint32_t k)
+static void raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
-	struct section_wedge w;
-	section_wedge_init(&w, &r->base.geom, k);
-	for (uint32_t i = b->start[k]; i < b->start[k + 1]; i++) {
-		const struct bin_prim *p = &b->prims[b->index[i]];
-		if (p->nverts == 1)
-			section_point(c, &w, p->v[0], p->rgb);
-		else
-			section_prim(c, &w, (const double (*)[3])p->v, p->nverts, p->rgb);
+	struct section_canvas *c = &w->canvas;
+	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
+		section_pixel(c, b->points[i].u, b->points[i].v, b->points[i].rgb);
+	struct section_wedge wedge;
+	struct bin_run runs[2 * BIN_MAX_CLASSES];
+	unsigned n = bin_runs(b, k, runs);
+	section_wedge_init(&wedge, &r->base.geom, k);
+	for (unsigned j = 0; j < n; j++) {
+		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
+			const struct bin_prim *p = &b->prims[i];
+			if (!bin_prim_in_image(b, p, k))
+				continue;
+			double v[3][3];
+			for (int a = 0; a < p->nverts; a++)
+				for (int e = 0; e < 3; e++)
+					v[a][e] = p->v[a][e];
+			section_prim(c, &wedge, (const double (*)[3])v, p->nverts, p->rgb);
+			w->prim_images++;
+		}
 	}
-	return pack_image(c, r->out, k);
 }
 
 /* Images are handed out one at a time; each image's result depends on
  * nothing but the scene, so any split gives identical output. */
-static void *worker_main(void *arg)
+static void image_job(void *arg, unsigned index)
 {
-	struct cpu_worker *w = arg;
-	struct render_cpu *r = w->r;
-	w->err = 0;
+	struct render_cpu *r = arg;
+	struct cpu_worker *w = &r->workers[index];
 	for (;;) {
 		uint32_t k = atomic_fetch_add(&r->next_image, 1);
-		if (k >= r->bins.image_count)
+		if (k >= r->bins.images)
 			break;
-		int err = render_image(r, &w->canvas, k);
+		int64_t t0 = now_ns();
+		raster_image(r, w, k);
+		int64_t t1 = now_ns();
+		int err = pack_image(r, w, k);
+		w->raster_ns += (uint64_t)(t1 - t0);
+		w->pack_ns += (uint64_t)(now_ns() - t1);
 		if (err < 0 && w->err == 0)
 			w->err = err;
 	}
-	return NULL;
 }
 
 static int check_output(const struct render_cpu *r, const struct volume *out)
@@ -120,22 +116,20 @@ static int check_output(const struct render_cpu *r, const struct volume *out)
 	return 0;
 }
 
-/* Worker 0 runs on the caller's thread; if a thread can't be started its
- * share simply goes to the others. */
-static int run_workers(struct render_cpu *r)
+/* Sums the workers' counters into the stats; the first error wins. */
+static int collect(struct render_cpu *r)
 {
-	unsigned started = 1;
-	for (unsigned i = 1; i < r->worker_count; i++) {
-		if (pthread_create(&r->workers[i].thread, NULL, worker_main, &r->workers[i]) != 0)
-			break;
-		started++;
-	}
-	worker_main(&r->workers[0]);
-	int err = r->workers[0].err;
-	for (unsigned i = 1; i < started; i++) {
-		pthread_join(r->workers[i].thread, NULL);
+	struct render_stats *s = &r->base.stats;
+	int err = 0;
+	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
+		struct cpu_worker *w = &r->workers[i];
+		s->raster_ns += w->raster_ns;
+		s->pack_ns += w->pack_ns;
+		s->prim_images += w->prim_images;
+		s->canvas_tiles += w->canvas_tiles;
+		s->tiles += w->tiles;
 		if (err == 0)
-			err = r->workers[i].err;
+			err = w->err;
 	}
 	return err;
 }
@@ -143,24 +137,37 @@ static int run_workers(struct render_cpu *r)
 static int cpu_render(struct renderer *base, const struct scene *scene, struct volume *out)
 {
 	struct render_cpu *r = (struct render_cpu *)base;
+	int64_t start = now_ns();
 	int err = check_output(r, out);
 	if (err < 0)
 		return err;
 	volume_clear(out);
-	err = bin_build(&r->bins, &base->geom, scene);
+	memset(&base->stats, 0, sizeof(base->stats));
+	base->stats.threads = pool_workers(r->pool);
+	err = bin_build(&r->bins, scene, r->pool);
+	int64_t binned = now_ns();
+	base->stats.bin_ns = (uint64_t)(binned - start);
 	if (err < 0)
 		return err;
+	base->stats.prims = r->bins.prim_count + r->bins.point_count;
+	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
+		struct section_canvas c = r->workers[i].canvas;
+		r->workers[i] = (struct cpu_worker){ .canvas = c };
+	}
 	r->out = out;
 	atomic_store(&r->next_image, 0);
-	err = run_workers(r);
+	pool_run(r->pool, image_job, r);
 	r->out = NULL;
+	err = collect(r);
+	base->stats.total_ns = (uint64_t)(now_ns() - start);
 	return err;
 }
 
 static void cpu_destroy(struct renderer *base)
 {
 	struct render_cpu *r = (struct render_cpu *)base;
-	for (unsigned i = 0; i < r->worker_count; i++)
+	pool_destroy(r->pool);
+	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++)
 		section_canvas_finish(&r->workers[i].canvas);
 	free(r->workers);
 	bin_finish(&r->bins);
@@ -192,8 +199,8 @@ struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads
 struct renderer *render_cpu_create_opts(const struct geometry *geom,
 					const struct render_cpu_options *opts)
 {
-	unsigned threads = opts->threads;
-	if (!halftone_pick(opts->simd)) {
+	halftone_fn halftone = halftone_pick(opts->simd);
+	if (!halftone) {
 		errno = ENOENT;
 		return NULL;
 	}
@@ -206,15 +213,20 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom,
 		return NULL;
 	r->base.impl = &cpu_impl;
 	r->base.geom = *geom;
-	r->worker_count = pick_threads(geom, threads);
-	r->workers = calloc(r->worker_count, sizeof(*r->workers));
+	r->halftone = halftone;
+	unsigned n = pick_threads(geom, opts->threads);
+	r->workers = calloc(n, sizeof(*r->workers));
 	if (!r->workers || bin_init(&r->bins, geom) < 0)
 		goto err_free;
-	for (unsigned i = 0; i < r->worker_count; i++) {
-		r->workers[i].r = r;
+	for (unsigned i = 0; i < n; i++) {
 		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
 			goto err_free;
+		r->base.stats.threads = i + 1; /* canvases to free */
 	}
+	r->pool = pool_create(n);
+	if (!r->pool)
+		goto err_free;
+	r->base.stats.threads = n;
 	return &r->base;
 
 err_free:

@@ -15,9 +15,9 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	c->tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
 	c->tiles_y = (g->height + VOLUME_TILE - 1) / VOLUME_TILE;
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
-	c->rgb = calloc(tiles, SECTION_TILE_RGB_BYTES);
-	c->touched = calloc(tiles, 1);
-	if (!c->rgb || !c->touched) {
+	c->rgb = calloc(tiles, HALFTONE_TILE_BYTES);
+	c->rows = calloc(tiles, sizeof(*c->rows));
+	if (!c->rgb || !c->rows) {
 		section_canvas_finish(c);
 		return -ENOMEM;
 	}
@@ -27,15 +27,25 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 void section_canvas_finish(struct section_canvas *c)
 {
 	free(c->rgb);
-	free(c->touched);
+	free(c->rows);
 	c->rgb = NULL;
-	c->touched = NULL;
+	c->rows = NULL;
 }
 
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
 {
-	memset(c->rgb + (size_t)t * SECTION_TILE_RGB_BYTES, 0, SECTION_TILE_RGB_BYTES);
-	c->touched[t] = 0;
+	uint8_t *tile = c->rgb + (size_t)t * HALFTONE_TILE_BYTES;
+	uint32_t rows = c->rows[t];
+	if (rows == UINT32_MAX) {
+		memset(tile, 0, HALFTONE_TILE_BYTES);
+	} else {
+		for (; rows; rows &= rows - 1) {
+			uint32_t y = (uint32_t)__builtin_ctz(rows);
+			for (int p = 0; p < 3; p++)
+				memset(tile + p * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES, 0, HALFTONE_ROW_BYTES);
+		}
+	}
+	c->rows[t] = 0;
 }
 
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k)
@@ -53,24 +63,39 @@ void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint3
 	w->n2z = -cos(b);
 }
 
-static inline void light_px(uint8_t *px, const uint8_t rgb[3])
+/* Per-channel MAX over bytes [a, b] of a canvas row (canvas order). */
+static inline void max_bytes(uint8_t *row, uint32_t a, uint32_t b, uint8_t value)
 {
-	for (int i = 0; i < 3; i++)
-		if (px[i] < rgb[i])
-			px[i] = rgb[i];
+	for (uint32_t j = a; j <= b; j++)
+		row[j] = row[j] < value ? value : row[j];
 }
 
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1,
 		  const uint8_t rgb[3])
 {
-	uint32_t row = (v / 32) * c->tiles_x;
+	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
 	for (uint32_t u = u0; u <= u1;) {
-		uint32_t t = row + u / 32;
-		uint32_t end = (u | 31) < u1 ? (u | 31) : u1;
-		uint8_t *base = c->rgb + (size_t)t * SECTION_TILE_RGB_BYTES + (v % 32) * 32 * 3;
-		for (; u <= end; u++)
-			light_px(base + (u % 32) * 3, rgb);
-		c->touched[t] = 1;
+		uint32_t t = row + u / VOLUME_TILE;
+		uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
+		uint8_t *base = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES;
+		for (int i = 0; i < 3; i++) {
+			if (!rgb[i])
+				continue;
+			uint8_t *r = base + i * HALFTONE_PLANE_BYTES;
+			/* Pixels a..b are bytes a^7..b^7: whole groups of 8
+			 * stay whole, partial groups at the ends reverse. */
+			uint32_t ga = a & ~7u, gb = b & ~7u;
+			if (ga == gb) {
+				max_bytes(r, ga + 7 - (b & 7), ga + 7 - (a & 7), rgb[i]);
+			} else {
+				max_bytes(r, ga, ga + 7 - (a & 7), rgb[i]);
+				if (gb > ga + 8)
+					max_bytes(r, ga + 8, gb - 1, rgb[i]);
+				max_bytes(r, gb + 7 - (b & 7), gb + 7, rgb[i]);
+			}
+		}
+		c->rows[t] |= 1u << y;
+		u += b - a + 1;
 	}
 }
 
@@ -168,24 +193,3 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w,
 	section_lobe(c, w, v, n, -1.0, rgb);
 }
 
-void section_point_images(const struct geometry *g, const double p[3], uint32_t out[2])
-{
-	uint32_t m = geometry_images_per_volume(g);
-	double phi = atan2(p[2], p[0]);
-	out[0] = geometry_image_of_azimuth(g, phi) % m;
-	out[1] = geometry_image_of_azimuth_back(g, phi) % m;
-}
-
-bool section_point(struct section_canvas *c, const struct section_wedge *w,
-		   const double p[3], const uint8_t rgb[3])
-{
-	uint32_t img[2];
-	section_point_images(&c->geom, p, img);
-	if (img[0] != w->image && img[1] != w->image)
-		return false;
-	/* Both lobes of one volume image map p to the same voxel. */
-	uint32_t u = geometry_column(&c->geom, p[0] * w->dx + p[2] * w->dz);
-	uint32_t v = geometry_row(&c->geom, p[1]);
-	section_span(c, v, u, u, rgb);
-	return true;
-}

@@ -13,20 +13,20 @@
 #include <stdint.h>
 
 #include "geometry.h"
+#include "halftone.h"
 #include "volume.h"
 
-/* An 8-bit RGB accumulation buffer for one image, stored tile by tile (32x32
- * pixels, row-major inside a tile, 3 bytes a pixel) so that halftoning and
- * clearing a tile touch one contiguous block. Only tiles flagged in touched
- * may hold non-zero bytes. */
+/* An 8-bit RGB accumulation buffer for one image, stored tile by tile in
+ * the canvas tile layout of halftone.h (planes R, G, B of 32 rows of 32
+ * bytes, pixel x at byte x ^ 7), so that halftoning and clearing a tile
+ * touch one contiguous block. rows[t] has bit y set when row y of tile t
+ * may hold non-zero bytes; all other rows are zero. */
 struct section_canvas {
 	struct geometry geom;
 	uint32_t tiles_x, tiles_y;
-	uint8_t *rgb;     /* tiles_x * tiles_y * SECTION_TILE_RGB_BYTES */
-	uint8_t *touched; /* tiles_x * tiles_y flags */
+	uint8_t *rgb;   /* tiles_x * tiles_y * HALFTONE_TILE_BYTES */
+	uint32_t *rows; /* tiles_x * tiles_y row masks */
 };
-
-#define SECTION_TILE_RGB_BYTES (VOLUME_TILE * VOLUME_TILE * 3)
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz
  * plane; the s < 0 lobe is their negation. */
@@ -41,8 +41,20 @@ struct section_wedge {
 int section_canvas_init(struct section_canvas *c, const struct geometry *g);
 void section_canvas_finish(struct section_canvas *c);
 
-/* Zeroes tile t and clears its touched flag. */
+/* Zeroes the rows of tile t that rows[t] flags, and the flags. */
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
+
+/* Lights pixel (u, v) by per-channel MAX with rgb. */
+static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t v, const uint8_t rgb[3])
+{
+	uint32_t t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE;
+	uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES +
+		      halftone_pos(u % VOLUME_TILE);
+	for (int i = 0; i < 3; i++)
+		if (px[i * HALFTONE_PLANE_BYTES] < rgb[i])
+			px[i * HALFTONE_PLANE_BYTES] = rgb[i];
+	c->rows[t] |= 1u << (v % VOLUME_TILE);
+}
 
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k);
 
@@ -55,14 +67,5 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
  * clamped to the image. Degenerate primitives light their section too. */
 void section_prim(struct section_canvas *c, const struct section_wedge *w,
 		  const double (*v)[3], int n, const uint8_t rgb[3]);
-
-/* Lights point p in the wedge's image if it owns p by the azimuth rule of
- * DESIGN.md (one voxel per owning lobe, clamped). Returns whether it did. */
-bool section_point(struct section_canvas *c, const struct section_wedge *w,
-		   const double p[3], const uint8_t rgb[3]);
-
-/* The volume images that own point p (its s >= 0 and s < 0 lobes); equal
- * when the device is mirrored, except on a rounding tie. */
-void section_point_images(const struct geometry *g, const double p[3], uint32_t out[2]);
 
 #endif

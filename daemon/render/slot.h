@@ -1,0 +1,67 @@
+/* Which slot of the revolution an azimuth falls in, from slopes instead of
+ * atan2 (DESIGN.md section 5, binning).
+ *
+ * Slot j of N is the closed wedge of azimuths [(j - 1/2) D, (j + 1/2) D],
+ * D = 2 pi / N: the s >= 0 lobe of image j. The four planes through the
+ * axis x = 0, z = 0, x = z, x = -z cut the plane into eight octants (the
+ * outcodes); inside an octant the azimuth is a monotonic function of the
+ * slope t = min(|x|, |z|) / max(|x|, |z|) in [0, 1], so a table of the slot
+ * boundaries' slopes, bucketed so that each bucket holds at most one
+ * boundary, gives the slot with one division, one load and one compare. */
+#ifndef SPINDLE_SLOT_H
+#define SPINDLE_SLOT_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#define SLOT_AXIS UINT32_MAX /* the point is on the axis: no azimuth */
+
+struct slot_bucket {
+	float edge;      /* slope of the boundary in this bucket, or 4 (none) */
+	float near;      /* slope of the closest boundary in this or a
+			  * neighbouring bucket, or 4 */
+	uint16_t below;  /* slot for slopes < edge */
+	uint16_t above;  /* slot for slopes >= edge */
+};
+
+struct slot_table {
+	uint32_t n;        /* slots per revolution N */
+	uint32_t buckets;  /* per octant; bucket i covers [i, i+1) / buckets */
+	struct slot_bucket *b; /* 8 * (buckets + 1) */
+};
+
+/* Returns 0 or -ENOMEM. */
+int slot_table_init(struct slot_table *t, uint32_t n);
+void slot_table_finish(struct slot_table *t);
+
+/* The slot of azimuth atan2(z, x), or SLOT_AXIS when x = z = 0. *near is
+ * set when the azimuth lies so close to a slot boundary that rounding may
+ * have put it on the wrong side (then the neighbouring slot may be the
+ * true one); it is left alone otherwise. x and z must be finite. */
+static inline uint32_t slot_of(const struct slot_table *t, float x, float z, bool *near)
+{
+	float ax = x < 0.0f ? -x : x, az = z < 0.0f ? -z : z;
+	/* Quadrant q: 0 (x >= 0, z >= 0), 1 (x < 0, z >= 0), 2, 3. Inside it,
+	 * the angle from the quadrant's first axis (+x, +z, -x, -z) grows
+	 * with perp / radial. */
+	unsigned q = z < 0.0f ? (x < 0.0f ? 2u : 3u) : (x < 0.0f ? 1u : 0u);
+	float perp = q & 1u ? ax : az, radial = q & 1u ? az : ax;
+	unsigned octant;
+	float s;
+	if (perp <= radial) {
+		if (radial == 0.0f)
+			return SLOT_AXIS;
+		octant = 2 * q;
+		s = perp / radial;
+	} else {
+		octant = 2 * q + 1;
+		s = radial / perp;
+	}
+	const struct slot_bucket *e = &t->b[octant * (t->buckets + 1) + (uint32_t)(s * (float)t->buckets)];
+	float d = s - e->near;
+	if (d < 1e-5f && d > -1e-5f)
+		*near = true;
+	return s >= e->edge ? e->above : e->below;
+}
+
+#endif
