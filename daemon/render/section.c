@@ -99,6 +99,17 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 	}
 }
 
+/* Minimum and maximum of finite values (fmin/fmax are library calls). */
+static inline double dmin(double a, double b)
+{
+	return a < b ? a : b;
+}
+
+static inline double dmax(double a, double b)
+{
+	return a > b ? a : b;
+}
+
 /* One Sutherland-Hodgman pass keeping sign * (nx x + nz z) >= 0 (closed, so
  * geometry on the axis survives every wedge). Returns the vertex count. */
 static int clip_plane(const double (*in)[3], int n, double (*out)[3], double nx, double nz)
@@ -119,25 +130,40 @@ static int clip_plane(const double (*in)[3], int n, double (*out)[3], double nx,
 	return m;
 }
 
-/* Widens [*lo, *hi] by the s values of edge a-b inside rows' slab
- * ylo <= y <= yhi (either may be infinite). */
-static void edge_in_slab(const double a[2], const double b[2], double ylo, double yhi,
-			 double *lo, double *hi)
+/* The polygon's edges, for crossing horizontal lines without dividing. */
+struct edges {
+	int n;
+	double y0[SECTION_MAX_VERTS], y1[SECTION_MAX_VERTS]; /* y0 <= y1 */
+	double s0[SECTION_MAX_VERTS], dsdy[SECTION_MAX_VERTS]; /* s at y0 */
+};
+
+static void edges_init(struct edges *e, const double (*q)[2], int n)
 {
-	double t0 = 0.0, t1 = 1.0, dy = b[1] - a[1];
-	if (dy == 0.0) {
-		if (a[1] < ylo || a[1] > yhi)
-			return;
-	} else {
-		double ta = (ylo - a[1]) / dy, tb = (yhi - a[1]) / dy;
-		t0 = fmax(0.0, fmin(ta, tb));
-		t1 = fmin(1.0, fmax(ta, tb));
-		if (t0 > t1)
-			return;
+	e->n = n;
+	for (int i = 0; i < n; i++) {
+		const double *a = q[i], *b = q[(i + 1) % n];
+		if (a[1] > b[1]) {
+			const double *t = a;
+			a = b;
+			b = t;
+		}
+		e->y0[i] = a[1];
+		e->y1[i] = b[1];
+		e->s0[i] = a[0];
+		e->dsdy[i] = b[1] > a[1] ? (b[0] - a[0]) / (b[1] - a[1]) : 0.0;
 	}
-	double s0 = a[0] + t0 * (b[0] - a[0]), s1 = a[0] + t1 * (b[0] - a[0]);
-	*lo = fmin(*lo, fmin(s0, s1));
-	*hi = fmax(*hi, fmax(s0, s1));
+}
+
+/* Widens [*lo, *hi] by where the edges cross the line y = y. */
+static void edges_cross(const struct edges *e, double y, double *lo, double *hi)
+{
+	for (int i = 0; i < e->n; i++) {
+		if (y < e->y0[i] || y > e->y1[i] || e->y1[i] == e->y0[i])
+			continue;
+		double s = e->s0[i] + (y - e->y0[i]) * e->dsdy[i];
+		*lo = dmin(*lo, s);
+		*hi = dmax(*hi, s);
+	}
 }
 
 /* Conservative rasterisation of a convex polygon in (s, y): per row, the s
@@ -151,45 +177,98 @@ static void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
 		return;
 	double ymin = q[0][1], ymax = q[0][1];
 	for (int i = 1; i < n; i++) {
-		ymin = fmin(ymin, q[i][1]);
-		ymax = fmax(ymax, q[i][1]);
+		ymin = dmin(ymin, q[i][1]);
+		ymax = dmax(ymax, q[i][1]);
 	}
 	double h = g->half_height, row_h = 2.0 * h / g->height;
 	/* A hair of slack so rounding at a row edge never loses a touch. */
 	double eps = 1e-9 * row_h;
 	uint32_t v0 = geometry_row(g, ymax), v1 = geometry_row(g, ymin);
+	if (v0 == v1) {
+		/* One row (most small primitives): the polygon is inside the
+		 * row's slab, so its columns run from its least to its
+		 * greatest s. */
+		double lo = q[0][0], hi = q[0][0];
+		for (int i = 1; i < n; i++) {
+			lo = dmin(lo, q[i][0]);
+			hi = dmax(hi, q[i][0]);
+		}
+		section_span(c, v0, geometry_column(g, lo), geometry_column(g, hi), rgb);
+		return;
+	}
+	/* Per row, the polygon's s range inside the slab comes from its
+	 * vertices in the slab and its edges' crossings of the slab's two
+	 * lines (s is linear along an edge). */
+	struct edges e;
+	edges_init(&e, q, n);
 	for (uint32_t v = v0; v <= v1; v++) {
-		double yhi = v == 0 ? INFINITY : h - v * row_h + eps;
-		double ylo = v == g->height - 1 ? -INFINITY : h - (v + 1) * row_h - eps;
+		double yhi = v == v0 ? INFINITY : h - v * row_h + eps;
+		double ylo = v == v1 ? -INFINITY : h - (v + 1) * row_h - eps;
 		double lo = INFINITY, hi = -INFINITY;
-		for (int i = 0; i < n; i++)
-			edge_in_slab(q[i], q[(i + 1) % n], ylo, yhi, &lo, &hi);
+		for (int i = 0; i < n; i++) {
+			if (q[i][1] >= ylo && q[i][1] <= yhi) {
+				lo = dmin(lo, q[i][0]);
+				hi = dmax(hi, q[i][0]);
+			}
+		}
+		if (v != v0)
+			edges_cross(&e, yhi, &lo, &hi);
+		if (v != v1)
+			edges_cross(&e, ylo, &lo, &hi);
 		if (lo <= hi)
 			section_span(c, v, geometry_column(g, lo), geometry_column(g, hi), rgb);
 	}
 }
 
-static void section_lobe(struct section_canvas *c, const struct section_wedge *w,
-			 const double (*v)[3], int n, double sign, const uint8_t rgb[3])
+/* Sections the convex polygon v (already inside the lobe's wedge) and
+ * rasterises its projection. */
+static void project_raster(struct section_canvas *c, const struct section_wedge *w,
+			   const double (*v)[3], int n, const uint8_t rgb[3])
 {
-	double a[SECTION_MAX_VERTS][3], b[SECTION_MAX_VERTS][3], q[SECTION_MAX_VERTS][2];
+	double q[SECTION_MAX_VERTS][2];
+	for (int i = 0; i < n; i++) {
+		q[i][0] = v[i][0] * w->dx + v[i][2] * w->dz;
+		q[i][1] = v[i][1];
+	}
+	raster_convex(c, (const double (*)[2])q, n, rgb);
+}
+
+/* One lobe: sign 1 keeps n1.p >= 0 and n2.p >= 0, sign -1 the opposite
+ * side. d1, d2 are the vertices' n1.p and n2.p: a primitive wholly inside
+ * needs no clipping, one wholly outside either plane nothing. */
+static void section_lobe(struct section_canvas *c, const struct section_wedge *w,
+			 const double (*v)[3], int n, const double *d1, const double *d2, double sign,
+			 const uint8_t rgb[3])
+{
+	int in1 = 0, in2 = 0;
+	for (int i = 0; i < n; i++) {
+		in1 += sign * d1[i] >= 0.0;
+		in2 += sign * d2[i] >= 0.0;
+	}
+	if (in1 == 0 || in2 == 0)
+		return;
+	if (in1 == n && in2 == n) {
+		project_raster(c, w, v, n, rgb);
+		return;
+	}
+	double a[SECTION_MAX_VERTS][3], b[SECTION_MAX_VERTS][3];
 	int m = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
 	if (m == 0)
 		return;
 	m = clip_plane((const double (*)[3])a, m, b, sign * w->n2x, sign * w->n2z);
-	if (m == 0)
-		return;
-	for (int i = 0; i < m; i++) {
-		q[i][0] = b[i][0] * w->dx + b[i][2] * w->dz;
-		q[i][1] = b[i][1];
-	}
-	raster_convex(c, (const double (*)[2])q, m, rgb);
+	if (m > 0)
+		project_raster(c, w, (const double (*)[3])b, m, rgb);
 }
 
 void section_prim(struct section_canvas *c, const struct section_wedge *w,
 		  const double (*v)[3], int n, const uint8_t rgb[3])
 {
-	section_lobe(c, w, v, n, 1.0, rgb);
-	section_lobe(c, w, v, n, -1.0, rgb);
+	double d1[3], d2[3];
+	for (int i = 0; i < n; i++) {
+		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
+		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
+	}
+	section_lobe(c, w, v, n, d1, d2, 1.0, rgb);
+	section_lobe(c, w, v, n, d1, d2, -1.0, rgb);
 }
 
