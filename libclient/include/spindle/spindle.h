@@ -50,7 +50,8 @@ struct spindle_device_info {
 /* Daemon and device state (spindle_get_status()). Counters count from
  * the daemon's start. A commit that leaves the whole scene (every visible
  * layer of every client) as it was in the last volume rendered renders
- * and uploads nothing: volumes_skipped counts those. */
+ * and uploads nothing: volumes_skipped counts such scenes (commits made
+ * while a render runs are taken together, as one scene). */
 struct spindle_status {
 	float rpm;                 /* measured rotor speed, 0 when not turning */
 	bool locked;               /* sync estimator locked to the rotor */
