@@ -138,9 +138,11 @@ static int display_commit(void *target)
 {
 	struct client *c = target;
 	struct waiter *w, *tmp;
+	int64_t now = now_ns();
 	c->commit_serial++;
 	link_for_each_safe(w, tmp, &c->frames_pending, link) {
 		w->commit_serial = c->commit_serial;
+		w->commit_ns = now;
 		link_remove(&w->link);
 		link_append(&c->frames, &w->link);
 	}
@@ -157,7 +159,8 @@ static int display_get_status(void *target)
 	struct server_status st;
 	server_get_status(c->server, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, st.rpm, st.flags, st.volumes_shown, st.underruns,
-					       st.clients));
+					       st.clients, st.volumes_rendered, st.volumes_skipped, st.bytes_uploaded,
+					       st.render_us));
 	return 0;
 }
 

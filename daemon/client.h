@@ -84,6 +84,7 @@ struct waiter {
 	struct object base;
 	uint64_t commit_serial; /* frame: the commit it belongs to (0: next) */
 	uint64_t volume_seq;    /* frame: the volume first showing it (0: none yet) */
+	int64_t commit_ns;      /* frame: when its commit was handled */
 	struct link link;
 };
 

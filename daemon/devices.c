@@ -82,11 +82,15 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 		log_error("sync source: %s", strerror(-n));
 		return 0;
 	}
-	for (int i = 0; i < n; i++)
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	for (int i = 0; i < n; i++) {
 		if (sync_estimator_feed(dev->est, ts[i]))
 			lock_changed(dev, ts[i]);
+		/* An accepted edge starts a revolution; a glitch does not. */
+		if (!dev->blanked && st->phase_ns == ts[i])
+			server_revolution(dev->srv, ts[i]);
+	}
 	if (n > 0) {
-		const struct sync_state *st = sync_estimator_state(dev->est);
 		if (st->period_ns > 0)
 			dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
 		/* A capture takes the volume on display at a revolution start. */

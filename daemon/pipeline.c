@@ -30,7 +30,14 @@ struct pipeline {
 	struct volume *work;
 	bool dirty, busy, ready;
 	uint64_t next_seq, work_seq;
-	struct snapshot snap;
+	/* building: the scene being compared or rendered; last: the scene of
+	 * the last volume rendered (seq last_seq), kept with its references
+	 * to vertex data until it is replaced, so that an identical scene is
+	 * recognised by pointer identity (snapshot_same()). */
+	struct snapshot snaps[2];
+	struct snapshot *building, *last;
+	bool have_last;
+	uint64_t last_seq;
 	struct pipeline_stats stats;
 
 	/* The render thread: takes a job when job is set, reports on done_fd. */
@@ -38,6 +45,7 @@ struct pipeline {
 	pthread_mutex_t lock;
 	pthread_cond_t cond;
 	bool job, quit;
+	const struct scene *job_scene;
 	int result;
 	int64_t started_ns;
 	int done_fd;
@@ -53,8 +61,9 @@ static void *render_thread(void *data)
 			pthread_cond_wait(&p->cond, &p->lock);
 		if (p->quit)
 			break;
+		const struct scene *scene = p->job_scene;
 		pthread_mutex_unlock(&p->lock);
-		int r = render_volume(p->renderer, &p->snap.scene, p->work);
+		int r = render_volume(p->renderer, scene, p->work);
 		pthread_mutex_lock(&p->lock);
 		p->result = r;
 		p->job = false;
@@ -87,28 +96,55 @@ static void upload_ready(struct pipeline *p)
 			return;
 		}
 		p->stats.last_upload_bytes = volume_sparse_bytes(p->content[b]);
+		p->stats.bytes_uploaded += p->stats.last_upload_bytes;
 		p->uploaded = b;
 		p->ready = false;
 		return;
 	}
 }
 
+/* The scene being built is the one last rendered: the volume of that
+ * render (shown already, or on its way) shows these commits too. */
+static void skip_unchanged(struct pipeline *p)
+{
+	snapshot_release(p->building);
+	p->stats.volumes_skipped++;
+	if (snapshot_tie_frames(p->srv, p->last_seq))
+		server_frames_waiting(p->srv);
+}
+
 static void start_render(struct pipeline *p)
 {
-	uint64_t seq = p->next_seq;
-	if (snapshot_build(&p->snap, p->srv, seq) < 0) {
+	if (snapshot_build(p->building, p->srv) < 0) {
 		log_error("out of memory building the scene; retrying with the next change");
 		return;
 	}
-	p->next_seq++;
 	p->dirty = false;
+	if (p->have_last && snapshot_same(p->building, p->last)) {
+		skip_unchanged(p);
+		return;
+	}
+	uint64_t seq = p->next_seq++;
+	snapshot_tie_frames(p->srv, seq);
 	p->busy = true;
 	p->work_seq = seq;
 	pthread_mutex_lock(&p->lock);
 	p->started_ns = now_ns();
+	p->job_scene = &p->building->scene;
 	p->job = true;
 	pthread_cond_signal(&p->cond);
 	pthread_mutex_unlock(&p->lock);
+}
+
+/* The scene just rendered becomes the one to compare with. */
+static void keep_rendered(struct pipeline *p)
+{
+	struct snapshot *old = p->last;
+	snapshot_release(old);
+	p->last = p->building;
+	p->building = old;
+	p->have_last = true;
+	p->last_seq = p->work_seq;
 }
 
 static void pipeline_kick(struct pipeline *p)
@@ -136,19 +172,24 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 		return 0;
 	pthread_mutex_lock(&p->lock);
 	int r = p->result;
-	double ms = (now_ns() - p->started_ns) / 1e6;
+	int64_t ns = now_ns() - p->started_ns;
 	pthread_mutex_unlock(&p->lock);
-	snapshot_release(&p->snap);
 	p->busy = false;
 	if (r < 0) {
 		log_error("render failed: %s", strerror(-r));
-		p->dirty = true; /* try again at the next change */
+		snapshot_release(p->building);
+		/* Render the scene again, even if it equals the last one
+		 * rendered: frames tied to this volume wait for a newer one. */
+		snapshot_release(p->last);
+		p->have_last = false;
+		p->dirty = true;
 	} else {
+		keep_rendered(p);
 		p->work->seq = p->work_seq; /* rendering cleared it */
 		p->ready = true;
 		p->stats.volumes_rendered++;
-		p->stats.last_render_ms = ms;
-		log_debug("volume %llu rendered in %.1f ms, %llu tiles", (unsigned long long)p->work->seq, ms,
+		p->stats.last_render_us = ns / 1000 > UINT32_MAX ? UINT32_MAX : (uint32_t)(ns / 1000);
+		log_debug("volume %llu rendered in %.1f ms, %llu tiles", (unsigned long long)p->work->seq, ns / 1e6,
 			  (unsigned long long)volume_tile_count(p->work));
 	}
 	pipeline_kick(p);
@@ -174,6 +215,11 @@ void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns)
 	p->stats.volumes_shown++;
 	server_volume_shown(p->srv, v->seq, time_ns);
 	pipeline_kick(p);
+}
+
+bool pipeline_swap_pending(const struct pipeline *p)
+{
+	return p->pending >= 0;
 }
 
 const struct volume *pipeline_shown(const struct pipeline *p)
@@ -220,6 +266,8 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 	p->buffers = info.buffers > MAX_BUFFERS ? MAX_BUFFERS : info.buffers;
 	p->shown = p->pending = p->uploaded = -1;
 	p->next_seq = 1;
+	p->building = &p->snaps[0];
+	p->last = &p->snaps[1];
 	p->done_fd = -1;
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->cond, NULL);
@@ -260,7 +308,8 @@ void pipeline_destroy(struct pipeline *p)
 	}
 	if (p->done_fd >= 0)
 		close(p->done_fd);
-	snapshot_finish(&p->snap);
+	snapshot_finish(&p->snaps[0]);
+	snapshot_finish(&p->snaps[1]);
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++)
 		volume_destroy(p->content[b]);
 	volume_destroy(p->work);

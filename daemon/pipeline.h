@@ -6,6 +6,7 @@
 #ifndef SPINDLE_PIPELINE_H
 #define SPINDLE_PIPELINE_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "geometry.h"
@@ -17,9 +18,11 @@ struct volume;
 
 struct pipeline_stats {
 	uint64_t volumes_rendered;
+	uint64_t volumes_skipped;   /* scenes identical to the last rendered */
 	uint64_t volumes_shown;
-	double last_render_ms;
-	uint64_t last_upload_bytes;
+	uint32_t last_render_us;    /* wall time of the last render */
+	uint64_t last_upload_bytes; /* sparse payload of the last upload */
+	uint64_t bytes_uploaded;    /* sparse payload of every upload */
 };
 
 /* Takes ownership of renderer; the projector stays the caller's and says
@@ -28,10 +31,17 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 /* Waits for a render in flight. Accepts NULL. */
 void pipeline_destroy(struct pipeline *p);
 
-/* The committed scene changed: render a new volume. */
+/* The committed scene may have changed, or commits wait for frames: a
+ * new scene is taken as soon as no render runs. It is rendered unless it
+ * is identical to the scene last rendered; then that volume (shown, or
+ * on its way) shows those commits too, and nothing is rendered or
+ * uploaded. */
 void pipeline_mark_dirty(struct pipeline *p);
 /* The projector reports buffer shown from time_ns on. */
 void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns);
+/* Whether a swap was asked for and not yet reported: a newer volume may
+ * be shown from the next revolution start on. */
+bool pipeline_swap_pending(const struct pipeline *p);
 /* The volume on display as the daemon sent it, or NULL before the first. */
 const struct volume *pipeline_shown(const struct pipeline *p);
 void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out);

@@ -159,22 +159,40 @@ void server_scene_changed(struct server *srv, bool changed)
 		pipeline_mark_dirty(srv->pipe);
 }
 
-/* Frame callbacks of volume seq and older are done: first shown at time_ns. */
-static void frames_done(struct server *srv, uint64_t seq, int64_t time_ns)
+/* Frame callbacks of c tied to volume seq or older are done: shown at
+ * time_ns; those of commits made after time_ns wait. Returns whether any
+ * waits so. */
+static bool client_frames_done(struct client *c, uint64_t seq, int64_t time_ns)
 {
+	bool later = false, sent = false;
+	struct waiter *w, *tmp;
+	link_for_each_safe(w, tmp, &c->frames, link) {
+		if (!w->volume_seq || w->volume_seq > seq)
+			continue;
+		if (w->commit_ns > time_ns) {
+			later = true;
+			continue;
+		}
+		proto_ev_callback_done(c->conn, w->base.id, seq, (uint64_t)time_ns);
+		object_destroy(&w->base);
+		sent = true;
+	}
+	if (sent)
+		client_flush(c);
+	return later;
+}
+
+/* The same for every client. Returns whether any frame waits for a later
+ * revolution start of seq. */
+static bool frames_done(struct server *srv, uint64_t seq, int64_t time_ns)
+{
+	bool later = false;
 	struct client *c;
 	link_for_each(c, &srv->clients, link) {
-		if (c->dead)
-			continue;
-		struct waiter *w, *tmp;
-		link_for_each_safe(w, tmp, &c->frames, link) {
-			if (!w->volume_seq || w->volume_seq > seq)
-				continue;
-			proto_ev_callback_done(c->conn, w->base.id, seq, (uint64_t)time_ns);
-			object_destroy(&w->base);
-		}
-		client_flush(c);
+		if (!c->dead)
+			later |= client_frames_done(c, seq, time_ns);
 	}
+	return later;
 }
 
 void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
@@ -185,7 +203,9 @@ void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
 		return;
 	}
 	srv->unseen_seq = 0;
-	frames_done(srv, seq, time_ns);
+	srv->shown_seq = seq;
+	if (frames_done(srv, seq, time_ns))
+		srv->frames_waiting = true;
 	if (srv->captures_waiting)
 		server_serve_captures(srv, server_shown(srv));
 }
@@ -194,6 +214,22 @@ void server_projector_lit(struct server *srv, int64_t time_ns)
 {
 	if (srv->unseen_seq)
 		server_volume_shown(srv, srv->unseen_seq, time_ns);
+}
+
+void server_frames_waiting(struct server *srv)
+{
+	srv->frames_waiting = true;
+}
+
+void server_revolution(struct server *srv, int64_t time_ns)
+{
+	if (!srv->frames_waiting || !srv->shown_seq)
+		return;
+	/* A volume swapped in at this very start is not shown_seq; its swap
+	 * report answers the frames instead. */
+	if (pipeline_swap_pending(srv->pipe))
+		return;
+	srv->frames_waiting = frames_done(srv, srv->shown_seq, time_ns);
 }
 
 /* Clients past the handshake and not being dropped. */
@@ -219,6 +255,10 @@ void server_get_status(struct server *srv, struct server_status *out)
 		.volumes_shown = ps.volumes_shown,
 		.underruns = ds.underruns,
 		.clients = server_active_clients(srv),
+		.volumes_rendered = ps.volumes_rendered,
+		.volumes_skipped = ps.volumes_skipped,
+		.bytes_uploaded = ps.bytes_uploaded,
+		.render_us = ps.last_render_us,
 	};
 }
 

@@ -32,6 +32,10 @@ struct server {
 	struct pipeline *pipe;
 	unsigned captures_waiting;
 	uint64_t unseen_seq; /* swapped in while the projector was dark */
+	uint64_t shown_seq;  /* the volume on display, seen lit */
+	/* Frame callbacks may wait for a revolution start of shown_seq: of
+	 * commits made after it was swapped in, identical to it. */
+	bool frames_waiting;
 };
 
 struct server_status {
@@ -40,6 +44,10 @@ struct server_status {
 	uint64_t volumes_shown;
 	uint64_t underruns;
 	uint32_t clients;
+	uint64_t volumes_rendered;
+	uint64_t volumes_skipped;
+	uint64_t bytes_uploaded;
+	uint32_t render_us;
 };
 
 /* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */
@@ -57,8 +65,15 @@ void server_capture_requested(struct server *srv);
 /* For the pipeline: volume seq was swapped in at time_ns; shown then if
  * the projector is lit, else once it is (server_projector_lit()). */
 void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns);
+/* For the pipeline: frame callbacks were tied to the volume last
+ * rendered, which may be on display already: they are answered at the
+ * next revolution start (server_revolution()). */
+void server_frames_waiting(struct server *srv);
 /* For the devices: the projector was lit at time_ns. */
 void server_projector_lit(struct server *srv, int64_t time_ns);
+/* For the devices: a revolution started at time_ns, the projector lit.
+ * Cheap when no frame callback waits. */
+void server_revolution(struct server *srv, int64_t time_ns);
 /* The volume on display: as the projector holds it when it can tell,
  * else as the daemon sent it; NULL before the first. */
 const struct volume *server_shown(struct server *srv);

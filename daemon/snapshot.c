@@ -54,16 +54,31 @@ static int add_layer(struct snapshot *snap, const struct layer_state *ls)
 }
 
 /* Frames of commits made so far are first shown by volume seq. */
-static void tie_frames(struct client *c, uint64_t seq)
+static unsigned tie_frames(struct client *c, uint64_t seq)
 {
+	unsigned n = 0;
 	struct waiter *w;
 	link_for_each(w, &c->frames, link) {
-		if (!w->volume_seq)
+		if (!w->volume_seq) {
 			w->volume_seq = seq;
+			n++;
+		}
 	}
+	return n;
 }
 
-int snapshot_build(struct snapshot *snap, struct server *srv, uint64_t seq)
+unsigned snapshot_tie_frames(struct server *srv, uint64_t seq)
+{
+	unsigned n = 0;
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		if (!c->dead)
+			n += tie_frames(c, seq);
+	}
+	return n;
+}
+
+int snapshot_build(struct snapshot *snap, struct server *srv)
 {
 	struct client *c;
 	snap->scene.draw_count = 0;
@@ -79,10 +94,26 @@ int snapshot_build(struct snapshot *snap, struct server *srv, uint64_t seq)
 				return -ENOMEM;
 			}
 		}
-		tie_frames(c, seq);
 	}
 	snap->scene.draws = snap->draws;
 	return 0;
+}
+
+static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
+{
+	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz &&
+	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
+}
+
+bool snapshot_same(const struct snapshot *a, const struct snapshot *b)
+{
+	if (a->scene.draw_count != b->scene.draw_count)
+		return false;
+	for (uint32_t i = 0; i < a->scene.draw_count; i++)
+		if (!draw_same(&a->draws[i], &b->draws[i]))
+			return false;
+	return true;
 }
 
 void snapshot_release(struct snapshot *snap)

@@ -4,6 +4,7 @@
 #ifndef SPINDLE_SNAPSHOT_H
 #define SPINDLE_SNAPSHOT_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "scene.h"
@@ -18,9 +19,16 @@ struct snapshot {
 	uint32_t cap;
 };
 
-/* Fills snap from every visible layer of every client, and ties the frame
- * callbacks of the commits it includes to volume seq. 0 or -ENOMEM. */
-int snapshot_build(struct snapshot *snap, struct server *srv, uint64_t seq);
+/* Fills snap from every visible layer of every client. 0 or -ENOMEM. */
+int snapshot_build(struct snapshot *snap, struct server *srv);
+/* Ties the frame callbacks of every commit made so far, not yet tied, to
+ * volume seq (the first volume showing their state). Returns how many. */
+unsigned snapshot_tie_frames(struct server *srv, uint64_t seq);
+/* Whether a draws exactly what b draws: draw for draw the same primitive,
+ * vertex data, transform and colour. Vertex data is compared by identity:
+ * safe because b holds references to its data, so none of it can have been
+ * freed and its address reused while b lives. */
+bool snapshot_same(const struct snapshot *a, const struct snapshot *b);
 /* Drops the references (keeps the arrays for the next build). */
 void snapshot_release(struct snapshot *snap);
 void snapshot_finish(struct snapshot *snap);

@@ -144,6 +144,10 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 		.volumes_shown = a->volumes_shown,
 		.underruns = a->underruns,
 		.clients = a->clients,
+		.volumes_rendered = a->volumes_rendered,
+		.volumes_skipped = a->volumes_skipped,
+		.bytes_uploaded = a->bytes_uploaded,
+		.render_us = a->render_us,
 	};
 	sp->status_serial++;
 	return 0;

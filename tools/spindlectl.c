@@ -111,6 +111,10 @@ static void print_status(const struct spindle_status *st)
 	printf("projector present: %s\n", st->projector_present ? "yes" : "no");
 	printf("volumes shown: %llu\n", (unsigned long long)st->volumes_shown);
 	printf("underruns: %llu\n", (unsigned long long)st->underruns);
+	printf("volumes rendered: %llu\n", (unsigned long long)st->volumes_rendered);
+	printf("volumes skipped: %llu\n", (unsigned long long)st->volumes_skipped);
+	printf("bytes uploaded: %llu\n", (unsigned long long)st->bytes_uploaded);
+	printf("render time: %.3f ms\n", st->render_us / 1e3);
 	printf("clients: %u\n", st->clients);
 }
 

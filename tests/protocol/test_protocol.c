@@ -4,6 +4,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <poll.h>
 #include <string.h>
 #include <sys/mman.h>
 #include <sys/socket.h>
@@ -521,22 +522,225 @@ static void test_slow_reader(void)
 	daemon_stop(&d);
 }
 
+static uint64_t mono_ns(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+}
+
+static const float identity[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
+
+/* Identity moved by dx along x. */
+static void shift_x(float m[16], float dx)
+{
+	memcpy(m, identity, sizeof(identity));
+	m[12] = dx;
+}
+
+/* A sphere (blue) on one layer, shown; frame says by which volume. */
+static struct spindle_layer *show_sphere(struct spindle *sp, struct spindle_frame *frame)
+{
+	static float v[48 * 24 * 18];
+	uint32_t n = sphere(v, 0.6, 48, 24);
+	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)n * 12);
+	struct spindle_list *list = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	CHECK(buf && list && layer);
+	CHECK(spindle_list_set_color(list, 0, 0, 255, 255) == 0);
+	CHECK(spindle_list_triangles(list, buf, 0, n, 0) == 0);
+	CHECK(spindle_layer_set_list(layer, list) == 0);
+	CHECK(spindle_commit_and_wait(sp, frame) == 0);
+	CHECK(frame->volume_seq > 0 && frame->time_ns > 0);
+	return layer;
+}
+
+/* Frames of changed commits: each is a new volume, shown later. */
 static void test_frames(void)
 {
 	struct daemon d;
 	daemon_start(&d);
 	struct spindle *sp = client_connect(&d);
-	float v[6];
-	show_vertices(sp, 1, v, axis_line(v), 255, 255, 255);
-	struct spindle_frame prev = { 0 }, f;
-	for (int i = 0; i < 5; i++) {
+	struct spindle_frame prev, f;
+	struct spindle_layer *layer = show_sphere(sp, &prev);
+	for (int i = 1; i <= 5; i++) {
+		float m[16];
+		shift_x(m, 0.01f * (float)i);
+		CHECK(spindle_layer_set_transform(layer, m) == 0);
 		CHECK(spindle_commit_and_wait(sp, &f) == 0);
 		CHECK(f.volume_seq > prev.volume_seq && f.time_ns > prev.time_ns);
-		struct timespec ts;
-		clock_gettime(CLOCK_MONOTONIC, &ts);
-		uint64_t now = (uint64_t)ts.tv_sec * 1000000000u + (uint64_t)ts.tv_nsec;
+		uint64_t now = mono_ns();
 		CHECK(f.time_ns <= now && now - f.time_ns < 2000000000u);
 		prev = f;
+	}
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* Frame callbacks answered asynchronously, in the order they came. */
+struct frame_log {
+	struct spindle_frame frame[4];
+	int order[4];
+	int arrived;
+};
+
+struct frame_slot {
+	struct frame_log *log;
+	int index;
+};
+
+static void log_frame(void *data, const struct spindle_frame *frame)
+{
+	struct frame_slot *slot = data;
+	slot->log->frame[slot->index] = *frame;
+	slot->log->order[slot->log->arrived++] = slot->index;
+}
+
+static void wait_frames(struct spindle *sp, struct frame_log *log, int n)
+{
+	uint64_t deadline = mono_ns() + 5000000000u;
+	while (log->arrived < n) {
+		CHECK(mono_ns() < deadline);
+		CHECK(spindle_flush(sp) == 0);
+		struct pollfd p = { spindle_get_fd(sp), POLLIN, 0 };
+		CHECK(poll(&p, 1, 100) >= 0);
+		CHECK(spindle_dispatch(sp) >= 0);
+	}
+}
+
+static struct spindle_status status_of(struct spindle *sp)
+{
+	struct spindle_status st;
+	CHECK(spindle_get_status(sp, &st) == 0);
+	return st;
+}
+
+/* Commits that change nothing render and upload nothing, yet their frame
+ * callbacks are answered by the volume on display, at the first revolution
+ * start after the commit. */
+static void check_unchanged_commits(struct spindle *sp, const struct spindle_frame *shown)
+{
+	struct spindle_status before = status_of(sp);
+	struct spindle_frame prev = *shown, f;
+	for (int i = 0; i < 10; i++) {
+		uint64_t committed = mono_ns();
+		CHECK(spindle_commit_and_wait(sp, &f) == 0);
+		CHECK_EQ(f.volume_seq, shown->volume_seq);
+		CHECK(f.time_ns >= committed && f.time_ns > prev.time_ns && f.time_ns <= mono_ns());
+		prev = f;
+	}
+	struct spindle_status after = status_of(sp);
+	CHECK_EQ(after.volumes_rendered, before.volumes_rendered);
+	CHECK_EQ(after.bytes_uploaded, before.bytes_uploaded);
+	CHECK_EQ(after.volumes_skipped, before.volumes_skipped + 10);
+}
+
+/* A changed commit renders exactly one volume and uploads it. */
+static struct spindle_frame check_changed_commit(struct spindle *sp, struct spindle_layer *layer, float dx,
+						 const struct spindle_frame *prev)
+{
+	struct spindle_status before = status_of(sp);
+	float m[16];
+	shift_x(m, dx);
+	CHECK(spindle_layer_set_transform(layer, m) == 0);
+	struct spindle_frame f;
+	CHECK(spindle_commit_and_wait(sp, &f) == 0);
+	CHECK(f.volume_seq > prev->volume_seq && f.time_ns > prev->time_ns);
+	struct spindle_status after = status_of(sp);
+	CHECK_EQ(after.volumes_rendered, before.volumes_rendered + 1);
+	CHECK(after.bytes_uploaded > before.bytes_uploaded && after.render_us > 0);
+	return f;
+}
+
+/* A changed commit A, then B, identical, sent while A renders: B is
+ * answered with A's volume, not before A's volume is shown. */
+static void check_commit_while_rendering(struct spindle *sp, struct spindle_layer *layer)
+{
+	struct spindle_status before = status_of(sp);
+	struct frame_log log = { .arrived = 0 };
+	struct frame_slot a = { &log, 0 }, b = { &log, 1 };
+	float m[16];
+	shift_x(m, 0.1f);
+	CHECK(spindle_layer_set_transform(layer, m) == 0);
+	uint64_t committed = mono_ns();
+	CHECK(spindle_request_frame(sp, log_frame, &a) == 0 && spindle_commit(sp) == 0);
+	CHECK(spindle_request_frame(sp, log_frame, &b) == 0 && spindle_commit(sp) == 0);
+	wait_frames(sp, &log, 2);
+	CHECK(log.order[0] == 0 && log.order[1] == 1);
+	CHECK_EQ(log.frame[1].volume_seq, log.frame[0].volume_seq);
+	CHECK(log.frame[0].time_ns >= committed && log.frame[1].time_ns >= log.frame[0].time_ns);
+	struct spindle_status after = status_of(sp);
+	CHECK_EQ(after.volumes_rendered, before.volumes_rendered + 1);
+	CHECK_EQ(after.volumes_skipped, before.volumes_skipped + 1);
+	CHECK(after.volumes_shown > before.volumes_shown);
+}
+
+static void test_unchanged(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	struct spindle_frame shown;
+	struct spindle_layer *layer = show_sphere(sp, &shown);
+	check_unchanged_commits(sp, &shown);
+	shown = check_changed_commit(sp, layer, 0.05f, &shown);
+	check_unchanged_commits(sp, &shown);
+	check_commit_while_rendering(sp, layer);
+	/* The volume shown is still the scene's: a sphere, nothing else. */
+	struct volume *vol = capture_volume(sp);
+	CHECK(count_lit(vol, 2) > 0 && count_lit(vol, 0) == 0);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+/* Commits a change and checks that it rendered one new volume. */
+static struct spindle_frame commit_rendered(struct spindle *sp, const struct spindle_frame *prev)
+{
+	struct spindle_status before = status_of(sp);
+	struct spindle_frame f;
+	CHECK(spindle_commit_and_wait(sp, &f) == 0);
+	CHECK(f.volume_seq > prev->volume_seq);
+	CHECK_EQ(status_of(sp).volumes_rendered, before.volumes_rendered + 1);
+	return f;
+}
+
+/* A scene changed back and forth is rendered every time: the identity check
+ * is against the last volume rendered, not any older one. */
+static void test_back_and_forth(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	/* Two lists alike but for their vertices: the axis, and a line off it. */
+	float axis[6], off[6];
+	axis_line(axis), axis_line(off);
+	off[0] = off[3] = 0.5f;
+	struct spindle_buffer *ab = spindle_buffer_create(sp, axis, sizeof(axis));
+	struct spindle_buffer *ob = spindle_buffer_create(sp, off, sizeof(off));
+	struct spindle_list *a = spindle_list_create(sp), *b = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	CHECK(ab && ob && a && b && layer);
+	CHECK(spindle_list_lines(a, ab, 0, 2, 0) == 0 && spindle_list_lines(b, ob, 0, 2, 0) == 0);
+	struct spindle_frame f = { 0 };
+	for (int i = 0; i < 3; i++) {
+		CHECK(spindle_layer_set_list(layer, i % 2 ? b : a) == 0);
+		f = commit_rendered(sp, &f);
+	}
+	struct volume *vol = capture_volume(sp);
+	for (int c = 0; c < 3; c++)
+		check_axis_line(vol, c);
+	volume_destroy(vol);
+	/* The same with a layer transform and with visibility. */
+	float m[16];
+	shift_x(m, 0.2f);
+	for (int i = 0; i < 3; i++) {
+		CHECK(spindle_layer_set_transform(layer, i % 2 ? identity : m) == 0);
+		f = commit_rendered(sp, &f);
+	}
+	for (int i = 0; i < 3; i++) {
+		CHECK(spindle_layer_set_visible(layer, i % 2) == 0);
+		f = commit_rendered(sp, &f);
 	}
 	spindle_disconnect(sp);
 	daemon_stop(&d);
@@ -560,6 +764,8 @@ static const struct {
 	{ "frames", test_frames },
 	{ "slow-reader", test_slow_reader },
 	{ "layers", test_layers },
+	{ "unchanged", test_unchanged },
+	{ "back-and-forth", test_back_and_forth },
 };
 
 int main(int argc, char **argv)

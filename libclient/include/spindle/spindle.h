@@ -47,21 +47,33 @@ struct spindle_device_info {
 	char name[64];           /* device description, NUL-terminated */
 };
 
-/* Daemon and device state (spindle_get_status()). */
+/* Daemon and device state (spindle_get_status()). Counters count from
+ * the daemon's start. A commit that leaves the whole scene (every visible
+ * layer of every client) as it was in the last volume rendered renders
+ * and uploads nothing: volumes_skipped counts such scenes (commits made
+ * while a render runs are taken together, as one scene). */
 struct spindle_status {
-	float rpm;              /* measured rotor speed, 0 when not turning */
-	bool locked;            /* sync estimator locked to the rotor */
-	bool blanked;           /* projector dark */
+	float rpm;                 /* measured rotor speed, 0 when not turning */
+	bool locked;               /* sync estimator locked to the rotor */
+	bool blanked;              /* projector dark */
 	bool projector_present;
-	uint64_t volumes_shown; /* volumes shown since the daemon started */
-	uint32_t clients;       /* connected clients past the handshake, this one included */
-	uint64_t underruns;     /* volumes that missed their revolution */
+	uint64_t volumes_shown;    /* volumes swapped in on the projector */
+	uint32_t clients;          /* connected clients past the handshake, this one included */
+	uint64_t underruns;        /* volumes that missed their revolution */
+	uint64_t volumes_rendered; /* volumes rendered */
+	uint64_t volumes_skipped;  /* scenes not rendered: identical to the last rendered */
+	uint64_t bytes_uploaded;   /* sparse volume data (tile masks and non-empty tiles)
+				    * sent to the projector */
+	uint32_t render_us;        /* wall time of the last render, microseconds (0: none yet) */
 };
 
-/* When a committed state was first shown. */
+/* When a committed state was first shown. A commit that leaves the scene
+ * as the last volume rendered shows it is not rendered again: its frame
+ * names that volume, at the first revolution start after the commit. */
 struct spindle_frame {
-	uint64_t volume_seq; /* sequence number of the first volume showing it */
-	uint64_t time_ns;    /* CLOCK_MONOTONIC time that volume was first shown */
+	uint64_t volume_seq; /* sequence number of the volume showing it */
+	uint64_t time_ns;    /* CLOCK_MONOTONIC revolution start it is shown from,
+			      * never earlier than the commit */
 };
 
 /* Connects to the daemon at path; NULL path means $SPINDLE_SOCKET, else
