@@ -39,7 +39,8 @@ struct options {
 	const char *profile;
 	const char *scenes[MAX_SCENES];
 	int scene_count;
-	const char *variants;
+	struct variant vars[MAX_VARIANTS];
+	int nvars;
 	uint32_t volumes;  /* at most this many measured volumes ... */
 	double seconds;    /* ... and no more measuring once this long has passed */
 	uint32_t warmup;
@@ -151,7 +152,9 @@ static int variant_open(struct variant *v, const struct geometry *g)
 	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd };
 	v->r = render_cpu_create_opts(g, &o);
 	if (!v->r) {
-		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name, strerror(errno));
+		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name,
+			errno == ENOENT ? "halftone variant unknown or not runnable on this CPU"
+					: strerror(errno));
 		return -1;
 	}
 	v->out = volume_create(g);
@@ -349,8 +352,8 @@ static int run_scene(const char *name, const struct geometry *g, struct variant 
 		return 0;
 	}
 	if (r < 0) {
-		fprintf(stderr, "spindle-bench: %s: %s\n", err, strerror(-r));
-		fprintf(notes, "- %s: failed: %s (%s).\n", name, err, strerror(-r));
+		fprintf(stderr, "spindle-bench: %s\n", err);
+		fprintf(notes, "- %s: failed: %s.\n", name, err);
 		return -1;
 	}
 	double ms;
@@ -431,17 +434,16 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 	       o->warmup, o->warmup == 1 ? "" : "s", o->volumes, o->seconds, REFERENCE_VARIANT);
 }
 
-static int run_renders(const struct options *o)
+static int run_renders(struct options *o)
 {
 	struct geometry g;
-	struct variant vars[MAX_VARIANTS], ref;
+	struct variant *vars = o->vars, ref;
+	int nvars = o->nvars;
 	if (geometry_from_profile(o->profile, &g) < 0) {
 		fprintf(stderr, "spindle-bench: no profile '%s'\n", o->profile);
 		return -1;
 	}
-	int nvars = parse_variants(o->variants, vars);
-	if (nvars < 0 || !parse_variant(REFERENCE_VARIANT, &ref))
-		return -1;
+	parse_variant(REFERENCE_VARIANT, &ref);
 	int r = variant_open(&ref, &g);
 	for (int i = 0; r == 0 && i < nvars; i++)
 		r = variant_open(&vars[i], &g);
@@ -527,11 +529,12 @@ static void set_quick(struct options *o)
 static int parse_options(int argc, char **argv, struct options *o)
 {
 	*o = (struct options){
-		.profile = "perspecta", .variants = "cpu," REFERENCE_VARIANT, .volumes = 100,
+		.profile = "perspecta", .volumes = 100,
 		.seconds = 2, .warmup = 2, .files = { .bunny = BENCH_DATA_DIR "/bunny.ply" },
 		.micro = true, .renders = true, .micro_tiles = 4096, .micro_runs = 7,
 		.memcpy_bytes = 64 << 20,
 	};
+	const char *variants = "cpu," REFERENCE_VARIANT;
 	bool volumes = false, seconds = false, warmup = false;
 	int c;
 	while ((c = getopt_long(argc, argv, "s:lp:V:n:t:qh", long_opts, NULL)) != -1) {
@@ -541,7 +544,7 @@ static int parse_options(int argc, char **argv, struct options *o)
 		case 's': ok = add_scenes(o, optarg) == 0; break;
 		case 'l': list_scenes(); return 1;
 		case 'p': o->profile = optarg; break;
-		case 'V': o->variants = optarg; break;
+		case 'V': variants = optarg; break;
 		case 'n': ok = volumes = parse_uint(optarg, 1, &o->volumes); break;
 		case 't':
 			o->seconds = strtod(optarg, &end);
@@ -575,6 +578,11 @@ static int parse_options(int argc, char **argv, struct options *o)
 		}
 	}
 	if (optind < argc) {
+		usage(stderr);
+		return -1;
+	}
+	o->nvars = parse_variants(variants, o->vars);
+	if (o->nvars <= 0) {
 		usage(stderr);
 		return -1;
 	}
