@@ -3,53 +3,22 @@
  * stages, sparseness, and coverage against the exact reference; then
  * memcpy bandwidth and halftone+pack throughput. See bench/README.md. */
 #include <errno.h>
-#include <getopt.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "coverage.h"
 #include "halftone.h"
 #include "log.h"
 #include "micro.h"
+#include "options.h"
 #include "render.h"
 #include "scenes.h"
 #include "svol.h"
-
-#ifndef BENCH_DATA_DIR
-#define BENCH_DATA_DIR "tests/data"
-#endif
-
-#define REFERENCE_VARIANT "cpu-1t-scalar"
-#define MAX_VARIANTS 16
-#define MAX_SCENES 64
-
-struct variant {
-	char name[32];
-	unsigned threads; /* 0: one per core */
-	char simd[16];    /* "auto", "scalar", ... */
-	struct renderer *r;
-	struct volume *out;
-};
-
-struct options {
-	const char *profile;
-	const char *scenes[MAX_SCENES];
-	int scene_count;
-	struct variant vars[MAX_VARIANTS];
-	int nvars;
-	uint32_t volumes;  /* at most this many measured volumes ... */
-	double seconds;    /* ... and no more measuring once this long has passed */
-	uint32_t warmup;
-	struct bench_files files;
-	bool micro, renders;
-	uint32_t micro_tiles, micro_runs;
-	size_t memcpy_bytes;
-	const char *save_dir; /* write each scene's reference frame 0 here */
-};
 
 /* What the measured volumes of one scene and variant gave. */
 struct measurement {
@@ -58,29 +27,8 @@ struct measurement {
 	struct render_stats sum; /* render_stats summed over the volumes */
 	uint64_t tiles, sparse_bytes;
 	double total_s;
+	double cpu_s;            /* process CPU time over the measured volumes */
 };
-
-static void usage(FILE *f)
-{
-	fprintf(f,
-		"usage: spindle-bench [options]\n"
-		"  --scene NAME[,NAME]  scenes or groups (S1, ...) to run, repeatable (default all)\n"
-		"  --list               list the scenes and exit\n"
-		"  --profile NAME       device profile (default perspecta)\n"
-		"  --variants LIST      renderer variants, comma separated (default cpu,%s):\n"
-		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512]\n"
-		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
-		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
-		"  --warmup N           warm-up volumes before measuring (default 2)\n"
-		"  --bunny PATH         bunny PLY (default %s/bunny.ply)\n"
-		"  --dragon PATH        dragon_vrip.ply (S3-dragon is skipped without it)\n"
-		"  --dragon-res2 PATH   dragon_vrip_res2.ply (S3-dragon-res2 likewise)\n"
-		"  --quick              tiny counts, for a smoke run\n"
-		"  --no-micro           skip the memcpy and halftone table\n"
-		"  --micro-only         only the memcpy and halftone table\n"
-		"  --save DIR           write each scene's reference frame 0 as DIR/SCENE.svol\n",
-		REFERENCE_VARIANT, BENCH_DATA_DIR);
-}
 
 /* "1234567" -> "1,234,567". */
 static const char *fmt_count(char *buf, size_t size, uint64_t v)
@@ -107,44 +55,6 @@ static const char *fmt_num(char *buf, size_t size, double v)
 	else
 		snprintf(buf, size, "%.0f", v);
 	return buf;
-}
-
-static bool parse_variant(const char *spec, struct variant *v)
-{
-	memset(v, 0, sizeof(*v));
-	if (strncmp(spec, "cpu", 3) != 0 || strlen(spec) >= sizeof(v->name))
-		return false;
-	snprintf(v->name, sizeof(v->name), "%s", spec);
-	snprintf(v->simd, sizeof(v->simd), "auto");
-	const char *p = spec + 3;
-	if (*p == '-' && p[1] >= '1' && p[1] <= '9') {
-		char *end;
-		unsigned long t = strtoul(p + 1, &end, 10);
-		if (*end != 't' || t > 1024)
-			return false;
-		v->threads = (unsigned)t;
-		p = end + 1;
-	}
-	if (*p == '-' && strlen(p + 1) < sizeof(v->simd) && p[1])
-		snprintf(v->simd, sizeof(v->simd), "%s", p + 1);
-	else if (*p)
-		return false;
-	return true;
-}
-
-static int parse_variants(const char *list, struct variant *out)
-{
-	char buf[512];
-	snprintf(buf, sizeof(buf), "%s", list);
-	int n = 0;
-	for (char *save, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-		if (n == MAX_VARIANTS || !parse_variant(tok, &out[n])) {
-			fprintf(stderr, "spindle-bench: bad variant '%s'\n", tok);
-			return -1;
-		}
-		n++;
-	}
-	return n;
 }
 
 static int variant_open(struct variant *v, const struct geometry *g)
@@ -200,6 +110,13 @@ static int render_frame(struct variant *v, struct bench_scene *s, uint64_t frame
 	return err;
 }
 
+static double process_cpu_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
 static int cmp_double(const void *a, const void *b)
 {
 	double x = *(const double *)a, y = *(const double *)b;
@@ -225,6 +142,7 @@ static int measure(struct variant *v, struct bench_scene *s, const struct option
 	if (!m->ms)
 		return -1;
 	int64_t start = now_ns();
+	double cpu_start = process_cpu_s();
 	while (m->n < o->volumes) {
 		if (render_frame(v, s, frame++, &m->ms[m->n]) < 0)
 			return -1;
@@ -235,6 +153,7 @@ static int measure(struct variant *v, struct bench_scene *s, const struct option
 		if ((double)(now_ns() - start) >= o->seconds * 1e9)
 			break;
 	}
+	m->cpu_s = process_cpu_s() - cpu_start;
 	for (uint32_t i = 0; i < m->n; i++)
 		m->total_s += m->ms[i] / 1e3;
 	qsort(m->ms, m->n, sizeof(*m->ms), cmp_double);
@@ -273,10 +192,10 @@ static const char *fmt_prims(char *buf, size_t size, const struct bench_scene *s
 
 static void print_table_header(void)
 {
-	printf("| scene | primitives | variant | volumes | vol/s | median ms | p99 ms "
+	printf("| scene | primitives | variant | volumes | vol/s | median ms | p99 ms | cores used "
 	       "| bin ms | raster ms (sum) | pack ms (sum) | tiles/vol | occupancy "
 	       "| sparse MB/vol | of dense | identical | coverage | stray |\n");
-	printf("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|--:|--:|\n");
+	printf("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|--:|--:|\n");
 }
 
 /* "100.0000%", or "n/a" when there is nothing to take the fraction of. */
@@ -296,11 +215,12 @@ static void print_row(const struct bench_scene *s, const struct variant *v,
 	double n = m->n, images = vol->image_count * (double)volume_tiles_per_image(vol);
 	double dense = vol->image_count * (double)volume_dense_image_bytes(vol);
 	double tiles = m->tiles / n, sparse = m->sparse_bytes / n;
-	printf("| %s | %s | %s | %u | %s | %s | %s | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
+	printf("| %s | %s | %s | %u | %s | %s | %s | %.2f | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
 	       "| %s | %s | %s |\n",
 	       s->info->name, fmt_prims(p, sizeof(p), s), v->name, m->n,
 	       fmt_num(b[0], 32, n / m->total_s), fmt_num(b[1], 32, percentile(m, 0.5)),
-	       fmt_num(b[2], 32, percentile(m, 0.99)), fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6),
+	       fmt_num(b[2], 32, percentile(m, 0.99)), m->cpu_s / m->total_s,
+	       fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6),
 	       fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6), fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6),
 	       fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)), 100 * tiles / images,
 	       fmt_num(b[7], 32, sparse / 1e6), 100 * sparse / dense,
@@ -366,42 +286,6 @@ static int run_scene(const char *name, const struct geometry *g, struct variant 
 	return r;
 }
 
-/* Scene names matching spec: a name, a group ("S1"), or "all". */
-static int add_matching(const char *spec, const char **out, int n)
-{
-	int found = 0;
-	size_t l = strlen(spec);
-	for (const struct bench_scene_info *i = bench_scene_list(); i->name; i++) {
-		bool match = strcmp(spec, "all") == 0 || strcmp(spec, i->name) == 0 ||
-			     (strncmp(spec, i->name, l) == 0 && i->name[l] == '-');
-		if (match && n + found < MAX_SCENES)
-			out[n + found++] = i->name;
-	}
-	if (!found)
-		fprintf(stderr, "spindle-bench: no scene '%s' (--list)\n", spec);
-	return found ? n + found : -1;
-}
-
-static int add_scenes(struct options *o, const char *list)
-{
-	char buf[512];
-	snprintf(buf, sizeof(buf), "%s", list);
-	for (char *save, *tok = strtok_r(buf, ",", &save); tok; tok = strtok_r(NULL, ",", &save)) {
-		/* Names point into the static scene list, not into buf. */
-		int n = add_matching(tok, o->scenes, o->scene_count);
-		if (n < 0)
-			return -1;
-		o->scene_count = n;
-	}
-	return 0;
-}
-
-static void list_scenes(void)
-{
-	for (const struct bench_scene_info *i = bench_scene_list(); i->name; i++)
-		printf("%-16s %s\n", i->name, i->what);
-}
-
 static void print_preamble(const char *profile, const struct geometry *g, const struct volume *vol,
 			   const struct variant *vars, int nvars, const struct options *o)
 {
@@ -424,7 +308,9 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 	}
 	printf("\nEach scene and variant: %u warm-up volume%s, then up to %u measured volumes or "
 	       "%.3g s, whichever comes first (volumes). Times are wall ms per volume, animation "
-	       "included; p99 is nearest rank. bin / raster / pack: render_stats per volume; bin is "
+	       "included; p99 is nearest rank. cores used = process CPU time / wall time while "
+	       "measuring (below the thread count: serial parts, or other load on the machine). "
+	       "bin / raster / pack: render_stats per volume; bin is "
 	       "wall time, raster (sectioning + raster) and pack (halftone + pack + clear) are "
 	       "summed over the renderer's threads. occupancy = tiles / (images x tiles per image). "
 	       "sparse MB = volume_sparse_bytes (masks + tiles); of dense = that / the dense volume. "
@@ -443,7 +329,7 @@ static int run_renders(struct options *o)
 		fprintf(stderr, "spindle-bench: no profile '%s'\n", o->profile);
 		return -1;
 	}
-	parse_variant(REFERENCE_VARIANT, &ref);
+	variant_parse(REFERENCE_VARIANT, &ref);
 	int r = variant_open(&ref, &g);
 	for (int i = 0; r == 0 && i < nvars; i++)
 		r = variant_open(&vars[i], &g);
@@ -482,119 +368,10 @@ static void run_micro(const struct options *o)
 	printf("\nMedian of %u runs each.\n", o->micro_runs);
 }
 
-enum {
-	OPT_BUNNY = 256, OPT_DRAGON, OPT_DRAGON2, OPT_NO_MICRO, OPT_MICRO_ONLY, OPT_WARMUP, OPT_SAVE,
-};
-
-static const struct option long_opts[] = {
-	{ "scene", required_argument, NULL, 's' },
-	{ "list", no_argument, NULL, 'l' },
-	{ "profile", required_argument, NULL, 'p' },
-	{ "variants", required_argument, NULL, 'V' },
-	{ "volumes", required_argument, NULL, 'n' },
-	{ "seconds", required_argument, NULL, 't' },
-	{ "warmup", required_argument, NULL, OPT_WARMUP },
-	{ "bunny", required_argument, NULL, OPT_BUNNY },
-	{ "dragon", required_argument, NULL, OPT_DRAGON },
-	{ "dragon-res2", required_argument, NULL, OPT_DRAGON2 },
-	{ "quick", no_argument, NULL, 'q' },
-	{ "no-micro", no_argument, NULL, OPT_NO_MICRO },
-	{ "micro-only", no_argument, NULL, OPT_MICRO_ONLY },
-	{ "save", required_argument, NULL, OPT_SAVE },
-	{ "help", no_argument, NULL, 'h' },
-	{ NULL, 0, NULL, 0 },
-};
-
-static bool parse_uint(const char *s, uint32_t min, uint32_t *out)
-{
-	char *end;
-	unsigned long v = strtoul(s, &end, 10);
-	if (*s == '\0' || *end != '\0' || v < min || v > 10000000)
-		return false;
-	*out = (uint32_t)v;
-	return true;
-}
-
-static void set_quick(struct options *o)
-{
-	o->volumes = 3;
-	o->seconds = 0.25;
-	o->warmup = 1;
-	o->micro_tiles = 256;
-	o->micro_runs = 3;
-	o->memcpy_bytes = 16 << 20;
-}
-
-/* Returns 0 to run, 1 to exit successfully, -1 on a usage error. */
-static int parse_options(int argc, char **argv, struct options *o)
-{
-	*o = (struct options){
-		.profile = "perspecta", .volumes = 100,
-		.seconds = 2, .warmup = 2, .files = { .bunny = BENCH_DATA_DIR "/bunny.ply" },
-		.micro = true, .renders = true, .micro_tiles = 4096, .micro_runs = 7,
-		.memcpy_bytes = 64 << 20,
-	};
-	const char *variants = "cpu," REFERENCE_VARIANT;
-	bool volumes = false, seconds = false, warmup = false;
-	int c;
-	while ((c = getopt_long(argc, argv, "s:lp:V:n:t:qh", long_opts, NULL)) != -1) {
-		bool ok = true;
-		char *end = NULL;
-		switch (c) {
-		case 's': ok = add_scenes(o, optarg) == 0; break;
-		case 'l': list_scenes(); return 1;
-		case 'p': o->profile = optarg; break;
-		case 'V': variants = optarg; break;
-		case 'n': ok = volumes = parse_uint(optarg, 1, &o->volumes); break;
-		case 't':
-			o->seconds = strtod(optarg, &end);
-			ok = seconds = *end == '\0' && o->seconds > 0 && o->seconds < 1e5;
-			break;
-		case OPT_WARMUP: ok = warmup = parse_uint(optarg, 0, &o->warmup); break;
-		case OPT_BUNNY: o->files.bunny = optarg; break;
-		case OPT_DRAGON: o->files.dragon = optarg; break;
-		case OPT_DRAGON2: o->files.dragon_res2 = optarg; break;
-		case OPT_NO_MICRO: o->micro = false; break;
-		case OPT_MICRO_ONLY: o->renders = false; break;
-		case OPT_SAVE: o->save_dir = optarg; break;
-		case 'q': {
-			struct options keep = *o;
-			set_quick(o);
-			/* Explicit counts win over --quick, in any order. */
-			if (volumes)
-				o->volumes = keep.volumes;
-			if (seconds)
-				o->seconds = keep.seconds;
-			if (warmup)
-				o->warmup = keep.warmup;
-			break;
-		}
-		case 'h': usage(stdout); return 1;
-		default: ok = false;
-		}
-		if (!ok) {
-			usage(stderr);
-			return -1;
-		}
-	}
-	if (optind < argc) {
-		usage(stderr);
-		return -1;
-	}
-	o->nvars = parse_variants(variants, o->vars);
-	if (o->nvars <= 0) {
-		usage(stderr);
-		return -1;
-	}
-	if (o->scene_count == 0)
-		add_scenes(o, "all");
-	return 0;
-}
-
 int main(int argc, char **argv)
 {
 	struct options o;
-	int r = parse_options(argc, argv, &o);
+	int r = options_parse(argc, argv, &o);
 	if (r != 0)
 		return r < 0 ? 2 : 0;
 	if (o.renders && run_renders(&o) < 0)
