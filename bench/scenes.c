@@ -151,7 +151,8 @@ static int build_wire(struct bench_scene *s, struct scene_data *d, const struct 
 	return 0;
 }
 
-/* S3: a model file fitted to 0.95 of the display, as one draw. */
+/* S3: a model file fitted to 0.95 of the display, as one draw; param
+ * picks the file: 0 bunny, 1 dragon_vrip_res2, 2 dragon_vrip. */
 static int build_model(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
 		       const struct bench_files *f, uint32_t param, char *err, size_t err_size)
 {
