@@ -1,0 +1,382 @@
+/* spindle-bench: renders the fixed benchmark scenes (bench/scenes.h) with
+ * each renderer variant and prints Markdown tables: speed, the split into
+ * stages, sparseness, and coverage against the exact reference; then
+ * memcpy bandwidth and halftone+pack throughput. See bench/README.md. */
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "coverage.h"
+#include "halftone.h"
+#include "log.h"
+#include "micro.h"
+#include "options.h"
+#include "render.h"
+#include "scenes.h"
+#include "svol.h"
+
+/* What the measured volumes of one scene and variant gave. */
+struct measurement {
+	uint32_t n;
+	double *ms;              /* per volume, sorted after measuring */
+	struct render_stats sum; /* render_stats summed over the volumes */
+	uint64_t tiles, sparse_bytes;
+	double total_s;
+	double cpu_s;            /* process CPU time over the measured volumes */
+};
+
+/* "1234567" -> "1,234,567". */
+static const char *fmt_count(char *buf, size_t size, uint64_t v)
+{
+	char digits[32];
+	int n = snprintf(digits, sizeof(digits), "%llu", (unsigned long long)v);
+	size_t o = 0;
+	for (int i = 0; i < n && o + 2 < size; i++) {
+		if (i > 0 && (n - i) % 3 == 0)
+			buf[o++] = ',';
+		buf[o++] = digits[i];
+	}
+	buf[o] = '\0';
+	return buf;
+}
+
+/* Three significant digits or so, at least one decimal below 100. */
+static const char *fmt_num(char *buf, size_t size, double v)
+{
+	if (v < 10)
+		snprintf(buf, size, "%.2f", v);
+	else if (v < 100)
+		snprintf(buf, size, "%.1f", v);
+	else
+		snprintf(buf, size, "%.0f", v);
+	return buf;
+}
+
+static int variant_open(struct variant *v, const struct geometry *g)
+{
+	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd };
+	v->r = render_cpu_create_opts(g, &o);
+	if (!v->r) {
+		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name,
+			errno == ENOENT ? "halftone variant unknown or not runnable on this CPU"
+					: strerror(errno));
+		return -1;
+	}
+	v->out = volume_create(g);
+	return v->out ? 0 : -1;
+}
+
+static void variant_close(struct variant *v)
+{
+	render_destroy(v->r);
+	volume_destroy(v->out);
+	v->r = NULL;
+	v->out = NULL;
+}
+
+static unsigned cores(void)
+{
+	long n = sysconf(_SC_NPROCESSORS_ONLN);
+	return n > 0 ? (unsigned)n : 1;
+}
+
+static void stats_add(struct render_stats *sum, const struct render_stats *s)
+{
+	sum->total_ns += s->total_ns;
+	sum->bin_ns += s->bin_ns;
+	sum->raster_ns += s->raster_ns;
+	sum->pack_ns += s->pack_ns;
+	sum->prims += s->prims;
+	sum->prim_images += s->prim_images;
+	sum->canvas_tiles += s->canvas_tiles;
+	sum->tiles += s->tiles;
+	sum->threads = s->threads;
+}
+
+/* Animates the scene to frame and renders it; the wall time of both in ms. */
+static int render_frame(struct variant *v, struct bench_scene *s, uint64_t frame, double *ms)
+{
+	int64_t t0 = now_ns();
+	bench_scene_animate(s, frame);
+	int err = render_volume(v->r, &s->scene, v->out);
+	*ms = (double)(now_ns() - t0) / 1e6;
+	if (err < 0)
+		fprintf(stderr, "spindle-bench: %s on %s: %s\n", v->name, s->info->name, strerror(-err));
+	return err;
+}
+
+static double process_cpu_s(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+	return (double)ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return (x > y) - (x < y);
+}
+
+/* Warm-up volumes (fewer if one alone takes the whole time budget), then
+ * measured volumes until o->volumes or o->seconds, at least one. Frames
+ * start at 1: frame 0 is the coverage frame. */
+static int measure(struct variant *v, struct bench_scene *s, const struct options *o,
+		   struct measurement *m)
+{
+	uint64_t frame = 1;
+	double ms;
+	memset(m, 0, sizeof(*m));
+	for (uint32_t i = 0; i < o->warmup; i++) {
+		if (render_frame(v, s, frame++, &ms) < 0)
+			return -1;
+		if (ms > o->seconds * 1e3)
+			break;
+	}
+	m->ms = calloc(o->volumes, sizeof(*m->ms));
+	if (!m->ms)
+		return -1;
+	int64_t start = now_ns();
+	double cpu_start = process_cpu_s();
+	while (m->n < o->volumes) {
+		if (render_frame(v, s, frame++, &m->ms[m->n]) < 0)
+			return -1;
+		stats_add(&m->sum, &v->r->stats);
+		m->tiles += volume_tile_count(v->out);
+		m->sparse_bytes += volume_sparse_bytes(v->out);
+		m->n++;
+		if ((double)(now_ns() - start) >= o->seconds * 1e9)
+			break;
+	}
+	m->cpu_s = process_cpu_s() - cpu_start;
+	for (uint32_t i = 0; i < m->n; i++)
+		m->total_s += m->ms[i] / 1e3;
+	qsort(m->ms, m->n, sizeof(*m->ms), cmp_double);
+	return 0;
+}
+
+/* Nearest rank: the smallest sample with at least p of the samples at or
+ * below it. */
+static double percentile(const struct measurement *m, double p)
+{
+	uint32_t rank = (uint32_t)ceil(p * m->n);
+	if (rank < 1)
+		rank = 1;
+	if (rank > m->n)
+		rank = m->n;
+	return m->ms[rank - 1];
+}
+
+static const char *fmt_prims(char *buf, size_t size, const struct bench_scene *s)
+{
+	char a[32], b[32];
+	if (s->points)
+		snprintf(buf, size, "%s points", fmt_count(a, sizeof(a), s->points));
+	else if (s->segments)
+		snprintf(buf, size, "%s segments", fmt_count(a, sizeof(a), s->segments));
+	else if (s->triangles)
+		snprintf(buf, size, "%s triangles", fmt_count(a, sizeof(a), s->triangles));
+	else
+		snprintf(buf, size, "none");
+	if (s->scene.draw_count > 1) {
+		size_t l = strlen(buf);
+		snprintf(buf + l, size - l, " in %s draws", fmt_count(b, sizeof(b), s->scene.draw_count));
+	}
+	return buf;
+}
+
+static void print_table_header(void)
+{
+	printf("| scene | primitives | variant | volumes | vol/s | median ms | p99 ms | cores used "
+	       "| bin ms | raster ms (sum) | pack ms (sum) | tiles/vol | occupancy "
+	       "| sparse MB/vol | of dense | identical | coverage | stray |\n");
+	printf("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|--:|--:|\n");
+}
+
+/* "100.0000%", or "n/a" when there is nothing to take the fraction of. */
+static const char *fmt_fraction(char *buf, size_t size, double f, const uint64_t of[3])
+{
+	if (of[0] + of[1] + of[2] == 0)
+		snprintf(buf, size, "n/a");
+	else
+		snprintf(buf, size, "%.4f%%", 100 * f);
+	return buf;
+}
+
+static void print_row(const struct bench_scene *s, const struct variant *v,
+		      const struct measurement *m, const struct coverage *c, const struct volume *vol)
+{
+	char p[96], b[10][32];
+	double n = m->n, images = vol->image_count * (double)volume_tiles_per_image(vol);
+	double dense = vol->image_count * (double)volume_dense_image_bytes(vol);
+	double tiles = m->tiles / n, sparse = m->sparse_bytes / n;
+	printf("| %s | %s | %s | %u | %s | %s | %s | %.2f | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
+	       "| %s | %s | %s |\n",
+	       s->info->name, fmt_prims(p, sizeof(p), s), v->name, m->n,
+	       fmt_num(b[0], 32, n / m->total_s), fmt_num(b[1], 32, percentile(m, 0.5)),
+	       fmt_num(b[2], 32, percentile(m, 0.99)), m->cpu_s / m->total_s,
+	       fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6),
+	       fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6), fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6),
+	       fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)), 100 * tiles / images,
+	       fmt_num(b[7], 32, sparse / 1e6), 100 * sparse / dense,
+	       c->identical ? "yes" : "no", fmt_fraction(b[8], 32, coverage_score(c), c->ref_lit),
+	       fmt_fraction(b[9], 32, coverage_stray(c), c->test_lit));
+	fflush(stdout);
+}
+
+/* Measures one variant on scene s and compares its frame 0 with ref. */
+static int run_variant(struct variant *v, struct bench_scene *s, const struct volume *ref,
+		       const struct options *o)
+{
+	struct measurement m;
+	struct coverage c;
+	double ms;
+	int err = measure(v, s, o, &m);
+	if (err == 0)
+		err = render_frame(v, s, 0, &ms);
+	if (err == 0 && (err = coverage_compare(ref, v->out, &c)) < 0)
+		fprintf(stderr, "spindle-bench: coverage: %s\n", strerror(-err));
+	if (err == 0)
+		print_row(s, v, &m, &c, v->out);
+	free(m.ms);
+	return err;
+}
+
+/* The reference volume as DIR/SCENE.svol, for spindlectl preview. */
+static int save_volume(const char *dir, const char *scene, const struct volume *vol)
+{
+	char path[4096];
+	snprintf(path, sizeof(path), "%s/%s.svol", dir, scene);
+	FILE *f = fopen(path, "wb");
+	int r = f ? svol_write(f, vol) : -errno;
+	if (f && fclose(f) != 0 && r == 0)
+		r = -errno;
+	if (r < 0)
+		fprintf(stderr, "spindle-bench: %s: %s\n", path, strerror(-r));
+	return r;
+}
+
+static int run_scene(const char *name, const struct geometry *g, struct variant *vars, int nvars,
+		     struct variant *ref, const struct options *o, FILE *notes)
+{
+	struct bench_scene s;
+	char err[256];
+	int r = bench_scene_build(name, g, &o->files, &s, err, sizeof(err));
+	if (r == -ENODATA) {
+		fprintf(notes, "- %s: skipped, its model file was not given.\n", name);
+		return 0;
+	}
+	if (r < 0) {
+		fprintf(stderr, "spindle-bench: %s\n", err);
+		fprintf(notes, "- %s: failed: %s.\n", name, err);
+		return -1;
+	}
+	double ms;
+	r = render_frame(ref, &s, 0, &ms);
+	if (r == 0 && o->save_dir)
+		r = save_volume(o->save_dir, name, ref->out);
+	for (int i = 0; r == 0 && i < nvars; i++)
+		r = run_variant(&vars[i], &s, ref->out, o);
+	bench_scene_free(&s);
+	return r;
+}
+
+static void print_preamble(const char *profile, const struct geometry *g, const struct volume *vol,
+			   const struct variant *vars, int nvars, const struct options *o)
+{
+	double dense = vol->image_count * (double)volume_dense_image_bytes(vol);
+	printf("Profile %s: %ux%u, N = %u%s: %u images per volume, %u tiles of 32x32 per image, "
+	       "dense volume %.2f MB.\n\n", profile, g->width, g->height, g->images_per_rev,
+	       g->mirrored ? ", mirrored" : "", vol->image_count, volume_tiles_per_image(vol), dense / 1e6);
+	printf("Variants (%u cores here; the reference is %s):\n", cores(), REFERENCE_VARIANT);
+	for (int i = 0; i < nvars; i++) {
+		char th[32];
+		if (vars[i].threads)
+			snprintf(th, sizeof(th), "%u thread%s", vars[i].threads, vars[i].threads > 1 ? "s" : "");
+		else
+			snprintf(th, sizeof(th), "one thread per core");
+		if (strcmp(vars[i].simd, "auto") == 0)
+			printf("- %s: %s, halftone auto (%s here)\n", vars[i].name, th,
+			       halftone_variants()[0].name);
+		else
+			printf("- %s: %s, halftone %s\n", vars[i].name, th, vars[i].simd);
+	}
+	printf("\nEach scene and variant: %u warm-up volume%s, then up to %u measured volumes or "
+	       "%.3g s, whichever comes first (volumes). Times are wall ms per volume, animation "
+	       "included; p99 is nearest rank. cores used = process CPU time / wall time while "
+	       "measuring (below the thread count: serial parts, or other load on the machine). "
+	       "bin / raster / pack: render_stats per volume; bin is "
+	       "wall time, raster (sectioning + raster) and pack (halftone + pack + clear) are "
+	       "summed over the renderer's threads. occupancy = tiles / (images x tiles per image). "
+	       "sparse MB = volume_sparse_bytes (masks + tiles); of dense = that / the dense volume. "
+	       "identical / coverage / stray: frame 0 against %s's (bench/coverage.h; coverage = "
+	       "reference voxels with a lit voxel within one voxel, per channel; stray = lit voxels "
+	       "farther than one voxel from any reference voxel).\n\n",
+	       o->warmup, o->warmup == 1 ? "" : "s", o->volumes, o->seconds, REFERENCE_VARIANT);
+}
+
+static int run_renders(struct options *o)
+{
+	struct geometry g;
+	struct variant *vars = o->vars, ref;
+	int nvars = o->nvars;
+	if (geometry_from_profile(o->profile, &g) < 0) {
+		fprintf(stderr, "spindle-bench: no profile '%s'\n", o->profile);
+		return -1;
+	}
+	variant_parse(REFERENCE_VARIANT, &ref);
+	int r = variant_open(&ref, &g);
+	for (int i = 0; r == 0 && i < nvars; i++)
+		r = variant_open(&vars[i], &g);
+	char *notes_buf = NULL;
+	size_t notes_len = 0;
+	FILE *notes = open_memstream(&notes_buf, &notes_len);
+	if (r == 0 && notes) {
+		print_preamble(o->profile, &g, ref.out, vars, nvars, o);
+		print_table_header();
+		for (int i = 0; i < o->scene_count; i++)
+			if (run_scene(o->scenes[i], &g, vars, nvars, &ref, o, notes) < 0)
+				r = -1;
+	}
+	if (notes) {
+		fclose(notes);
+		if (notes_len)
+			printf("\n%s", notes_buf);
+		free(notes_buf);
+	}
+	for (int i = 0; i < nvars; i++)
+		variant_close(&vars[i]);
+	variant_close(&ref);
+	return r;
+}
+
+static void run_micro(const struct options *o)
+{
+	double mc = micro_memcpy_gbps(o->memcpy_bytes, (int)o->micro_runs);
+	printf("\n| single thread | GB/s | of memcpy |\n|---|--:|--:|\n");
+	printf("| memcpy, %zu MiB buffers (bytes copied) | %.2f | 100%% |\n", o->memcpy_bytes >> 20, mc);
+	for (const struct halftone_variant *v = halftone_variants(); v->name; v++) {
+		double ht = micro_halftone_gbps(v->fn, o->micro_tiles, (int)o->micro_runs);
+		printf("| halftone+pack %s, %u random canvas tiles (3072 canvas bytes each) | %.2f | %.0f%% |\n",
+		       v->name, o->micro_tiles, ht, 100 * ht / mc);
+	}
+	printf("\nMedian of %u runs each.\n", o->micro_runs);
+}
+
+int main(int argc, char **argv)
+{
+	struct options o;
+	int r = options_parse(argc, argv, &o);
+	if (r != 0)
+		return r < 0 ? 2 : 0;
+	if (o.renders && run_renders(&o) < 0)
+		r = 1;
+	if (o.micro)
+		run_micro(&o);
+	return r;
+}
