@@ -6,6 +6,7 @@
  * canvas, and halftone and pack only the tiles something touched. */
 #include <errno.h>
 #include <stdatomic.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -40,12 +41,16 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	struct section_canvas *c = &w->canvas;
 	struct halftone_table thr;
+	bool have_thr = false; /* made at the first touched tile */
 	int err = 0;
-	halftone_table_init(&thr, k);
 	uint32_t tiles = c->tiles_x * c->tiles_y;
 	for (uint32_t t = 0; t < tiles; t++) {
 		if (!c->rows[t])
 			continue;
+		if (!have_thr) {
+			halftone_table_init(&thr, k);
+			have_thr = true;
+		}
 		w->canvas_tiles++;
 		/* Halftoned straight into the volume's storage. */
 		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
