@@ -32,73 +32,61 @@ static inline void put_row(uint8_t *out, uint32_t word)
 	out[3] = (uint8_t)(word >> 24);
 }
 
-static int halftone_scalar(const uint8_t *canvas, uint32_t rows,
-			   const struct halftone_table *t, uint8_t *out)
-{
-	uint32_t any = 0;
-	for (int c = 0; c < 3; c++) {
-		for (uint32_t y = 0; y < 32; y++) {
-			uint32_t word = 0;
-			if (rows & (1u << y)) {
-				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
-				const uint8_t *thr = t->thr[y & 15];
-				for (uint32_t j = 0; j < 32; j++)
-					word |= (uint32_t)(row[j] > thr[j]) << j;
-			}
-			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
-			any |= word;
-		}
+/* One variant: every row set in rows, in all three planes, through
+ * row_word (the packed word of a 32-byte canvas row against its 32
+ * thresholds); everything else comes out zero. */
+#define HALFTONE_BY_ROWS(name, attrs, row_word)                                                   \
+	attrs static int name(const uint8_t *canvas, uint32_t rows, const struct halftone_table *t, \
+			      uint8_t *out)                                                       \
+	{                                                                                         \
+		uint32_t any = 0;                                                                 \
+		memset(out, 0, VOLUME_TILE_BYTES);                                                \
+		for (; rows; rows &= rows - 1) {                                                  \
+			uint32_t y = (uint32_t)__builtin_ctz(rows);                               \
+			for (int c = 0; c < 3; c++) {                                             \
+				uint32_t word = row_word(canvas + c * HALFTONE_PLANE_BYTES +      \
+							 y * HALFTONE_ROW_BYTES, t->thr[y & 15]); \
+				put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);         \
+				any |= word;                                                      \
+			}                                                                         \
+		}                                                                                 \
+		return any != 0;                                                                  \
 	}
-	return any != 0;
+
+static inline uint32_t row_scalar(const uint8_t *row, const uint8_t *thr)
+{
+	uint32_t word = 0;
+	for (uint32_t j = 0; j < 32; j++)
+		word |= (uint32_t)(row[j] > thr[j]) << j;
+	return word;
 }
+
+HALFTONE_BY_ROWS(halftone_scalar, , row_scalar)
 
 #ifdef HALFTONE_X86
 /* c > t for unsigned bytes is "c - t saturated is not zero". */
-__attribute__((target("sse2"))) static int halftone_sse2(const uint8_t *canvas, uint32_t rows,
-							   const struct halftone_table *t, uint8_t *out)
+__attribute__((target("sse2"))) static inline uint32_t row_sse2(const uint8_t *row, const uint8_t *thr)
 {
 	const __m128i zero = _mm_setzero_si128();
-	uint32_t any = 0;
-	for (int c = 0; c < 3; c++) {
-		for (uint32_t y = 0; y < 32; y++) {
-			uint32_t word = 0;
-			if (rows & (1u << y)) {
-				const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
-				const uint8_t *thr = t->thr[y & 15];
-				__m128i a = _mm_loadu_si128((const __m128i *)row);
-				__m128i b = _mm_loadu_si128((const __m128i *)(row + 16));
-				__m128i ta = _mm_loadu_si128((const __m128i *)thr);
-				__m128i tb = _mm_loadu_si128((const __m128i *)(thr + 16));
-				uint32_t lo = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(a, ta), zero));
-				uint32_t hi = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(b, tb), zero));
-				word = ~(lo | hi << 16);
-			}
-			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
-			any |= word;
-		}
-	}
-	return any != 0;
+	__m128i a = _mm_loadu_si128((const __m128i *)row);
+	__m128i b = _mm_loadu_si128((const __m128i *)(row + 16));
+	__m128i ta = _mm_loadu_si128((const __m128i *)thr);
+	__m128i tb = _mm_loadu_si128((const __m128i *)(thr + 16));
+	uint32_t lo = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(a, ta), zero));
+	uint32_t hi = (uint32_t)_mm_movemask_epi8(_mm_cmpeq_epi8(_mm_subs_epu8(b, tb), zero));
+	return ~(lo | hi << 16);
 }
 
-__attribute__((target("avx2"))) static int halftone_avx2(const uint8_t *canvas, uint32_t rows,
-							   const struct halftone_table *t, uint8_t *out)
+HALFTONE_BY_ROWS(halftone_sse2, __attribute__((target("sse2"))), row_sse2)
+
+__attribute__((target("avx2"))) static inline uint32_t row_avx2(const uint8_t *row, const uint8_t *thr)
 {
-	const __m256i zero = _mm256_setzero_si256();
-	uint32_t any = 0;
-	memset(out, 0, VOLUME_TILE_BYTES);
-	for (; rows; rows &= rows - 1) {
-		uint32_t y = (uint32_t)__builtin_ctz(rows);
-		__m256i th = _mm256_loadu_si256((const __m256i *)t->thr[y & 15]);
-		for (int c = 0; c < 3; c++) {
-			const uint8_t *row = canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES;
-			__m256i a = _mm256_loadu_si256((const __m256i *)row);
-			uint32_t word = ~(uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, th), zero));
-			put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);
-			any |= word;
-		}
-	}
-	return any != 0;
+	__m256i a = _mm256_loadu_si256((const __m256i *)row);
+	__m256i th = _mm256_loadu_si256((const __m256i *)thr);
+	return ~(uint32_t)_mm256_movemask_epi8(_mm256_cmpeq_epi8(_mm256_subs_epu8(a, th), _mm256_setzero_si256()));
 }
+
+HALFTONE_BY_ROWS(halftone_avx2, __attribute__((target("avx2"))), row_avx2)
 
 /* Two rows at a time: rows y and y + 1 (y even) are 64 contiguous bytes in
  * the canvas and in the table. */
