@@ -10,20 +10,34 @@
 
 #define KEY_NONE UINT32_MAX
 
+/* The first primitive and first point item of a draw. */
+struct draw_base {
+	uint64_t prim, point;
+};
+
+/* A record and its sort key (KEY_NONE: unused). */
+struct stage_prim {
+	struct bin_prim rec;
+	uint32_t key;
+};
+
+struct stage_point {
+	struct bin_point rec;
+	uint32_t key;
+};
+
 struct bin_work {
 	const struct scene *scene;
 	unsigned threads;
 	uint64_t prim_items, point_items;
-	uint64_t *prim_base, *point_base; /* per draw: first item of the draw */
-	size_t draw_cap;
+	struct draw_base *base; /* per draw */
+	size_t base_cap;
 	/* Two staging entries per item (a primitive or point may need two
 	 * records); unused ones have key KEY_NONE. */
-	struct bin_prim *stage_prims;
-	uint32_t *prim_keys;
-	size_t prim_stage_cap;
-	struct bin_point *stage_points;
-	uint32_t *point_keys;
-	size_t point_stage_cap;
+	struct stage_prim *stage_prims;
+	size_t stage_prims_cap;
+	struct stage_point *stage_points;
+	size_t stage_points_cap;
 	uint32_t *hist;      /* threads x (prim keys + point keys) */
 	size_t hist_cap;
 	size_t prim_cap, point_cap; /* of the sorted arrays */
@@ -69,12 +83,9 @@ void bin_finish(struct bin_set *b)
 {
 	struct bin_work *w = b->work;
 	if (w) {
-		free(w->prim_base);
-		free(w->point_base);
+		free(w->base);
 		free(w->stage_prims);
-		free(w->prim_keys);
 		free(w->stage_points);
-		free(w->point_keys);
 		free(w->hist);
 		free(w);
 	}
@@ -154,67 +165,64 @@ static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool n
 	return *len < N;
 }
 
-static uint32_t prim_key(const struct bin_set *b, struct bin_prim *p, uint32_t first, uint32_t count)
+static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t first, uint32_t count)
 {
 	if (count >= b->images) {
 		first = 0;
 		count = b->images;
 	}
-	p->first = (uint16_t)first;
-	p->count = (uint16_t)count;
-	return ceil_log2(count) * b->images + first;
+	s->rec.first = (uint16_t)first;
+	s->rec.count = (uint16_t)count;
+	s->key = ceil_log2(count) * b->images + first;
 }
 
-/* Records (one or two) of one segment or triangle; returns keys in k. */
+/* Records (one or two) of one segment or triangle. */
 static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const float *xyz, int n,
-			 struct bin_prim *out, uint32_t *k)
+			 struct stage_prim *out)
 {
 	double t[3][3];
-	k[0] = k[1] = KEY_NONE;
+	out[0].key = out[1].key = KEY_NONE;
 	for (int i = 0; i < n; i++)
 		if (!transform(d->transform, xyz + 3 * i, t[i]))
 			return; /* NaN or infinite: nothing sensible to light */
-	struct bin_prim *p = &out[0];
+	struct bin_prim *p = &out[0].rec;
 	for (int i = 0; i < n; i++)
 		for (int j = 0; j < 3; j++)
 			p->v[i][j] = (float)t[i][j];
 	p->nverts = (uint8_t)n;
 	memcpy(p->rgb, d->rgb, 3);
-	uint32_t M = b->images, first, len;
+	uint32_t M = b->images, first, len, bf, bl;
 	if (!prim_arc(b, (const float (*)[3])p->v, n, false, &first, &len)) {
-		k[0] = prim_key(b, p, 0, M);
+		prim_key(b, &out[0], 0, M);
 	} else if (b->geom.mirrored) {
-		k[0] = prim_key(b, p, first % M, len); /* both lobes fold onto M images */
+		prim_key(b, &out[0], first % M, len); /* both lobes fold onto M images */
+	} else if (!prim_arc(b, (const float (*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
+		prim_key(b, &out[0], 0, M);
 	} else {
-		uint32_t bf, bl;
-		if (!prim_arc(b, (const float (*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
-			k[0] = prim_key(b, p, 0, M);
-			return;
-		}
-		out[1] = *p;
-		k[0] = prim_key(b, &out[0], first, len);
-		k[1] = prim_key(b, &out[1], bf, bl);
+		out[1].rec = *p;
+		prim_key(b, &out[0], first, len);
+		prim_key(b, &out[1], bf, bl);
 	}
 }
 
-static uint32_t point_key(const struct bin_set *b, const double p[3], uint32_t k, const uint8_t rgb[3],
-			  struct bin_point *out)
+static void point_key(const struct bin_set *b, const double p[3], uint32_t k, const uint8_t rgb[3],
+		      struct stage_point *s)
 {
 	const struct geometry *g = &b->geom;
-	out->u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
-	out->v = (uint16_t)geometry_row(g, p[1]);
-	memcpy(out->rgb, rgb, 3);
-	out->pad = 0;
-	return k;
+	s->rec.u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
+	s->rec.v = (uint16_t)geometry_row(g, p[1]);
+	memcpy(s->rec.rgb, rgb, 3);
+	s->rec.pad = 0;
+	s->key = k;
 }
 
 /* A point lights one voxel in each lobe's image (DESIGN.md section 3); on a
  * mirrored device both usually fold onto one volume image. */
 static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz,
-			  struct bin_point *out, uint32_t *k)
+			  struct stage_point *out)
 {
 	double p[3];
-	k[0] = k[1] = KEY_NONE;
+	out[0].key = out[1].key = KEY_NONE;
 	if (!transform(d->transform, xyz, p))
 		return;
 	const struct geometry *g = &b->geom;
@@ -229,9 +237,9 @@ static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, c
 	} else {
 		back = (front + N / 2) % N;
 	}
-	k[0] = point_key(b, p, front % M, d->rgb, &out[0]);
+	point_key(b, p, front % M, d->rgb, &out[0]);
 	if (back % M != front % M)
-		k[1] = point_key(b, p, back % M, d->rgb, &out[1]);
+		point_key(b, p, back % M, d->rgb, &out[1]);
 }
 
 /* ---- the parallel build ---- */
@@ -246,24 +254,34 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 }
 
 /* Calls fn for every item of one kind (points or not) in [c.lo, c.hi). */
+#define BASE_(db, points) ((points) ? (db).point : (db).prim)
 #define FOR_ITEMS(b, points, c, d, nv, i, body)                                                  \
 	do {                                                                                     \
 		const struct bin_work *w_ = (b)->work;                                            \
-		const uint64_t *base_ = (points) ? w_->point_base : w_->prim_base;                \
+		const struct draw_base *base_ = w_->base;                                          \
 		for (uint32_t di_ = 0; di_ < w_->scene->draw_count; di_++) {                      \
 			const struct scene_draw *d = &w_->scene->draws[di_];                       \
 			int nv = draw_verts(d);                                                    \
 			if (nv == 0 || !d->xyz || (nv == 1) != (points))                           \
 				continue;                                                          \
 			uint64_t n_ = d->count / (uint32_t)nv;                                     \
-			uint64_t lo_ = base_[di_] > (c).lo ? base_[di_] : (c).lo;                   \
-			uint64_t hi_ = base_[di_] + n_ < (c).hi ? base_[di_] + n_ : (c).hi;         \
+			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;                   \
+			uint64_t hi_ = BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi;         \
 			for (uint64_t i = lo_; i < hi_; i++) {                                     \
-				const float *xyz_ = d->xyz + (i - base_[di_]) * (uint64_t)nv * 3;   \
+				const float *xyz_ = d->xyz + (i - BASE_(base_[di_], points)) * (uint64_t)nv * 3;   \
 				body                                                               \
 			}                                                                          \
 		}                                                                                  \
 	} while (0)
+
+/* Adds the keys of a staged pair to a histogram. */
+static inline void count_keys(uint32_t *hist, uint32_t k0, uint32_t k1)
+{
+	if (k0 != KEY_NONE)
+		hist[k0]++;
+	if (k1 != KEY_NONE)
+		hist[k1]++;
+}
 
 static void count_job(void *arg, unsigned t)
 {
@@ -273,22 +291,15 @@ static void count_job(void *arg, unsigned t)
 	uint32_t *hist = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	FOR_ITEMS(b, false, c, d, nv, i, {
-		uint32_t *k = &w->prim_keys[2 * i];
-		bin_one_prim(b, d, xyz_, nv, &w->stage_prims[2 * i], k);
-		if (k[0] != KEY_NONE)
-			hist[k[0]]++;
-		if (k[1] != KEY_NONE)
-			hist[k[1]]++;
+		struct stage_prim *s = &w->stage_prims[2 * i];
+		bin_one_prim(b, d, xyz_, nv, s);
+		count_keys(hist, s[0].key, s[1].key);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
 	FOR_ITEMS(b, true, c, d, nv, i, {
-		uint32_t *k = &w->point_keys[2 * i];
-		bin_one_point(b, d, xyz_, &w->stage_points[2 * i], k);
-		if (k[0] != KEY_NONE)
-			hist[pk + k[0]]++;
-		if (k[1] != KEY_NONE)
-			hist[pk + k[1]]++;
-		(void)nv;
+		struct stage_point *s = &w->stage_points[2 * i];
+		bin_one_point(b, d, xyz_, s);
+		count_keys(hist + pk, s[0].key, s[1].key);
 	});
 }
 
@@ -301,13 +312,13 @@ static void scatter_job(void *arg, unsigned t)
 	uint32_t pk = prim_keys(b);
 	uint32_t *off = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
-	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
-		if (w->prim_keys[i] != KEY_NONE)
-			b->prims[off[w->prim_keys[i]]++] = w->stage_prims[i];
+	for (const struct stage_prim *s = &w->stage_prims[2 * c.lo]; s < &w->stage_prims[2 * c.hi]; s++)
+		if (s->key != KEY_NONE)
+			b->prims[off[s->key]++] = s->rec;
 	c = chunk_of(w->point_items, w->threads, t);
-	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
-		if (w->point_keys[i] != KEY_NONE)
-			b->points[off[pk + w->point_keys[i]]++] = w->stage_points[i];
+	for (const struct stage_point *s = &w->stage_points[2 * c.lo]; s < &w->stage_points[2 * c.hi]; s++)
+		if (s->key != KEY_NONE)
+			b->points[off[pk + s->key]++] = s->rec;
 }
 
 static int grow(void **p, size_t *cap, size_t need, size_t size)
@@ -330,10 +341,7 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 {
 	struct bin_work *w = b->work;
 	uint32_t draws = scene ? scene->draw_count : 0;
-	size_t cap = w->draw_cap, n2;
-	int r = grow((void **)&w->prim_base, &cap, draws, sizeof(uint64_t));
-	if (r == 0)
-		r = grow((void **)&w->point_base, &w->draw_cap, draws, sizeof(uint64_t));
+	int r = grow((void **)&w->base, &w->base_cap, draws, sizeof(*w->base));
 	if (r < 0)
 		return r;
 	w->scene = scene;
@@ -342,8 +350,7 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	for (uint32_t i = 0; i < draws; i++) {
 		const struct scene_draw *d = &scene->draws[i];
 		int nv = draw_verts(d);
-		w->prim_base[i] = w->prim_items;
-		w->point_base[i] = w->point_items;
+		w->base[i] = (struct draw_base){ w->prim_items, w->point_items };
 		if (nv == 0 || !d->xyz)
 			continue;
 		if (nv == 1)
@@ -353,16 +360,12 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	}
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
 		return -E2BIG;
-	size_t pcap = w->prim_stage_cap, qcap = w->point_stage_cap, keys = prim_keys(b) + b->images;
-	n2 = 2 * w->prim_items;
-	if ((r = grow((void **)&w->stage_prims, &pcap, n2, sizeof(struct bin_prim))) < 0 ||
-	    (r = grow((void **)&w->prim_keys, &w->prim_stage_cap, n2, sizeof(uint32_t))) < 0)
-		return r;
-	n2 = 2 * w->point_items;
-	if ((r = grow((void **)&w->stage_points, &qcap, n2, sizeof(struct bin_point))) < 0 ||
-	    (r = grow((void **)&w->point_keys, &w->point_stage_cap, n2, sizeof(uint32_t))) < 0)
-		return r;
-	if ((r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
+	size_t keys = prim_keys(b) + b->images;
+	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, 2 * w->prim_items,
+		      sizeof(*w->stage_prims))) < 0 ||
+	    (r = grow((void **)&w->stage_points, &w->stage_points_cap, 2 * w->point_items,
+		      sizeof(*w->stage_points))) < 0 ||
+	    (r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
 		return r;
 	memset(w->hist, 0, threads * keys * sizeof(uint32_t));
 	return 0;
