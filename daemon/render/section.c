@@ -169,48 +169,43 @@ static void edges_cross(const struct edges *e, double y, double *lo, double *hi)
 /* Conservative rasterisation of a convex polygon in (s, y): per row, the s
  * range of the polygon within the row's slab gives the columns. The outer
  * rows' slabs extend to infinity: that is the clamp to the image. */
+/* Widens [*lo, *hi] by coordinate axis (0 s, 1 y) of the vertices whose y
+ * lies in [ylo, yhi]. */
+static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi, int axis, double *lo,
+			     double *hi)
+{
+	for (int i = 0; i < n; i++) {
+		if (q[i][1] >= ylo && q[i][1] <= yhi) {
+			*lo = dmin(*lo, q[i][axis]);
+			*hi = dmax(*hi, q[i][axis]);
+		}
+	}
+}
+
 static void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
 			  const uint8_t rgb[3])
 {
 	const struct geometry *g = &c->geom;
+	double ymin = INFINITY, ymax = -INFINITY;
+	vertices_in_slab(q, n, -INFINITY, INFINITY, 1, &ymin, &ymax);
 	if (n <= 0)
 		return;
-	double ymin = q[0][1], ymax = q[0][1];
-	for (int i = 1; i < n; i++) {
-		ymin = dmin(ymin, q[i][1]);
-		ymax = dmax(ymax, q[i][1]);
-	}
 	double h = g->half_height, row_h = 2.0 * h / g->height;
 	/* A hair of slack so rounding at a row edge never loses a touch. */
 	double eps = 1e-9 * row_h;
 	uint32_t v0 = geometry_row(g, ymax), v1 = geometry_row(g, ymin);
-	if (v0 == v1) {
-		/* One row (most small primitives): the polygon is inside the
-		 * row's slab, so its columns run from its least to its
-		 * greatest s. */
-		double lo = q[0][0], hi = q[0][0];
-		for (int i = 1; i < n; i++) {
-			lo = dmin(lo, q[i][0]);
-			hi = dmax(hi, q[i][0]);
-		}
-		section_span(c, v0, geometry_column(g, lo), geometry_column(g, hi), rgb);
-		return;
-	}
 	/* Per row, the polygon's s range inside the slab comes from its
 	 * vertices in the slab and its edges' crossings of the slab's two
-	 * lines (s is linear along an edge). */
+	 * lines (s is linear along an edge). The outer rows' slabs are open,
+	 * so a polygon in one row (most small primitives) needs no edges. */
 	struct edges e;
-	edges_init(&e, q, n);
+	if (v1 > v0)
+		edges_init(&e, q, n);
 	for (uint32_t v = v0; v <= v1; v++) {
 		double yhi = v == v0 ? INFINITY : h - v * row_h + eps;
 		double ylo = v == v1 ? -INFINITY : h - (v + 1) * row_h - eps;
 		double lo = INFINITY, hi = -INFINITY;
-		for (int i = 0; i < n; i++) {
-			if (q[i][1] >= ylo && q[i][1] <= yhi) {
-				lo = dmin(lo, q[i][0]);
-				hi = dmax(hi, q[i][0]);
-			}
-		}
+		vertices_in_slab(q, n, ylo, yhi, 0, &lo, &hi);
 		if (v != v0)
 			edges_cross(&e, yhi, &lo, &hi);
 		if (v != v1)
