@@ -1,0 +1,14 @@
+/* The framing layer (wire.h) names the protocol's error codes without the
+ * generated header; the build fails if the two ever disagree. */
+#include "spindle-protocol.h"
+#include "wire.h"
+
+#define SAME(a, b) _Static_assert((int)(a) == (int)(b), #a " != " #b)
+SAME(PROTO_ERR_OBJECT, PROTO_DISPLAY_ERROR_INVALID_OBJECT);
+SAME(PROTO_ERR_METHOD, PROTO_DISPLAY_ERROR_INVALID_METHOD);
+SAME(PROTO_ERR_MESSAGE, PROTO_DISPLAY_ERROR_INVALID_MESSAGE);
+SAME(PROTO_ERR_VALUE, PROTO_DISPLAY_ERROR_INVALID_VALUE);
+SAME(PROTO_ERR_FD, PROTO_DISPLAY_ERROR_BAD_FD);
+SAME(PROTO_ERR_QUOTA, PROTO_DISPLAY_ERROR_QUOTA);
+SAME(PROTO_ERR_VERSION, PROTO_DISPLAY_ERROR_VERSION);
+SAME(PROTO_ERR_NO_MEMORY, PROTO_DISPLAY_ERROR_NO_MEMORY);
