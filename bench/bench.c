@@ -60,7 +60,12 @@ static const char *fmt_num(char *buf, size_t size, double v)
 static int variant_open(struct variant *v, const struct geometry *g)
 {
 	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd };
-	v->r = render_cpu_create_opts(g, &o);
+	struct render_gl_options gl = { .backend = v->gl, .naive = v->naive, .no_fallback = true };
+	v->r = v->gl[0] ? render_gl_create(g, &gl) : render_cpu_create_opts(g, &o);
+	if (!v->r && v->gl[0]) {
+		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name, strerror(errno));
+		return -1;
+	}
 	if (!v->r) {
 		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name,
 			errno == ENOENT ? "halftone variant unknown or not runnable on this CPU"

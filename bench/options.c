@@ -17,7 +17,8 @@ static void usage(FILE *f)
 		"  --list               list the scenes and exit\n"
 		"  --profile NAME       device profile (default perspecta)\n"
 		"  --variants LIST      renderer variants, comma separated (default cpu,%s):\n"
-		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512]\n"
+		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512], egl[-naive],\n"
+		"                       osmesa[-naive]\n"
 		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
 		"  --warmup N           warm-up volumes before measuring (default 2)\n"
@@ -34,9 +35,20 @@ static void usage(FILE *f)
 bool variant_parse(const char *spec, struct variant *v)
 {
 	memset(v, 0, sizeof(*v));
-	if (strncmp(spec, "cpu", 3) != 0 || strlen(spec) >= sizeof(v->name))
+	if (strlen(spec) >= sizeof(v->name))
 		return false;
 	snprintf(v->name, sizeof(v->name), "%s", spec);
+	static const char *const gl[] = { "egl", "osmesa" };
+	for (size_t i = 0; i < sizeof(gl) / sizeof(gl[0]); i++) {
+		size_t n = strlen(gl[i]);
+		if (strncmp(spec, gl[i], n) == 0 && (!spec[n] || !strcmp(spec + n, "-naive"))) {
+			snprintf(v->gl, sizeof(v->gl), "%s", gl[i]);
+			v->naive = spec[n] != '\0';
+			return true;
+		}
+	}
+	if (strncmp(spec, "cpu", 3) != 0)
+		return false;
 	snprintf(v->simd, sizeof(v->simd), "auto");
 	const char *p = spec + 3;
 	if (*p == '-' && p[1] >= '1' && p[1] <= '9') {

@@ -14,12 +14,14 @@
 #define MAX_VARIANTS 16
 #define MAX_SCENES 64
 
-/* A CPU renderer variant, "cpu[-<N>t][-<simd>]", and, while it runs, its
- * renderer and output volume. */
+/* A renderer variant, "cpu[-<N>t][-<simd>]" or "egl|osmesa[-naive]", and,
+ * while it runs, its renderer and output volume. */
 struct variant {
 	char name[32];
 	unsigned threads; /* 0: one per core */
 	char simd[16];    /* "auto", "scalar", ... */
+	char gl[8];       /* GL backend ("egl", "osmesa"), "" for the CPU */
+	bool naive;       /* the GL baseline pipeline */
 	struct renderer *r;
 	struct volume *out;
 };

@@ -3,13 +3,31 @@
 #include <errno.h>
 #include <string.h>
 
+#include "log.h"
+
 struct renderer *render_create(const char *name, const struct geometry *geom, unsigned threads)
 {
-	/* "auto" will prefer a GL renderer once one is built; CPU until then. */
-	if (!name || strcmp(name, "auto") == 0 || strcmp(name, "cpu") == 0)
-		return render_cpu_create(geom, threads);
-	errno = ENOENT;
-	return NULL;
+	struct render_gl_options gl = { .backend = name, .threads = threads };
+	if (name && (!strcmp(name, "egl") || !strcmp(name, "osmesa")))
+		return render_gl_create(geom, &gl);
+	if (name && strcmp(name, "auto") != 0 && strcmp(name, "cpu") != 0) {
+		errno = ENOENT;
+		return NULL;
+	}
+	if (!name || !strcmp(name, "auto")) {
+		/* EGL on a hardware GPU. Without one, EGL and OSMesa run on
+		 * llvmpipe, which docs/performance.md measures slower than
+		 * the CPU renderer on every scene: take the CPU renderer. */
+		gl.backend = "egl";
+		struct renderer *r = render_gl_create(geom, &gl);
+		if (r && render_gl_is_hardware(r))
+			return r;
+		if (r)
+			log_info("renderer auto: no hardware GPU (EGL gives a software rasterizer): "
+				 "the CPU renderer is faster here");
+		render_destroy(r);
+	}
+	return render_cpu_create(geom, threads);
 }
 
 /* Entry (x, y) of the 16x16 Bayer index matrix, 0..255: bit-reverse of the

@@ -8,6 +8,8 @@
 #ifndef SPINDLE_RENDER_H
 #define SPINDLE_RENDER_H
 
+#include <stdbool.h>
+
 #include "geometry.h"
 #include "scene.h"
 #include "volume.h"
@@ -37,6 +39,18 @@ struct render_cpu_options {
 			      * CPU runs), "scalar", "sse2", "avx2", "avx512" */
 };
 
+/* GL renderer options (render_gl.c). */
+struct render_gl_options {
+	const char *backend; /* "egl" (default when NULL) or "osmesa" */
+	unsigned threads;    /* binning threads; 0 = one per core */
+	unsigned batch;      /* images per batch; 0 = as many as fit, at most 16 */
+	bool naive;          /* the unoptimised baseline the benchmark measures
+			      * against: every primitive in every image, RGBA
+			      * read back whole, halftone and pack on the CPU */
+	bool no_fallback;    /* a GL failure fails the render instead of
+			      * handing over to the CPU renderer (tests) */
+};
+
 struct renderer_impl {
 	const char *name;
 	/* Renders scene into out (same geometry as the renderer; out is
@@ -60,7 +74,18 @@ struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads
 struct renderer *render_cpu_create_opts(const struct geometry *geom,
 					const struct render_cpu_options *opts);
 
-/* Picks a renderer by name ("cpu", "auto"), with up to threads worker
+/* The GL pipeline of DESIGN.md section 5 on an EGL (surfaceless or device)
+ * or OSMesa context. NULL + errno when there is no usable context or a
+ * shader does not build (ENOENT: backend not built in), with a log line
+ * saying why. After a failure while rendering (context lost, GL error, a
+ * fence that never signals) it logs why and renders on the CPU from then
+ * on, unless opts->no_fallback. */
+struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts);
+/* Whether r is a GL renderer on a hardware GPU (not llvmpipe or another
+ * software rasterizer). */
+bool render_gl_is_hardware(const struct renderer *r);
+
+/* Picks a renderer by name ("cpu", "egl", "osmesa", "auto"), with up to threads worker
  * threads (0 = one per core). NULL + errno (ENOENT: unknown or not built)
  * on failure. */
 struct renderer *render_create(const char *name, const struct geometry *geom, unsigned threads);

@@ -1,0 +1,228 @@
+/* GLSL ES 3.10 sources of the GL renderers (render_gl.c): one source for
+ * OpenGL ES 3.1 and, through ARB_ES3_1_compatibility, desktop OpenGL 4.5.
+ *
+ * Conventions shared with render_gl.c:
+ * - primitives live in an R32UI texture as the raw words of struct bin_prim
+ *   (11 words each: 9 vertex floats, nverts | rgb << 8, first | count << 16),
+ *   word i at texel (i & (width - 1), i >> log2 width);
+ * - slice coordinates of a point p for image k: s = p . d_k, y, and
+ *   t = p . n_k with n_k = (-sin theta_k, 0, cos theta_k);
+ * - image k's bow tie is |t| <= |s| tau, tau = tan(pi / N). */
+#ifndef SPINDLE_GL_SHADERS_H
+#define SPINDLE_GL_SHADERS_H
+
+#define GL_SHADER_VERSION "#version 310 es\n"
+
+/* Uniforms of the drawing programs, set per image:
+ * u_image: k (volume image), M (images per volume), 1 = every primitive
+ *          (the naive pipeline), log2 of the primitive texture's width;
+ * u_slice: cos theta_k, sin theta_k, tau, b (the hyperbolic bias);
+ * u_eye:   De (eye distance), T (slab half thickness), jitter x, y (NDC);
+ * u_frame: 1 / h, 2 / W, 2 / H, 0. */
+#define GL_SHADER_COMMON                                                                          \
+	"precision highp float;\n"                                                                \
+	"precision highp int;\n"                                                                  \
+	"precision highp usampler2D;\n"                                                           \
+	"uniform uvec4 u_image;\n"                                                                \
+	"uniform vec4 u_slice;\n"                                                                 \
+	"uniform vec4 u_eye;\n"                                                                   \
+	"uniform vec4 u_frame;\n"                                                                 \
+	"uniform usampler2D u_prims;\n"                                                           \
+	"const vec4 OFF = vec4(2.0, 2.0, 2.0, 1.0); /* outside the clip volume */\n"              \
+	"uint word(uint i) {\n"                                                                   \
+	"	uint mask = (1u << u_image.w) - 1u;\n"                                            \
+	"	return texelFetch(u_prims, ivec2(int(i & mask), int(i >> u_image.w)), 0).r;\n"    \
+	"}\n"                                                                                     \
+	"vec3 vertex_syt(uint base, uint j) { /* (s, y, t) of vertex j */\n"                      \
+	"	vec3 p = uintBitsToFloat(uvec3(word(base + 3u * j), word(base + 3u * j + 1u),\n"  \
+	"				       word(base + 3u * j + 2u)));\n"                     \
+	"	return vec3(p.x * u_slice.x + p.z * u_slice.y, p.y, p.z * u_slice.x - p.x * u_slice.y);\n" \
+	"}\n"                                                                                     \
+	"bool in_image(uint w10) { /* the binned range holds image k */\n"                        \
+	"	uint first = w10 & 0xffffu, k = u_image.x;\n"                                     \
+	"	uint off = k >= first ? k - first : k + u_image.y - first;\n"                     \
+	"	return u_image.z != 0u || off < (w10 >> 16);\n"                                   \
+	"}\n"                                                                                     \
+	"/* Perspective from the eye at De n_k, image plane t = 0, so points on the slice\n"     \
+	" * plane map exactly; z spans the slab |t| <= T; jit shifts the sample grid. */\n"      \
+	"vec4 project(vec3 syt, vec2 jit) {\n"                                                    \
+	"	float de = u_eye.x, t = syt.z, w = de - t;\n"                                     \
+	"	return vec4(syt.x * de + jit.x * w, -syt.y * de * u_frame.x + jit.y * w,\n"      \
+	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                  \
+	"}\n"
+
+/* Faces: each triangle drawn whole with the slice's projection; the
+ * fragment shader keeps what lies in the bow tie, widened near the axis to
+ * the hyperbola t^2 <= (s tau)^2 + b^2 so the thin wedges leave no dead
+ * zone. Vertex n is vertex n % 3 of primitive n / 3. */
+static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
+	"out vec2 v_st;\n"
+	"flat out uint v_rgb;\n"
+	"void main() {\n"
+	"	uint p = uint(gl_VertexID) / 3u, j = uint(gl_VertexID) % 3u, base = p * 11u;\n"
+	"	uint w9 = word(base + 9u), w10 = word(base + 10u);\n"
+	"	v_rgb = w9 >> 8;\n"
+	"	v_st = vec2(0.0);\n"
+	"	gl_Position = OFF;\n"
+	"	if ((w9 & 255u) != 3u || !in_image(w10))\n"
+	"		return;\n"
+	"	vec3 syt = vertex_syt(base, j);\n"
+	"	v_st = syt.xz;\n"
+	"	gl_Position = project(syt, u_eye.zw);\n"
+	"}\n";
+
+static const char gl_face_fs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n"
+	"uniform vec4 u_slice;\n"
+	"in vec2 v_st;\n"
+	"flat in uint v_rgb;\n"
+	"out vec4 o_colour;\n"
+	"void main() {\n"
+	"	float s = v_st.x * u_slice.z, t = v_st.y;\n"
+	"	if (t * t > s * s + u_slice.w * u_slice.w)\n"
+	"		discard;\n"
+	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
+	"}\n";
+
+/* Sections, drawn as GL_LINES and again as GL_POINTS (so a section shorter
+ * than a pixel still lights one): vertices 4p .. 4p + 3 of primitive p are
+ * two segments. A triangle's first segment is its section with the slice
+ * plane t = 0, which lights it where it is edge-on to the projection; a
+ * segment primitive is clipped exactly to each lobe, one segment each. */
+static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
+	"flat out uint v_rgb;\n"
+	"void main() {\n"
+	"	uint p = uint(gl_VertexID) >> 2, j = uint(gl_VertexID) & 3u, base = p * 11u;\n"
+	"	uint w9 = word(base + 9u), w10 = word(base + 10u);\n"
+	"	v_rgb = w9 >> 8;\n"
+	"	gl_PointSize = 1.0;\n"
+	"	gl_Position = OFF;\n"
+	"	if (!in_image(w10))\n"
+	"		return;\n"
+	"	vec3 a = vertex_syt(base, 0u), b = vertex_syt(base, 1u);\n"
+	"	if ((w9 & 255u) == 3u) {\n"
+	"		if (j >= 2u)\n"
+	"			return;\n"
+	"		vec3 c = vertex_syt(base, 2u), q[3];\n"
+	"		vec3 e0[3] = vec3[3](a, b, c), e1[3] = vec3[3](b, c, a);\n"
+	"		int n = 0;\n"
+	"		for (int i = 0; i < 3; i++) {\n"
+	"			vec3 u = e0[i], v = e1[i];\n"
+	"			if ((u.z >= 0.0) != (v.z >= 0.0)) {\n"
+	"				q[n] = mix(u, v, u.z / (u.z - v.z));\n"
+	"				q[n].z = 0.0;\n"
+	"				n++;\n"
+	"			}\n"
+	"		}\n"
+	"		if (n == 2)\n"
+	"			gl_Position = project(q[j], vec2(0.0));\n"
+	"		return;\n"
+	"	}\n"
+	"	/* Lobe L: t - L tau s <= 0 and -t - L tau s <= 0, for lambda in [0, 1]. */\n"
+	"	float L = j < 2u ? 1.0 : -1.0, tau = u_slice.z, lo = 0.0, hi = 1.0;\n"
+	"	vec2 g0 = vec2(a.z - L * tau * a.x, -a.z - L * tau * a.x);\n"
+	"	vec2 g1 = vec2(b.z - L * tau * b.x, -b.z - L * tau * b.x);\n"
+	"	for (int i = 0; i < 2; i++) {\n"
+	"		if (g0[i] > 0.0 && g1[i] > 0.0)\n"
+	"			return;\n"
+	"		if (g0[i] > 0.0)\n"
+	"			lo = max(lo, g0[i] / (g0[i] - g1[i]));\n"
+	"		else if (g1[i] > 0.0)\n"
+	"			hi = min(hi, g0[i] / (g0[i] - g1[i]));\n"
+	"	}\n"
+	"	if (lo > hi)\n"
+	"		return;\n"
+	"	gl_Position = project(mix(a, b, (j & 1u) == 0u ? lo : hi), vec2(0.0));\n"
+	"}\n";
+
+/* Points arrive reduced by the binning to the voxel (u, v) of this image:
+ * attribute x = u | v << 16, y = rgb. */
+static const char gl_point_vs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n"
+	"uniform vec4 u_frame;\n"
+	"layout(location = 0) in uvec2 a_point;\n"
+	"flat out uint v_rgb;\n"
+	"void main() {\n"
+	"	vec2 uv = vec2(uvec2(a_point.x & 0xffffu, a_point.x >> 16)) + 0.5;\n"
+	"	gl_Position = vec4(uv * u_frame.yz - 1.0, 0.0, 1.0);\n"
+	"	gl_PointSize = 1.0;\n"
+	"	v_rgb = a_point.y;\n"
+	"}\n";
+
+static const char gl_flat_fs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n"
+	"flat in uint v_rgb;\n"
+	"out vec4 o_colour;\n"
+	"void main() {\n"
+	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
+	"}\n";
+
+/* Halftone + pack + find non-empty tiles: one work group per 32x32 tile of
+ * one image of the batch, one invocation per tile row. Each row becomes
+ * three words (R, G, B; pixel x of the row at bit x ^ 7, so the little-endian
+ * bytes read MSB = leftmost); a tile with any bit set takes the next slot
+ * of the output (atomic counter) and records its number there.
+ * u_pack: first volume image of the batch, W, H, tiles per image. */
+static const char gl_pack_cs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n"
+	"layout(local_size_x = 32) in;\n"
+	"uniform highp sampler2D u_colour;\n"
+	"uniform uvec4 u_pack;\n"
+	"layout(std430, binding = 0) writeonly buffer Tiles { uint tiles[]; };\n"
+	"layout(std430, binding = 1) buffer Ids { uint count; uint ids[]; };\n"
+	"shared uint any_bits;\n"
+	"shared uint slot;\n"
+	"uint bayer16(uint x, uint y) {\n"
+	"	uint a = (x ^ y) & 15u, b = y & 15u, v = 0u;\n"
+	"	for (uint i = 0u; i < 4u; i++) {\n"
+	"		v |= ((a >> i) & 1u) << (7u - 2u * i);\n"
+	"		v |= ((b >> i) & 1u) << (6u - 2u * i);\n"
+	"	}\n"
+	"	return v;\n"
+	"}\n"
+	"void main() {\n"
+	"	uint r = gl_LocalInvocationID.x, tx = gl_WorkGroupID.x, ty = gl_WorkGroupID.y;\n"
+	"	uint b = gl_WorkGroupID.z, k = u_pack.x + b, phase = (k * 97u) & 255u;\n"
+	"	uint v = ty * 32u + r;\n"
+	"	if (r == 0u)\n"
+	"		any_bits = 0u;\n"
+	"	memoryBarrierShared();\n"
+	"	barrier();\n"
+	"	uvec3 bits = uvec3(0u);\n"
+	"	if (v < u_pack.z) {\n"
+	"		uint thr[16];\n"
+	"		for (uint i = 0u; i < 16u; i++)\n"
+	"			thr[i] = (bayer16(i, (v + (phase >> 4)) & 15u) * 255u) >> 8;\n"
+	"		int row = int(b * u_pack.z + v);\n"
+	"		uint n = min(32u, u_pack.y - tx * 32u);\n"
+	"		for (uint x = 0u; x < n; x++) {\n"
+	"			uint u = tx * 32u + x;\n"
+	"			uvec3 c = uvec3(texelFetch(u_colour, ivec2(int(u), row), 0).rgb * 255.0 + 0.5);\n"
+	"			uint t = thr[(u + phase) & 15u], bit = 1u << (x ^ 7u);\n"
+	"			bits.r |= c.r > t ? bit : 0u;\n"
+	"			bits.g |= c.g > t ? bit : 0u;\n"
+	"			bits.b |= c.b > t ? bit : 0u;\n"
+	"		}\n"
+	"	}\n"
+	"	atomicOr(any_bits, bits.r | bits.g | bits.b);\n"
+	"	memoryBarrierShared();\n"
+	"	barrier();\n"
+	"	if (r == 0u)\n"
+	"		slot = any_bits != 0u ? atomicAdd(count, 1u) : 0xffffffffu;\n"
+	"	memoryBarrierShared();\n"
+	"	barrier();\n"
+	"	uint s = slot;\n"
+	"	if (s == 0xffffffffu)\n"
+	"		return;\n"
+	"	tiles[s * 96u + r] = bits.r;\n"
+	"	tiles[s * 96u + 32u + r] = bits.g;\n"
+	"	tiles[s * 96u + 64u + r] = bits.b;\n"
+	"	if (r == 0u)\n"
+	"		ids[s] = b * u_pack.w + ty * gl_NumWorkGroups.x + tx;\n"
+	"}\n";
+
+#endif

@@ -1,0 +1,679 @@
+/* The GL renderer: DESIGN.md section 5's pipeline on OpenGL ES 3.1 (EGL) or
+ * desktop OpenGL 4.5 (OSMesa), with the same GLSL.
+ *
+ * Per volume the CPU bins the scene exactly as the CPU renderer does
+ * (bin.h) and uploads the sorted primitives as a texture of raw words and
+ * the per-image points as a vertex buffer. Images are drawn in batches into
+ * an RGBA8 atlas (image b of a batch at rows b*H .. b*H + H - 1), each with
+ * its own projection: a thin slab around the slice plane, seen in
+ * perspective from a point on the slice's normal, its sample grid jittered
+ * by a sub-pixel offset fixed per image. Per image, only the runs of
+ * primitives binned to it are drawn, three ways (gl_shaders.h): faces
+ * clipped to the bow tie in the fragment shader, sections with the slice
+ * plane as lines and points, and the binned points. Colours combine by MAX
+ * blending. A compute pass then halftones, packs and finds the non-empty
+ * tiles of the whole batch, compacting them into a buffer the CPU maps once
+ * the batch's fence has signalled, while the GPU draws the next batch; only
+ * non-empty packed tiles cross back. */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "bin.h"
+#include "gl_context.h"
+#include "gl_shaders.h"
+#include "log.h"
+#include "pool.h"
+#include "render.h"
+
+_Static_assert(sizeof(struct bin_prim) == 11 * 4, "the shaders read bin_prim as 11 words");
+_Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
+
+#define GL_MAX_BATCH 16
+#define GL_PRIM_WORDS 11
+#define GL_TILE_WORDS (VOLUME_TILE_BYTES / 4)
+/* Half thickness of the slab the fragment shader accepts on the axis, in
+ * pixels: the b of t^2 <= (s tau)^2 + b^2. */
+#define GL_AXIS_BIAS_PX 0.25
+/* Jitter of the sample grid, at most this many pixels either way. */
+#define GL_JITTER_PX 0.25
+#define GL_FENCE_TIMEOUT_NS 5000000000ull
+
+enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_COUNT };
+static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims" };
+
+struct gl_program {
+	GLuint id;
+	GLint uni[UNI_COUNT];
+};
+
+/* One batch's output on the GPU, and what the CPU needs to collect it. */
+struct gl_batch {
+	GLuint tiles, ids; /* shader storage: packed tiles; count + tile ids */
+	GLsync fence;      /* NULL when nothing is pending */
+	uint32_t first, n; /* volume images first .. first + n - 1 */
+};
+
+struct render_gl {
+	struct renderer base;
+	struct render_gl_options opts;
+	struct gl_context ctx;
+	bool have_ctx;
+	enum gl_fault fault;
+	const struct gl_api *gl;
+	struct pool *pool;
+	struct bin_set bins;
+	uint32_t images, tiles_per_image, batch;
+
+	struct gl_program face, section, point;
+	GLuint pack;
+	GLint pack_uni;
+	GLuint vao, point_buf, prim_tex, atlas, fbo;
+	uint32_t tex_width, tex_shift, tex_rows;
+	size_t point_buf_bytes;
+	struct gl_batch out[2];
+	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
+	uint8_t *rgba;      /* naive: one image read back */
+	uint64_t volumes;
+
+	struct renderer *cpu; /* after a failure: the CPU renderer takes over */
+	/* Per render: */
+	struct volume *vol;
+	uint64_t wait_ns, copy_ns;
+};
+
+static GLuint compile(struct render_gl *r, GLenum type, const char *src, const char *what)
+{
+	const struct gl_api *gl = r->gl;
+	GLuint s = gl->CreateShader(type);
+	/* The injected fault: a source that cannot compile. */
+	const char *srcs[2] = { src, r->fault == GL_FAULT_SHADER ? "#error fault injected by SPINDLE_GL_FAULT\n" : "" };
+	gl->ShaderSource(s, 2, srcs, NULL);
+	gl->CompileShader(s);
+	GLint ok = 0;
+	gl->GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+	if (!ok) {
+		char msg[512] = "";
+		gl->GetShaderInfoLog(s, sizeof(msg), NULL, msg);
+		log_warn("GL renderer: the %s shader does not compile: %s", what, msg);
+		gl->DeleteShader(s);
+		return 0;
+	}
+	return s;
+}
+
+/* Links the given shaders (0 = compile failed) into a program; 0 on error. */
+static GLuint link_program(struct render_gl *r, const GLuint *shaders, int n, const char *what)
+{
+	const struct gl_api *gl = r->gl;
+	GLuint p = 0;
+	bool ok = true;
+	for (int i = 0; i < n; i++)
+		ok = ok && shaders[i];
+	if (ok) {
+		p = gl->CreateProgram();
+		for (int i = 0; i < n; i++)
+			gl->AttachShader(p, shaders[i]);
+		gl->LinkProgram(p);
+		GLint linked = 0;
+		gl->GetProgramiv(p, GL_LINK_STATUS, &linked);
+		if (!linked) {
+			char msg[512] = "";
+			gl->GetProgramInfoLog(p, sizeof(msg), NULL, msg);
+			log_warn("GL renderer: the %s program does not link: %s", what, msg);
+			gl->DeleteProgram(p);
+			p = 0;
+		}
+	}
+	for (int i = 0; i < n; i++)
+		if (shaders[i])
+			gl->DeleteShader(shaders[i]);
+	return p;
+}
+
+static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs,
+			const char *what)
+{
+	GLuint sh[2] = { compile(r, GL_VERTEX_SHADER, vs, what), compile(r, GL_FRAGMENT_SHADER, fs, what) };
+	p->id = link_program(r, sh, 2, what);
+	if (!p->id)
+		return -EINVAL;
+	for (int i = 0; i < UNI_COUNT; i++)
+		p->uni[i] = r->gl->GetUniformLocation(p->id, uniform_names[i]);
+	return 0;
+}
+
+static int build_programs(struct render_gl *r)
+{
+	int e = draw_program(r, &r->face, gl_face_vs, gl_face_fs, "face");
+	if (e == 0)
+		e = draw_program(r, &r->section, gl_section_vs, gl_flat_fs, "section");
+	if (e == 0)
+		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, "point");
+	if (e == 0) {
+		GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, "pack");
+		r->pack = link_program(r, &cs, 1, "pack");
+		if (!r->pack)
+			return -EINVAL;
+		r->pack_uni = r->gl->GetUniformLocation(r->pack, "u_pack");
+	}
+	return e;
+}
+
+static GLuint make_texture(const struct gl_api *gl, GLenum fmt, uint32_t w, uint32_t h)
+{
+	GLuint t;
+	gl->GenTextures(1, &t);
+	gl->BindTexture(GL_TEXTURE_2D, t);
+	gl->TexStorage2D(GL_TEXTURE_2D, 1, fmt, (GLsizei)w, (GLsizei)h);
+	gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+	gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+	return t;
+}
+
+static int create_objects(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	GLint max_tex = 0;
+	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
+	if ((uint32_t)max_tex < g->width || (uint32_t)max_tex < g->height) {
+		log_warn("GL renderer: images of %ux%u exceed GL_MAX_TEXTURE_SIZE %d", g->width, g->height, max_tex);
+		return -E2BIG;
+	}
+	uint32_t fit = (uint32_t)max_tex / g->height;
+	r->batch = r->opts.batch ? r->opts.batch : GL_MAX_BATCH;
+	if (r->batch > fit)
+		r->batch = fit;
+	if (r->batch > GL_MAX_BATCH)
+		r->batch = GL_MAX_BATCH;
+	if (r->batch > r->images)
+		r->batch = r->images;
+	if (r->opts.naive)
+		r->batch = 1;
+	for (r->tex_shift = 12; (1u << r->tex_shift) > (uint32_t)max_tex; r->tex_shift--)
+		;
+	r->tex_width = 1u << r->tex_shift;
+
+	gl->GenVertexArrays(1, &r->vao);
+	gl->BindVertexArray(r->vao);
+	gl->GenBuffers(1, &r->point_buf);
+	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
+	gl->VertexAttribIPointer(0, 2, GL_UNSIGNED_INT, sizeof(struct bin_point), NULL);
+	gl->EnableVertexAttribArray(0);
+
+	r->atlas = make_texture(gl, GL_RGBA8, g->width, g->height * r->batch);
+	gl->GenFramebuffers(1, &r->fbo);
+	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+	gl->FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, r->atlas, 0);
+	if (gl->CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+		log_warn("GL renderer: the RGBA8 atlas is not a complete framebuffer");
+		return -ENOTSUP;
+	}
+	size_t tiles = (size_t)r->batch * r->tiles_per_image;
+	for (int i = 0; i < 2; i++) {
+		gl->GenBuffers(1, &r->out[i].tiles);
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].tiles);
+		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(tiles * VOLUME_TILE_BYTES), NULL, GL_STREAM_READ);
+		gl->GenBuffers(1, &r->out[i].ids);
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].ids);
+		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 1) * 4), NULL, GL_STREAM_READ);
+	}
+	r->slot_of = malloc(tiles * sizeof(*r->slot_of));
+	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
+	if (!r->slot_of || (r->opts.naive && !r->rgba))
+		return -ENOMEM;
+
+	gl->ClearColor(0, 0, 0, 0);
+	gl->Enable(GL_BLEND);
+	gl->BlendEquation(GL_MAX);
+	gl->PixelStorei(GL_PACK_ALIGNMENT, 1);
+	gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+	GLenum err = gl->GetError();
+	if (err != GL_NO_ERROR) {
+		log_warn("GL renderer: GL error 0x%x while setting up", err);
+		return -EIO;
+	}
+	return 0;
+}
+
+static void destroy_gl(struct render_gl *r)
+{
+	if (!r->have_ctx)
+		return;
+	const struct gl_api *gl = r->gl;
+	if (gl_context_bind(&r->ctx) == 0) {
+		for (int i = 0; i < 2; i++) {
+			if (r->out[i].fence)
+				gl->DeleteSync(r->out[i].fence);
+			gl->DeleteBuffers(1, &r->out[i].tiles);
+			gl->DeleteBuffers(1, &r->out[i].ids);
+		}
+		gl->DeleteFramebuffers(1, &r->fbo);
+		gl->DeleteTextures(1, &r->atlas);
+		gl->DeleteTextures(1, &r->prim_tex);
+		gl->DeleteBuffers(1, &r->point_buf);
+		gl->DeleteVertexArrays(1, &r->vao);
+		gl->DeleteProgram(r->face.id);
+		gl->DeleteProgram(r->section.id);
+		gl->DeleteProgram(r->point.id);
+		gl->DeleteProgram(r->pack);
+	}
+	gl_context_destroy(&r->ctx);
+	r->have_ctx = false;
+	memset(r->out, 0, sizeof(r->out));
+}
+
+/* Uploads the binned primitives (as raw words) and points. */
+static int upload(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	const struct bin_set *b = &r->bins;
+	uint64_t words = (uint64_t)b->prim_count * GL_PRIM_WORDS;
+	uint64_t rows = (words + r->tex_width - 1) / r->tex_width;
+	GLint max_tex = 0;
+	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
+	if (rows > (uint64_t)max_tex)
+		return -E2BIG;
+	if (rows < 1)
+		rows = 1;
+	if (rows > r->tex_rows) {
+		uint64_t cap = rows + rows / 2 < (uint64_t)max_tex ? rows + rows / 2 : (uint64_t)max_tex;
+		gl->DeleteTextures(1, &r->prim_tex);
+		r->prim_tex = make_texture(gl, GL_R32UI, r->tex_width, (uint32_t)cap);
+		r->tex_rows = (uint32_t)cap;
+	}
+	gl->ActiveTexture(GL_TEXTURE0);
+	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
+	const uint32_t *w = (const uint32_t *)b->prims;
+	uint64_t full = words / r->tex_width, rest = words % r->tex_width;
+	if (full)
+		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)r->tex_width, (GLsizei)full, GL_RED_INTEGER,
+				  GL_UNSIGNED_INT, w);
+	if (rest)
+		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, (GLint)full, (GLsizei)rest, 1, GL_RED_INTEGER, GL_UNSIGNED_INT,
+				  w + full * r->tex_width);
+	size_t pbytes = (size_t)b->point_count * sizeof(struct bin_point);
+	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
+	gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(pbytes ? pbytes : 8), pbytes ? b->points : NULL, GL_STREAM_DRAW);
+	return 0;
+}
+
+static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, uint32_t k)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	double theta = geometry_image_angle(g, k);
+	double tau = tan(M_PI / g->images_per_rev);
+	double bias = GL_AXIS_BIAS_PX * 2.0 / g->width;
+	double slab = tau + bias;
+	/* The eye far enough that perspective moves no point of the slab by
+	 * more than a quarter pixel. */
+	double eye = 2.0 * g->width * slab + slab;
+	/* R2 low-discrepancy sequence: neighbouring images sample far apart. */
+	double jx = fmod(0.5 + 0.7548776662466927 * k, 1.0) - 0.5;
+	double jy = fmod(0.5 + 0.5698402909980532 * k, 1.0) - 0.5;
+	gl->Uniform4ui(p->uni[UNI_IMAGE], k, r->images, r->opts.naive ? 1u : 0u, r->tex_shift);
+	gl->Uniform4f(p->uni[UNI_SLICE], (float)cos(theta), (float)sin(theta), (float)tau, (float)bias);
+	gl->Uniform4f(p->uni[UNI_EYE], (float)eye, (float)slab, (float)(2 * GL_JITTER_PX * jx * 2.0 / g->width),
+		      (float)(2 * GL_JITTER_PX * jy * 2.0 / g->height));
+	gl->Uniform4f(p->uni[UNI_FRAME], (float)(1.0 / g->half_height), 2.0f / (float)g->width,
+		      2.0f / (float)g->height, 0.0f);
+	gl->Uniform1i(p->uni[UNI_PRIMS], 0);
+}
+
+/* Draws primitives [begin, end) of b->prims with program p, vertices
+ * per primitive each, in mode. */
+static void draw_runs(struct render_gl *r, const struct bin_run *runs, unsigned n, GLenum mode, unsigned verts)
+{
+	for (unsigned i = 0; i < n; i++)
+		if (runs[i].end > runs[i].begin)
+			r->gl->DrawArrays(mode, (GLint)(runs[i].begin * verts), (GLsizei)((runs[i].end - runs[i].begin) * verts));
+}
+
+static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	const struct bin_set *b = &r->bins;
+	struct bin_run runs[2 * BIN_MAX_CLASSES];
+	unsigned n;
+	if (r->opts.naive) {
+		runs[0] = (struct bin_run){ 0, b->prim_count };
+		n = 1;
+	} else {
+		n = bin_runs(b, k, runs);
+	}
+	gl->Viewport(0, (GLint)(slot * g->height), (GLsizei)g->width, (GLsizei)g->height);
+	gl->UseProgram(r->face.id);
+	set_image_uniforms(r, &r->face, k);
+	draw_runs(r, runs, n, GL_TRIANGLES, 3);
+	gl->UseProgram(r->section.id);
+	set_image_uniforms(r, &r->section, k);
+	draw_runs(r, runs, n, GL_LINES, 4);
+	draw_runs(r, runs, n, GL_POINTS, 4);
+	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
+	if (p1 > p0) {
+		gl->UseProgram(r->point.id);
+		set_image_uniforms(r, &r->point, k);
+		gl->DrawArrays(GL_POINTS, (GLint)p0, (GLsizei)(p1 - p0));
+	}
+}
+
+/* Queues halftone + pack of the batch just drawn into out. */
+static void pack_batch(struct render_gl *r, struct gl_batch *out)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	static const uint32_t zero = 0;
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, out->ids);
+	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, 4, &zero);
+	gl->UseProgram(r->pack);
+	gl->ActiveTexture(GL_TEXTURE1);
+	gl->BindTexture(GL_TEXTURE_2D, r->atlas);
+	gl->Uniform1i(gl->GetUniformLocation(r->pack, "u_colour"), 1);
+	gl->Uniform4ui(r->pack_uni, out->first, g->width, g->height, r->tiles_per_image);
+	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, out->tiles);
+	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out->ids);
+	gl->DispatchCompute((g->width + VOLUME_TILE - 1) / VOLUME_TILE, (g->height + VOLUME_TILE - 1) / VOLUME_TILE,
+			    out->n);
+	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+	out->fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+	gl->Flush();
+	gl->ActiveTexture(GL_TEXTURE0);
+}
+
+/* Waits for a packed batch and appends its tiles, in tile order, to the
+ * volume. */
+static int collect_batch(struct render_gl *r, struct gl_batch *out)
+{
+	const struct gl_api *gl = r->gl;
+	if (!out->fence)
+		return 0;
+	uint64_t t0 = (uint64_t)now_ns();
+	GLenum w = gl->ClientWaitSync(out->fence, GL_SYNC_FLUSH_COMMANDS_BIT, GL_FENCE_TIMEOUT_NS);
+	gl->DeleteSync(out->fence);
+	out->fence = NULL;
+	uint64_t t1 = (uint64_t)now_ns();
+	r->wait_ns += t1 - t0;
+	if (w != GL_ALREADY_SIGNALED && w != GL_CONDITION_SATISFIED) {
+		log_error("GL renderer: a batch did not finish within %llu s",
+			  (unsigned long long)(GL_FENCE_TIMEOUT_NS / 1000000000ull));
+		return -ETIMEDOUT;
+	}
+	uint32_t tiles = out->n * r->tiles_per_image;
+	gl->BindBuffer(GL_COPY_READ_BUFFER, out->ids);
+	const uint32_t *ids = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
+	if (!ids)
+		return -EIO;
+	uint32_t count = ids[0];
+	int err = count > tiles ? -EIO : 0;
+	for (uint32_t t = 0; t < tiles; t++)
+		r->slot_of[t] = -1;
+	for (uint32_t i = 0; err == 0 && i < count; i++) {
+		if (ids[1 + i] >= tiles || r->slot_of[ids[1 + i]] >= 0)
+			err = -EIO;
+		else
+			r->slot_of[ids[1 + i]] = (int32_t)i;
+	}
+	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
+	if (err < 0) {
+		log_error("GL renderer: the pack pass returned a corrupt tile list");
+		return err;
+	}
+	if (count == 0)
+		return 0;
+	gl->BindBuffer(GL_COPY_READ_BUFFER, out->tiles);
+	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES),
+						 GL_MAP_READ_BIT);
+	if (!data)
+		return -EIO;
+	for (uint32_t i = 0; err == 0 && i < out->n; i++) {
+		const int32_t *slot = r->slot_of + (size_t)i * r->tiles_per_image;
+		for (uint32_t t = 0; err == 0 && t < r->tiles_per_image; t++) {
+			if (slot[t] < 0)
+				continue;
+			uint8_t *dst = volume_image_next(r->vol, out->first + i);
+			if (!dst) {
+				err = -ENOMEM;
+				break;
+			}
+			memcpy(dst, data + (size_t)slot[t] * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
+			err = volume_image_push(r->vol, out->first + i, t);
+		}
+	}
+	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
+	r->base.stats.tiles += count;
+	r->copy_ns += (uint64_t)now_ns() - t1;
+	return err;
+}
+
+/* The naive pipeline's back end: the whole RGBA image read back,
+ * halftoned and packed on the CPU. */
+static int readback_naive(struct render_gl *r, uint32_t k)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	uint64_t t0 = (uint64_t)now_ns();
+	gl->ReadPixels(0, 0, (GLsizei)g->width, (GLsizei)g->height, GL_RGBA, GL_UNSIGNED_BYTE, r->rgba);
+	uint64_t t1 = (uint64_t)now_ns();
+	r->wait_ns += t1 - t0;
+	uint8_t tile[VOLUME_TILE_BYTES];
+	for (uint32_t t = 0; t < r->tiles_per_image; t++) {
+		uint32_t tx = t % r->vol->tiles_x, ty = t / r->vol->tiles_x;
+		memset(tile, 0, sizeof(tile));
+		for (uint32_t y = 0; y < VOLUME_TILE && ty * VOLUME_TILE + y < g->height; y++) {
+			uint32_t v = ty * VOLUME_TILE + y;
+			for (uint32_t x = 0; x < VOLUME_TILE && tx * VOLUME_TILE + x < g->width; x++) {
+				uint32_t u = tx * VOLUME_TILE + x;
+				const uint8_t *px = r->rgba + ((size_t)v * g->width + u) * 4;
+				uint8_t thr = render_dither_threshold(k, u, v);
+				for (int c = 0; c < 3; c++)
+					if (px[c] > thr)
+						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));
+			}
+		}
+		int e = volume_image_append(r->vol, k, t, tile);
+		if (e < 0)
+			return e;
+	}
+	r->copy_ns += (uint64_t)now_ns() - t1;
+	return 0;
+}
+
+static int render_batches(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+	gl->BindVertexArray(r->vao);
+	gl->ActiveTexture(GL_TEXTURE0);
+	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
+	int err = 0, cur = 0;
+	for (uint32_t first = 0; first < r->images && err == 0; first += r->batch) {
+		uint32_t n = r->images - first < r->batch ? r->images - first : r->batch;
+		gl->Clear(GL_COLOR_BUFFER_BIT);
+		for (uint32_t i = 0; i < n; i++)
+			draw_image(r, first + i, i);
+		if (r->opts.naive) {
+			err = readback_naive(r, first);
+			continue;
+		}
+		struct gl_batch *out = &r->out[cur];
+		out->first = first;
+		out->n = n;
+		pack_batch(r, out);
+		/* Collect the previous batch while this one runs. */
+		cur ^= 1;
+		err = collect_batch(r, &r->out[cur]);
+	}
+	for (int i = 0; i < 2; i++) {
+		int e = collect_batch(r, &r->out[cur ^ 1]);
+		err = err ? err : e;
+		cur ^= 1;
+	}
+	return err;
+}
+
+/* Checks that the context survived the render. */
+static int check_context(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	if (r->fault == GL_FAULT_LOST && r->volumes >= 1) {
+		log_error("GL renderer: context lost (GL_GUILTY_CONTEXT_RESET, fault injected by SPINDLE_GL_FAULT)");
+		return -ENOTRECOVERABLE;
+	}
+	if (r->ctx.robust && gl->GetGraphicsResetStatus) {
+		GLenum s = gl->GetGraphicsResetStatus();
+		if (s != GL_NO_ERROR) {
+			log_error("GL renderer: context lost (reset status 0x%x)", s);
+			return -ENOTRECOVERABLE;
+		}
+	}
+	GLenum e = gl->GetError();
+	if (e != GL_NO_ERROR) {
+		log_error("GL renderer: GL error 0x%x", e);
+		return -EIO;
+	}
+	return 0;
+}
+
+static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out);
+
+/* Hands over to the CPU renderer for good. */
+static int fall_back(struct render_gl *r, int why)
+{
+	log_error("GL renderer (%s) failed (%s): falling back to the CPU renderer", gl_backend_name(r->ctx.backend),
+		  strerror(-why));
+	destroy_gl(r);
+	r->cpu = render_cpu_create(&r->base.geom, r->opts.threads);
+	if (!r->cpu) {
+		log_error("CPU renderer: %s", strerror(errno));
+		return -errno;
+	}
+	return 0;
+}
+
+static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
+{
+	struct render_gl *r = (struct render_gl *)base;
+	if (r->cpu) {
+		int e = render_volume(r->cpu, scene, out);
+		r->base.stats = r->cpu->stats;
+		return e;
+	}
+	uint64_t t0 = (uint64_t)now_ns();
+	memset(&r->base.stats, 0, sizeof(r->base.stats));
+	volume_clear(out);
+	r->vol = out;
+	r->wait_ns = r->copy_ns = 0;
+	int err = bin_build(&r->bins, scene, r->pool);
+	uint64_t t1 = (uint64_t)now_ns();
+	if (err < 0)
+		return err;
+	err = gl_context_bind(&r->ctx);
+	if (err == 0)
+		err = upload(r);
+	if (err == 0)
+		err = render_batches(r);
+	if (err == 0 || err == -ETIMEDOUT || err == -EIO) {
+		int lost = check_context(r);
+		err = lost < 0 ? lost : err;
+	}
+	gl_context_unbind(&r->ctx);
+	r->volumes++;
+	if (err == -ENOMEM || err == -E2BIG || r->opts.no_fallback)
+		return err; /* this scene only, or the caller wants to know */
+	if (err < 0) {
+		err = fall_back(r, err);
+		return err < 0 ? err : render_gl_volume(base, scene, out);
+	}
+	struct render_stats *st = &r->base.stats;
+	st->total_ns = (uint64_t)now_ns() - t0;
+	st->bin_ns = t1 - t0;
+	st->pack_ns = r->wait_ns + r->copy_ns;
+	st->raster_ns = st->total_ns - st->bin_ns - st->pack_ns;
+	st->prims = r->bins.prim_count + r->bins.point_count;
+	st->threads = pool_workers(r->pool);
+	if (r->opts.naive)
+		st->tiles = volume_tile_count(out);
+	return 0;
+}
+
+static void render_gl_destroy(struct renderer *base)
+{
+	struct render_gl *r = (struct render_gl *)base;
+	destroy_gl(r);
+	render_destroy(r->cpu);
+	bin_finish(&r->bins);
+	pool_destroy(r->pool);
+	free(r->slot_of);
+	free(r->rgba);
+	free(r);
+}
+
+static const struct renderer_impl render_egl_impl = { "egl", render_gl_volume, render_gl_destroy };
+static const struct renderer_impl render_osmesa_impl = { "osmesa", render_gl_volume, render_gl_destroy };
+
+bool render_gl_is_hardware(const struct renderer *base)
+{
+	if (base->impl != &render_egl_impl && base->impl != &render_osmesa_impl)
+		return false;
+	const struct render_gl *r = (const struct render_gl *)base;
+	return r->have_ctx && r->ctx.hardware;
+}
+
+struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts)
+{
+	static const struct render_gl_options defaults = { 0 };
+	if (!opts)
+		opts = &defaults;
+	enum gl_backend backend;
+	if (!opts->backend || !strcmp(opts->backend, "egl")) {
+		backend = GL_BACKEND_EGL;
+	} else if (!strcmp(opts->backend, "osmesa")) {
+		backend = GL_BACKEND_OSMESA;
+	} else {
+		errno = ENOENT;
+		return NULL;
+	}
+	struct render_gl *r = calloc(1, sizeof(*r));
+	if (!r) {
+		errno = ENOMEM;
+		return NULL;
+	}
+	r->base.impl = backend == GL_BACKEND_EGL ? &render_egl_impl : &render_osmesa_impl;
+	r->base.geom = *geom;
+	r->opts = *opts;
+	r->fault = gl_fault_from_env();
+	r->images = geometry_images_per_volume(geom);
+	int err = bin_init(&r->bins, geom);
+	r->tiles_per_image = ((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) *
+			     ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	unsigned threads = opts->threads ? opts->threads : cores > 0 ? (unsigned)cores : 1;
+	r->pool = err == 0 ? pool_create(threads) : NULL;
+	if (err == 0 && !r->pool)
+		err = -ENOMEM;
+	if (err == 0) {
+		err = gl_context_create(&r->ctx, backend);
+		r->have_ctx = true;
+	}
+	r->gl = &r->ctx.gl;
+	if (err == 0)
+		err = build_programs(r);
+	if (err == 0)
+		err = create_objects(r);
+	if (err == 0)
+		log_info("GL renderer %s: %s, %s%s, %u images per batch", gl_backend_name(backend), r->ctx.renderer,
+			 r->ctx.version, r->ctx.hardware ? "" : " (software)", r->batch);
+	if (r->have_ctx)
+		gl_context_unbind(&r->ctx);
+	if (err < 0) {
+		render_gl_destroy(&r->base);
+		errno = -err;
+		return NULL;
+	}
+	return &r->base;
+}
