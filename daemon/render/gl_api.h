@@ -29,6 +29,7 @@
 	X(void, UseProgram, (GLuint p))                                                              \
 	X(GLint, GetUniformLocation, (GLuint p, const GLchar *name))                                 \
 	X(void, Uniform1i, (GLint loc, GLint v))                                                     \
+	X(void, Uniform1ui, (GLint loc, GLuint v))                                                   \
 	X(void, Uniform4f, (GLint loc, GLfloat a, GLfloat b, GLfloat c, GLfloat d))                 \
 	X(void, Uniform4ui, (GLint loc, GLuint a, GLuint b, GLuint c, GLuint d))                    \
 	X(void, GenTextures, (GLsizei n, GLuint *t))                                                 \
@@ -69,6 +70,9 @@
 	X(void, BlendEquation, (GLenum mode))                                                        \
 	X(void, DrawArrays, (GLenum mode, GLint first, GLsizei count))                               \
 	X(void, DispatchCompute, (GLuint x, GLuint y, GLuint z))                                     \
+	X(void, DispatchComputeIndirect, (GLintptr offset))                                          \
+	X(void, BindImageTexture, (GLuint unit, GLuint t, GLint level, GLboolean layered,           \
+				   GLint layer, GLenum access, GLenum fmt))                          \
 	X(void, MemoryBarrier, (GLbitfield barriers))                                                \
 	X(GLsync, FenceSync, (GLenum cond, GLbitfield flags))                                        \
 	X(GLenum, ClientWaitSync, (GLsync s, GLbitfield flags, GLuint64 timeout))                    \

@@ -51,6 +51,18 @@
 	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                  \
 	"}\n"
 
+/* Fragment shaders mark the 32x32 tile their pixel lies in, so that only
+ * touched tiles are packed (and cleared again). u_tile: tiles across, tiles
+ * per image, this image's slot in the batch, H. */
+#define GL_SHADER_MARK                                                                            \
+	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"                      \
+	"uniform uvec4 u_tile;\n"                                                                 \
+	"void mark() {\n"                                                                         \
+	"	uvec2 p = uvec2(gl_FragCoord.xy);\n"                                              \
+	"	p.y -= u_tile.z * u_tile.w;\n"                                                    \
+	"	touched[u_tile.z * u_tile.y + (p.y >> 5) * u_tile.x + (p.x >> 5)] = 1u;\n"       \
+	"}\n"
+
 /* Faces: each triangle drawn whole with the slice's projection; the
  * fragment shader keeps what lies in the bow tie, widened near the axis to
  * the hyperbola t^2 <= (s tau)^2 + b^2 so the thin wedges leave no dead
@@ -74,6 +86,7 @@ static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 static const char gl_face_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
 	"precision highp int;\n"
+	GL_SHADER_MARK
 	"uniform vec4 u_slice;\n"
 	"in vec2 v_st;\n"
 	"flat in uint v_rgb;\n"
@@ -82,6 +95,7 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 	"	float s = v_st.x * u_slice.z, t = v_st.y;\n"
 	"	if (t * t > s * s + u_slice.w * u_slice.w)\n"
 	"		discard;\n"
+	"	mark();\n"
 	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
 	"}\n";
 
@@ -154,26 +168,49 @@ static const char gl_point_vs[] = GL_SHADER_VERSION
 static const char gl_flat_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
 	"precision highp int;\n"
+	GL_SHADER_MARK
 	"flat in uint v_rgb;\n"
 	"out vec4 o_colour;\n"
 	"void main() {\n"
+	"	mark();\n"
 	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
 	"}\n";
 
-/* Halftone + pack + find non-empty tiles: one work group per 32x32 tile of
- * one image of the batch, one invocation per tile row. Each row becomes
- * three words (R, G, B; pixel x of the row at bit x ^ 7, so the little-endian
- * bytes read MSB = leftmost); a tile with any bit set takes the next slot
- * of the output (atomic counter) and records its number there.
+/* The touched tiles of a batch as a list, which is also the indirect
+ * dispatch of the pack pass (groups_x = list length; the CPU sets
+ * groups_y = groups_z = 1 and groups_x = 0 first). Clears the marks.
+ * u_count: tiles in the batch. */
+static const char gl_list_cs[] = GL_SHADER_VERSION
+	"precision highp int;\n"
+	"layout(local_size_x = 64) in;\n"
+	"uniform uint u_count;\n"
+	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"
+	"layout(std430, binding = 3) buffer List { uint groups_x, groups_y, groups_z; uint list[]; };\n"
+	"void main() {\n"
+	"	uint i = gl_GlobalInvocationID.x;\n"
+	"	if (i < u_count && touched[i] != 0u) {\n"
+	"		touched[i] = 0u;\n"
+	"		list[atomicAdd(groups_x, 1u)] = i;\n"
+	"	}\n"
+	"}\n";
+
+/* Halftone + pack + find non-empty tiles: one work group per touched tile
+ * (from the list), one invocation per tile row. Each row becomes three
+ * words (R, G, B; pixel x of the row at bit x ^ 7, so the little-endian
+ * bytes read MSB = leftmost) and is zeroed in the atlas for the next batch;
+ * a tile with any bit set takes the next slot of the output (atomic
+ * counter) and records its number (slot in batch * tiles per image + t).
  * u_pack: first volume image of the batch, W, H, tiles per image. */
 static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
 	"precision highp int;\n"
 	"layout(local_size_x = 32) in;\n"
 	"uniform highp sampler2D u_colour;\n"
+	"layout(rgba8, binding = 0) writeonly uniform highp image2D u_atlas;\n"
 	"uniform uvec4 u_pack;\n"
 	"layout(std430, binding = 0) writeonly buffer Tiles { uint tiles[]; };\n"
 	"layout(std430, binding = 1) buffer Ids { uint count; uint ids[]; };\n"
+	"layout(std430, binding = 3) readonly buffer List { uint groups_x, groups_y, groups_z; uint list[]; };\n"
 	"shared uint any_bits;\n"
 	"shared uint slot;\n"
 	"uint bayer16(uint x, uint y) {\n"
@@ -185,8 +222,9 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"	return v;\n"
 	"}\n"
 	"void main() {\n"
-	"	uint r = gl_LocalInvocationID.x, tx = gl_WorkGroupID.x, ty = gl_WorkGroupID.y;\n"
-	"	uint b = gl_WorkGroupID.z, k = u_pack.x + b, phase = (k * 97u) & 255u;\n"
+	"	uint id = list[gl_WorkGroupID.x], tiles_x = (u_pack.y + 31u) >> 5;\n"
+	"	uint b = id / u_pack.w, t = id % u_pack.w, tx = t % tiles_x, ty = t / tiles_x;\n"
+	"	uint r = gl_LocalInvocationID.x, k = u_pack.x + b, phase = (k * 97u) & 255u;\n"
 	"	uint v = ty * 32u + r;\n"
 	"	if (r == 0u)\n"
 	"		any_bits = 0u;\n"
@@ -200,12 +238,13 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"		int row = int(b * u_pack.z + v);\n"
 	"		uint n = min(32u, u_pack.y - tx * 32u);\n"
 	"		for (uint x = 0u; x < n; x++) {\n"
-	"			uint u = tx * 32u + x;\n"
-	"			uvec3 c = uvec3(texelFetch(u_colour, ivec2(int(u), row), 0).rgb * 255.0 + 0.5);\n"
-	"			uint t = thr[(u + phase) & 15u], bit = 1u << (x ^ 7u);\n"
-	"			bits.r |= c.r > t ? bit : 0u;\n"
-	"			bits.g |= c.g > t ? bit : 0u;\n"
-	"			bits.b |= c.b > t ? bit : 0u;\n"
+	"			ivec2 at = ivec2(int(tx * 32u + x), row);\n"
+	"			uvec3 c = uvec3(texelFetch(u_colour, at, 0).rgb * 255.0 + 0.5);\n"
+	"			imageStore(u_atlas, at, vec4(0.0));\n"
+	"			uint th = thr[(tx * 32u + x + phase) & 15u], bit = 1u << (x ^ 7u);\n"
+	"			bits.r |= c.r > th ? bit : 0u;\n"
+	"			bits.g |= c.g > th ? bit : 0u;\n"
+	"			bits.b |= c.b > th ? bit : 0u;\n"
 	"		}\n"
 	"	}\n"
 	"	atomicOr(any_bits, bits.r | bits.g | bits.b);\n"
@@ -222,7 +261,7 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"	tiles[s * 96u + 32u + r] = bits.g;\n"
 	"	tiles[s * 96u + 64u + r] = bits.b;\n"
 	"	if (r == 0u)\n"
-	"		ids[s] = b * u_pack.w + ty * gl_NumWorkGroups.x + tx;\n"
+	"		ids[s] = id;\n"
 	"}\n";
 
 #endif

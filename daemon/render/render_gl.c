@@ -41,8 +41,8 @@ _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two wo
 #define GL_JITTER_PX 0.25
 #define GL_FENCE_TIMEOUT_NS 5000000000ull
 
-enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_COUNT };
-static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims" };
+enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_TILE, UNI_COUNT };
+static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims", "u_tile" };
 
 struct gl_program {
 	GLuint id;
@@ -68,9 +68,11 @@ struct render_gl {
 	uint32_t images, tiles_per_image, batch;
 
 	struct gl_program face, section, point;
-	GLuint pack;
-	GLint pack_uni;
+	GLuint pack, list;
+	GLint pack_uni, pack_colour, list_count;
 	GLuint vao, point_buf, prim_tex, atlas, fbo;
+	GLuint touched, tile_list; /* tile marks of a batch; touched tiles as a list */
+	bool atlas_dirty;          /* a render stopped half-way: clear first */
 	uint32_t tex_width, tex_shift, tex_rows;
 	size_t point_buf_bytes;
 	struct gl_batch out[2];
@@ -152,14 +154,18 @@ static int build_programs(struct render_gl *r)
 		e = draw_program(r, &r->section, gl_section_vs, gl_flat_fs, "section");
 	if (e == 0)
 		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, "point");
-	if (e == 0) {
-		GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, "pack");
-		r->pack = link_program(r, &cs, 1, "pack");
-		if (!r->pack)
-			return -EINVAL;
-		r->pack_uni = r->gl->GetUniformLocation(r->pack, "u_pack");
-	}
-	return e;
+	if (e < 0)
+		return e;
+	GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, "pack");
+	r->pack = link_program(r, &cs, 1, "pack");
+	cs = compile(r, GL_COMPUTE_SHADER, gl_list_cs, "list");
+	r->list = link_program(r, &cs, 1, "list");
+	if (!r->pack || !r->list)
+		return -EINVAL;
+	r->pack_uni = r->gl->GetUniformLocation(r->pack, "u_pack");
+	r->pack_colour = r->gl->GetUniformLocation(r->pack, "u_colour");
+	r->list_count = r->gl->GetUniformLocation(r->list, "u_count");
+	return 0;
 }
 
 static GLuint make_texture(const struct gl_api *gl, GLenum fmt, uint32_t w, uint32_t h)
@@ -182,6 +188,12 @@ static int create_objects(struct render_gl *r)
 	if ((uint32_t)max_tex < g->width || (uint32_t)max_tex < g->height) {
 		log_warn("GL renderer: images of %ux%u exceed GL_MAX_TEXTURE_SIZE %d", g->width, g->height, max_tex);
 		return -E2BIG;
+	}
+	GLint frag_ssbo = 0;
+	gl->GetIntegerv(GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS, &frag_ssbo);
+	if (frag_ssbo < 1) {
+		log_warn("GL renderer: fragment shaders cannot write storage buffers here");
+		return -ENOTSUP;
 	}
 	uint32_t fit = (uint32_t)max_tex / g->height;
 	r->batch = r->opts.batch ? r->opts.batch : GL_MAX_BATCH;
@@ -221,6 +233,17 @@ static int create_objects(struct render_gl *r)
 		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].ids);
 		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 1) * 4), NULL, GL_STREAM_READ);
 	}
+	uint32_t *zero = calloc(tiles + 3, 4);
+	if (!zero)
+		return -ENOMEM;
+	gl->GenBuffers(1, &r->touched);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->touched);
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(tiles * 4), zero, GL_DYNAMIC_COPY);
+	gl->GenBuffers(1, &r->tile_list);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 3) * 4), zero, GL_DYNAMIC_COPY);
+	free(zero);
+	r->atlas_dirty = true;
 	r->slot_of = malloc(tiles * sizeof(*r->slot_of));
 	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
 	if (!r->slot_of || (r->opts.naive && !r->rgba))
@@ -251,6 +274,8 @@ static void destroy_gl(struct render_gl *r)
 			gl->DeleteBuffers(1, &r->out[i].tiles);
 			gl->DeleteBuffers(1, &r->out[i].ids);
 		}
+		gl->DeleteBuffers(1, &r->touched);
+		gl->DeleteBuffers(1, &r->tile_list);
 		gl->DeleteFramebuffers(1, &r->fbo);
 		gl->DeleteTextures(1, &r->atlas);
 		gl->DeleteTextures(1, &r->prim_tex);
@@ -260,6 +285,7 @@ static void destroy_gl(struct render_gl *r)
 		gl->DeleteProgram(r->section.id);
 		gl->DeleteProgram(r->point.id);
 		gl->DeleteProgram(r->pack);
+		gl->DeleteProgram(r->list);
 	}
 	gl_context_destroy(&r->ctx);
 	r->have_ctx = false;
@@ -301,7 +327,7 @@ static int upload(struct render_gl *r)
 	return 0;
 }
 
-static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, uint32_t k)
+static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, uint32_t k, uint32_t slot)
 {
 	const struct gl_api *gl = r->gl;
 	const struct geometry *g = &r->base.geom;
@@ -322,6 +348,7 @@ static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, 
 	gl->Uniform4f(p->uni[UNI_FRAME], (float)(1.0 / g->half_height), 2.0f / (float)g->width,
 		      2.0f / (float)g->height, 0.0f);
 	gl->Uniform1i(p->uni[UNI_PRIMS], 0);
+	gl->Uniform4ui(p->uni[UNI_TILE], r->vol->tiles_x, r->tiles_per_image, slot, g->height);
 }
 
 /* Draws primitives [begin, end) of b->prims with program p, vertices
@@ -348,38 +375,51 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	}
 	gl->Viewport(0, (GLint)(slot * g->height), (GLsizei)g->width, (GLsizei)g->height);
 	gl->UseProgram(r->face.id);
-	set_image_uniforms(r, &r->face, k);
+	set_image_uniforms(r, &r->face, k, slot);
 	draw_runs(r, runs, n, GL_TRIANGLES, 3);
 	gl->UseProgram(r->section.id);
-	set_image_uniforms(r, &r->section, k);
+	set_image_uniforms(r, &r->section, k, slot);
 	draw_runs(r, runs, n, GL_LINES, 4);
 	draw_runs(r, runs, n, GL_POINTS, 4);
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
 		gl->UseProgram(r->point.id);
-		set_image_uniforms(r, &r->point, k);
+		set_image_uniforms(r, &r->point, k, slot);
 		gl->DrawArrays(GL_POINTS, (GLint)p0, (GLsizei)(p1 - p0));
 	}
 }
 
-/* Queues halftone + pack of the batch just drawn into out. */
+/* Queues halftone + pack of the batch just drawn into out: the touched
+ * tiles are listed, then packed (and zeroed in the atlas) by an indirect
+ * dispatch over the list. */
 static void pack_batch(struct render_gl *r, struct gl_batch *out)
 {
 	const struct gl_api *gl = r->gl;
 	const struct geometry *g = &r->base.geom;
-	static const uint32_t zero = 0;
+	static const uint32_t zero = 0, list_head[3] = { 0, 1, 1 };
+	uint32_t tiles = out->n * r->tiles_per_image;
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, out->ids);
 	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, 4, &zero);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
+	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(list_head), list_head);
+	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+	gl->UseProgram(r->list);
+	gl->Uniform1ui(r->list_count, tiles);
+	gl->DispatchCompute((tiles + 63) / 64, 1, 1);
+	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+
 	gl->UseProgram(r->pack);
 	gl->ActiveTexture(GL_TEXTURE1);
 	gl->BindTexture(GL_TEXTURE_2D, r->atlas);
-	gl->Uniform1i(gl->GetUniformLocation(r->pack, "u_colour"), 1);
+	gl->Uniform1i(r->pack_colour, 1);
 	gl->Uniform4ui(r->pack_uni, out->first, g->width, g->height, r->tiles_per_image);
+	gl->BindImageTexture(0, r->atlas, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA8);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, out->tiles);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out->ids);
-	gl->DispatchCompute((g->width + VOLUME_TILE - 1) / VOLUME_TILE, (g->height + VOLUME_TILE - 1) / VOLUME_TILE,
-			    out->n);
-	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+	gl->BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, r->tile_list);
+	gl->DispatchComputeIndirect(0);
+	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+			  GL_SHADER_STORAGE_BARRIER_BIT);
 	out->fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
 	gl->Flush();
 	gl->ActiveTexture(GL_TEXTURE0);
@@ -490,16 +530,33 @@ static int render_batches(struct render_gl *r)
 	gl->BindVertexArray(r->vao);
 	gl->ActiveTexture(GL_TEXTURE0);
 	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
+	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r->touched);
+	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, r->tile_list);
+	if (r->atlas_dirty || r->opts.naive) {
+		/* The pack pass leaves the atlas zero; after a failed render
+		 * it may not be, and the marks may be stale: clear both. */
+		size_t bytes = (size_t)r->batch * r->tiles_per_image * 4;
+		uint32_t *zero = calloc(1, bytes);
+		if (!zero)
+			return -ENOMEM;
+		gl->Clear(GL_COLOR_BUFFER_BIT);
+		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->touched);
+		gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, (GLsizeiptr)bytes, zero);
+		free(zero);
+	}
+	r->atlas_dirty = true;
 	int err = 0, cur = 0;
 	for (uint32_t first = 0; first < r->images && err == 0; first += r->batch) {
 		uint32_t n = r->images - first < r->batch ? r->images - first : r->batch;
-		gl->Clear(GL_COLOR_BUFFER_BIT);
+		if (r->opts.naive)
+			gl->Clear(GL_COLOR_BUFFER_BIT);
 		for (uint32_t i = 0; i < n; i++)
 			draw_image(r, first + i, i);
 		if (r->opts.naive) {
 			err = readback_naive(r, first);
 			continue;
 		}
+		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 		struct gl_batch *out = &r->out[cur];
 		out->first = first;
 		out->n = n;
@@ -513,6 +570,8 @@ static int render_batches(struct render_gl *r)
 		err = err ? err : e;
 		cur ^= 1;
 	}
+	if (err == 0 && !r->opts.naive)
+		r->atlas_dirty = false;
 	return err;
 }
 
@@ -583,7 +642,7 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	}
 	gl_context_unbind(&r->ctx);
 	r->volumes++;
-	if (err == -ENOMEM || err == -E2BIG || r->opts.no_fallback)
+	if (err < 0 && (err == -ENOMEM || err == -E2BIG || r->opts.no_fallback))
 		return err; /* this scene only, or the caller wants to know */
 	if (err < 0) {
 		err = fall_back(r, err);
