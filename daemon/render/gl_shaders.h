@@ -51,16 +51,17 @@
 	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                  \
 	"}\n"
 
-/* Fragment shaders mark the 32x32 tile their pixel lies in, so that only
- * touched tiles are packed (and cleared again). u_tile: tiles across, tiles
- * per image, this image's slot in the batch, H. */
+/* Fragment shaders mark the row of the 32x32 tile their pixel lies in (bit
+ * y % 32 of the tile's word), so that only touched rows of touched tiles
+ * are packed (and cleared again). u_tile: tiles across, tiles per image,
+ * this image's slot in the batch, H. */
 #define GL_SHADER_MARK                                                                            \
 	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"                      \
 	"uniform uvec4 u_tile;\n"                                                                 \
 	"void mark() {\n"                                                                         \
 	"	uvec2 p = uvec2(gl_FragCoord.xy);\n"                                              \
 	"	p.y -= u_tile.z * u_tile.w;\n"                                                    \
-	"	touched[u_tile.z * u_tile.y + (p.y >> 5) * u_tile.x + (p.x >> 5)] = 1u;\n"       \
+	"	atomicOr(touched[u_tile.z * u_tile.y + (p.y >> 5) * u_tile.x + (p.x >> 5)], 1u << (p.y & 31u));\n" \
 	"}\n"
 
 /* Faces: each triangle drawn whole with the slice's projection; the
@@ -176,26 +177,27 @@ static const char gl_flat_fs[] = GL_SHADER_VERSION
 	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
 	"}\n";
 
-/* The touched tiles of a batch as a list, which is also the indirect
- * dispatch of the pack pass (groups_x = list length; the CPU sets
- * groups_y = groups_z = 1 and groups_x = 0 first). Clears the marks.
- * u_count: tiles in the batch. */
+/* The touched tiles of a batch as a list of (tile, row mask), whose header
+ * is also the indirect dispatch of the pack pass (groups_x = list length;
+ * the CPU sets groups_y = groups_z = 1 and groups_x = 0 first). Clears the
+ * marks. u_count: tiles in the batch. */
 static const char gl_list_cs[] = GL_SHADER_VERSION
 	"precision highp int;\n"
 	"layout(local_size_x = 64) in;\n"
 	"uniform uint u_count;\n"
 	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"
-	"layout(std430, binding = 3) buffer List { uint groups_x, groups_y, groups_z; uint list[]; };\n"
+	"layout(std430, binding = 3) buffer List { uint groups_x, groups_y, groups_z; uvec2 list[]; };\n"
 	"void main() {\n"
 	"	uint i = gl_GlobalInvocationID.x;\n"
-	"	if (i < u_count && touched[i] != 0u) {\n"
+	"	uint rows = i < u_count ? touched[i] : 0u;\n"
+	"	if (rows != 0u) {\n"
 	"		touched[i] = 0u;\n"
-	"		list[atomicAdd(groups_x, 1u)] = i;\n"
+	"		list[atomicAdd(groups_x, 1u)] = uvec2(i, rows);\n"
 	"	}\n"
 	"}\n";
 
 /* Halftone + pack + find non-empty tiles: one work group per touched tile
- * (from the list), one invocation per tile row. Each row becomes three
+ * (from the list), one invocation per tile row; untouched rows are zero. Each row becomes three
  * words (R, G, B; pixel x of the row at bit x ^ 7, so the little-endian
  * bytes read MSB = leftmost) and is zeroed in the atlas for the next batch;
  * a tile with any bit set takes the next slot of the output (atomic
@@ -210,7 +212,7 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"uniform uvec4 u_pack;\n"
 	"layout(std430, binding = 0) writeonly buffer Tiles { uint tiles[]; };\n"
 	"layout(std430, binding = 1) buffer Ids { uint count; uint ids[]; };\n"
-	"layout(std430, binding = 3) readonly buffer List { uint groups_x, groups_y, groups_z; uint list[]; };\n"
+	"layout(std430, binding = 3) readonly buffer List { uint groups_x, groups_y, groups_z; uvec2 list[]; };\n"
 	"shared uint any_bits;\n"
 	"shared uint slot;\n"
 	"uint bayer16(uint x, uint y) {\n"
@@ -222,7 +224,8 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"	return v;\n"
 	"}\n"
 	"void main() {\n"
-	"	uint id = list[gl_WorkGroupID.x], tiles_x = (u_pack.y + 31u) >> 5;\n"
+	"	uvec2 entry = list[gl_WorkGroupID.x];\n"
+	"	uint id = entry.x, tiles_x = (u_pack.y + 31u) >> 5;\n"
 	"	uint b = id / u_pack.w, t = id % u_pack.w, tx = t % tiles_x, ty = t / tiles_x;\n"
 	"	uint r = gl_LocalInvocationID.x, k = u_pack.x + b, phase = (k * 97u) & 255u;\n"
 	"	uint v = ty * 32u + r;\n"
@@ -231,7 +234,7 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"	memoryBarrierShared();\n"
 	"	barrier();\n"
 	"	uvec3 bits = uvec3(0u);\n"
-	"	if (v < u_pack.z) {\n"
+	"	if (v < u_pack.z && ((entry.y >> r) & 1u) != 0u) {\n"
 	"		uint thr[16];\n"
 	"		for (uint i = 0u; i < 16u; i++)\n"
 	"			thr[i] = (bayer16(i, (v + (phase >> 4)) & 15u) * 255u) >> 8;\n"

@@ -233,7 +233,8 @@ static int create_objects(struct render_gl *r)
 		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].ids);
 		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 1) * 4), NULL, GL_STREAM_READ);
 	}
-	uint32_t *zero = calloc(tiles + 3, 4);
+	/* The list: a 3-word header padded to 16 bytes, then (tile, rows). */
+	uint32_t *zero = calloc(tiles * 2 + 4, 4);
 	if (!zero)
 		return -ENOMEM;
 	gl->GenBuffers(1, &r->touched);
@@ -241,7 +242,7 @@ static int create_objects(struct render_gl *r)
 	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(tiles * 4), zero, GL_DYNAMIC_COPY);
 	gl->GenBuffers(1, &r->tile_list);
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
-	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 3) * 4), zero, GL_DYNAMIC_COPY);
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles * 2 + 4) * 4), zero, GL_DYNAMIC_COPY);
 	free(zero);
 	r->atlas_dirty = true;
 	r->slot_of = malloc(tiles * sizeof(*r->slot_of));
