@@ -2,9 +2,10 @@
  * OpenGL ES 3.1 and, through ARB_ES3_1_compatibility, desktop OpenGL 4.5.
  *
  * Conventions shared with render_gl.c:
- * - primitives live in an R32UI texture as the raw words of struct bin_prim
- *   (11 words each: 9 vertex floats, nverts | rgb << 8, first | count << 16),
- *   word i at texel (i & (width - 1), i >> log2 width);
+ * - primitives live in an RGBA32UI texture, three texels each: (vertex 0,
+ *   nverts | rgb << 8), (vertex 1, first | count << 16), (vertex 2, 0), the
+ *   words of struct bin_prim rearranged; texel i at (i & (width - 1),
+ *   i >> log2 width);
  * - slice coordinates of a point p for image k: s = p . d_k, y, and
  *   t = p . n_k with n_k = (-sin theta_k, 0, cos theta_k);
  * - image k's bow tie is |t| <= |s| tau, tau = tan(pi / N). */
@@ -29,13 +30,12 @@
 	"uniform vec4 u_frame;\n"                                                                 \
 	"uniform usampler2D u_prims;\n"                                                           \
 	"const vec4 OFF = vec4(2.0, 2.0, 2.0, 1.0); /* outside the clip volume */\n"              \
-	"uint word(uint i) {\n"                                                                   \
+	"uvec4 texel(uint i) {\n"                                                                 \
 	"	uint mask = (1u << u_image.w) - 1u;\n"                                            \
-	"	return texelFetch(u_prims, ivec2(int(i & mask), int(i >> u_image.w)), 0).r;\n"    \
+	"	return texelFetch(u_prims, ivec2(int(i & mask), int(i >> u_image.w)), 0);\n"      \
 	"}\n"                                                                                     \
-	"vec3 vertex_syt(uint base, uint j) { /* (s, y, t) of vertex j */\n"                      \
-	"	vec3 p = uintBitsToFloat(uvec3(word(base + 3u * j), word(base + 3u * j + 1u),\n"  \
-	"				       word(base + 3u * j + 2u)));\n"                     \
+	"vec3 syt(uvec4 t) { /* (s, y, t) of the vertex in texel t */\n"                          \
+	"	vec3 p = uintBitsToFloat(t.xyz);\n"                                               \
 	"	return vec3(p.x * u_slice.x + p.z * u_slice.y, p.y, p.z * u_slice.x - p.x * u_slice.y);\n" \
 	"}\n"                                                                                     \
 	"bool in_image(uint w10) { /* the binned range holds image k */\n"                        \
@@ -72,16 +72,16 @@ static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"out vec2 v_st;\n"
 	"flat out uint v_rgb;\n"
 	"void main() {\n"
-	"	uint p = uint(gl_VertexID) / 3u, j = uint(gl_VertexID) % 3u, base = p * 11u;\n"
-	"	uint w9 = word(base + 9u), w10 = word(base + 10u);\n"
-	"	v_rgb = w9 >> 8;\n"
+	"	uint p = uint(gl_VertexID) / 3u, j = uint(gl_VertexID) % 3u;\n"
+	"	uvec4 t0 = texel(3u * p), t1 = texel(3u * p + 1u);\n"
+	"	v_rgb = t0.w >> 8;\n"
 	"	v_st = vec2(0.0);\n"
 	"	gl_Position = OFF;\n"
-	"	if ((w9 & 255u) != 3u || !in_image(w10))\n"
+	"	if ((t0.w & 255u) != 3u || !in_image(t1.w))\n"
 	"		return;\n"
-	"	vec3 syt = vertex_syt(base, j);\n"
-	"	v_st = syt.xz;\n"
-	"	gl_Position = project(syt, u_eye.zw);\n"
+	"	vec3 q = syt(j == 0u ? t0 : j == 1u ? t1 : texel(3u * p + 2u));\n"
+	"	v_st = q.xz;\n"
+	"	gl_Position = project(q, u_eye.zw);\n"
 	"}\n";
 
 static const char gl_face_fs[] = GL_SHADER_VERSION
@@ -108,18 +108,17 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"flat out uint v_rgb;\n"
 	"void main() {\n"
-	"	uint p = uint(gl_VertexID) >> 2, j = uint(gl_VertexID) & 3u, base = p * 11u;\n"
-	"	uint w9 = word(base + 9u), w10 = word(base + 10u);\n"
-	"	v_rgb = w9 >> 8;\n"
+	"	uint p = uint(gl_VertexID) >> 2, j = uint(gl_VertexID) & 3u;\n"
+	"	uvec4 t0 = texel(3u * p), t1 = texel(3u * p + 1u);\n"
+	"	bool tri = (t0.w & 255u) == 3u;\n"
+	"	v_rgb = t0.w >> 8;\n"
 	"	gl_PointSize = 1.0;\n"
 	"	gl_Position = OFF;\n"
-	"	if (!in_image(w10))\n"
+	"	if ((tri && j >= 2u) || !in_image(t1.w))\n"
 	"		return;\n"
-	"	vec3 a = vertex_syt(base, 0u), b = vertex_syt(base, 1u);\n"
-	"	if ((w9 & 255u) == 3u) {\n"
-	"		if (j >= 2u)\n"
-	"			return;\n"
-	"		vec3 c = vertex_syt(base, 2u), q[3];\n"
+	"	vec3 a = syt(t0), b = syt(t1);\n"
+	"	if (tri) {\n"
+	"		vec3 c = syt(texel(3u * p + 2u)), q[3];\n"
 	"		vec3 e0[3] = vec3[3](a, b, c), e1[3] = vec3[3](b, c, a);\n"
 	"		int n = 0;\n"
 	"		for (int i = 0; i < 3; i++) {\n"

@@ -28,11 +28,11 @@
 #include "pool.h"
 #include "render.h"
 
-_Static_assert(sizeof(struct bin_prim) == 11 * 4, "the shaders read bin_prim as 11 words");
+_Static_assert(sizeof(struct bin_prim) == 11 * 4, "bin_prim is 9 vertex words and 2 more");
 _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
 
 #define GL_MAX_BATCH 16
-#define GL_PRIM_WORDS 11
+#define GL_PRIM_TEXELS 3 /* RGBA32UI texels per primitive (gl_shaders.h) */
 #define GL_TILE_WORDS (VOLUME_TILE_BYTES / 4)
 /* Half thickness of the slab the fragment shader accepts on the axis, in
  * pixels: the b of t^2 <= (s tau)^2 + b^2. */
@@ -74,6 +74,8 @@ struct render_gl {
 	GLuint touched, tile_list; /* tile marks of a batch; touched tiles as a list */
 	bool atlas_dirty;          /* a render stopped half-way: clear first */
 	uint32_t tex_width, tex_shift, tex_rows;
+	uint32_t *staging;  /* primitives in the texture's layout */
+	size_t staging_cap; /* primitives */
 	size_t point_buf_bytes;
 	struct gl_batch out[2];
 	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
@@ -293,13 +295,54 @@ static void destroy_gl(struct render_gl *r)
 	memset(r->out, 0, sizeof(r->out));
 }
 
-/* Uploads the binned primitives (as raw words) and points. */
+/* Rearranges primitives [begin, end) of the bins into the texture layout
+ * of gl_shaders.h: each vertex in a texel of its own, with the two words of
+ * flags in the texels' fourth components. */
+static void stage_prims(const struct bin_prim *src, uint32_t *dst, uint32_t begin, uint32_t end)
+{
+	for (uint32_t i = begin; i < end; i++) {
+		const uint32_t *w = (const uint32_t *)&src[i];
+		uint32_t *d = dst + (size_t)i * 12;
+		memcpy(d, w, 12);
+		d[3] = w[9];
+		memcpy(d + 4, w + 3, 12);
+		d[7] = w[10];
+		memcpy(d + 8, w + 6, 12);
+		d[11] = 0;
+	}
+}
+
+struct stage_job {
+	const struct bin_set *bins;
+	uint32_t *dst;
+	unsigned workers;
+};
+
+static void stage_worker(void *arg, unsigned worker)
+{
+	const struct stage_job *j = arg;
+	uint64_t n = j->bins->prim_count;
+	stage_prims(j->bins->prims, j->dst, (uint32_t)(n * worker / j->workers),
+		    (uint32_t)(n * (worker + 1) / j->workers));
+}
+
+/* Uploads the binned primitives and points. */
 static int upload(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	const struct bin_set *b = &r->bins;
-	uint64_t words = (uint64_t)b->prim_count * GL_PRIM_WORDS;
-	uint64_t rows = (words + r->tex_width - 1) / r->tex_width;
+	if (b->prim_count > r->staging_cap) {
+		size_t cap = b->prim_count + b->prim_count / 2;
+		uint32_t *s = realloc(r->staging, cap * GL_PRIM_TEXELS * 16);
+		if (!s)
+			return -ENOMEM;
+		r->staging = s;
+		r->staging_cap = cap;
+	}
+	struct stage_job job = { b, r->staging, pool_workers(r->pool) };
+	pool_run(r->pool, stage_worker, &job);
+	uint64_t texels = (uint64_t)b->prim_count * GL_PRIM_TEXELS;
+	uint64_t rows = (texels + r->tex_width - 1) / r->tex_width;
 	GLint max_tex = 0;
 	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
 	if (rows > (uint64_t)max_tex)
@@ -309,19 +352,18 @@ static int upload(struct render_gl *r)
 	if (rows > r->tex_rows) {
 		uint64_t cap = rows + rows / 2 < (uint64_t)max_tex ? rows + rows / 2 : (uint64_t)max_tex;
 		gl->DeleteTextures(1, &r->prim_tex);
-		r->prim_tex = make_texture(gl, GL_R32UI, r->tex_width, (uint32_t)cap);
+		r->prim_tex = make_texture(gl, GL_RGBA32UI, r->tex_width, (uint32_t)cap);
 		r->tex_rows = (uint32_t)cap;
 	}
 	gl->ActiveTexture(GL_TEXTURE0);
 	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
-	const uint32_t *w = (const uint32_t *)b->prims;
-	uint64_t full = words / r->tex_width, rest = words % r->tex_width;
+	uint64_t full = texels / r->tex_width, rest = texels % r->tex_width;
 	if (full)
-		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)r->tex_width, (GLsizei)full, GL_RED_INTEGER,
-				  GL_UNSIGNED_INT, w);
+		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)r->tex_width, (GLsizei)full, GL_RGBA_INTEGER,
+				  GL_UNSIGNED_INT, r->staging);
 	if (rest)
-		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, (GLint)full, (GLsizei)rest, 1, GL_RED_INTEGER, GL_UNSIGNED_INT,
-				  w + full * r->tex_width);
+		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, (GLint)full, (GLsizei)rest, 1, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
+				  r->staging + full * r->tex_width * 4);
 	size_t pbytes = (size_t)b->point_count * sizeof(struct bin_point);
 	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
 	gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(pbytes ? pbytes : 8), pbytes ? b->points : NULL, GL_STREAM_DRAW);
@@ -670,6 +712,7 @@ static void render_gl_destroy(struct renderer *base)
 	pool_destroy(r->pool);
 	free(r->slot_of);
 	free(r->rgba);
+	free(r->staging);
 	free(r);
 }
 
