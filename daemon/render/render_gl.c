@@ -394,8 +394,8 @@ static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, 
 	gl->Uniform4ui(p->uni[UNI_TILE], r->vol->tiles_x, r->tiles_per_image, slot, g->height);
 }
 
-/* Draws primitives [begin, end) of b->prims with program p, vertices
- * per primitive each, in mode. */
+/* Draws the runs of b->prims with the current program: verts vertices
+ * per primitive, in mode. */
 static void draw_runs(struct render_gl *r, const struct bin_run *runs, unsigned n, GLenum mode, unsigned verts)
 {
 	for (unsigned i = 0; i < n; i++)
