@@ -63,9 +63,16 @@ int config_set(struct config *cfg, const char *key, const char *value)
 		return strcmp(value, "sim") ? -EINVAL : set_string(cfg->device, sizeof(cfg->device), value);
 	if (!strcmp(key, "profile"))
 		return set_string(cfg->profile, sizeof(cfg->profile), value);
-	if (!strcmp(key, "renderer"))
-		return strcmp(value, "auto") && strcmp(value, "cpu") ? -EINVAL
-								      : set_string(cfg->renderer, sizeof(cfg->renderer), value);
+	if (!strcmp(key, "renderer")) {
+		/* Every name is accepted in every build: one without OSMesa
+		 * (or a machine without EGL) falls back to the CPU renderer
+		 * with a warning when it starts (server.c). */
+		static const char *const names[] = { "auto", "cpu", "egl", "osmesa" };
+		for (size_t i = 0; i < sizeof(names) / sizeof(names[0]); i++)
+			if (!strcmp(value, names[i]))
+				return set_string(cfg->renderer, sizeof(cfg->renderer), value);
+		return -EINVAL;
+	}
 	if (!strcmp(key, "render-threads"))
 		return set_u32(&cfg->render_threads, value, 0, 256);
 	if (!strcmp(key, "projector-buffers"))

@@ -12,7 +12,7 @@ struct config {
 	char socket_path[108]; /* sun_path size */
 	char device[16];       /* "sim" */
 	char profile[32];      /* "perspecta", "small" */
-	char renderer[16];     /* "auto", "cpu" */
+	char renderer[16];     /* "auto", "cpu", "egl", "osmesa" */
 	unsigned render_threads; /* 0 = one per core */
 	unsigned projector_buffers; /* 2 or 3 */
 	uint64_t sim_link_bytes_per_sec; /* 0 = unlimited */

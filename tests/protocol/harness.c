@@ -23,10 +23,47 @@ static void sleep_ms(int ms)
 	nanosleep(&ts, NULL);
 }
 
+static void print_log(struct daemon *d);
+
 void daemon_start(struct daemon *d)
+{
+	const char *r = getenv("SPINDLE_TEST_RENDERER");
+	daemon_start_renderer(d, r && *r ? r : NULL);
+	if (!*d->renderer)
+		return;
+	if (strcmp(d->renderer, "auto") != 0)
+		daemon_require_renderer(d, d->renderer);
+	const char *fault = getenv("SPINDLE_GL_FAULT");
+	d->strict_gl = (!strcmp(d->renderer, "egl") || !strcmp(d->renderer, "osmesa")) && !(fault && *fault);
+}
+
+void daemon_require_renderer(struct daemon *d, const char *name)
+{
+	/* Both lines are logged before the socket is opened. */
+	char line[64];
+	snprintf(line, sizeof(line), "renderer '%s' unavailable", name);
+	if (daemon_log_contains(d, line)) {
+		printf("SKIP: spindled cannot run the %s renderer here; its log:\n", name);
+		fflush(stdout);
+		print_log(d);
+		daemon_stop(d);
+		exit(77);
+	}
+	snprintf(line, sizeof(line), "renderer: %s\n", name);
+	if (!daemon_log_contains(d, line)) {
+		fprintf(stderr, "spindled does not run the %s renderer; its log:\n", name);
+		print_log(d);
+		CHECK(false);
+	}
+}
+
+void daemon_start_renderer(struct daemon *d, const char *renderer)
 {
 	const char *exe = getenv("SPINDLED");
 	CHECK(exe != NULL);
+	CHECK(!renderer || strlen(renderer) < sizeof(d->renderer));
+	snprintf(d->renderer, sizeof(d->renderer), "%s", renderer ? renderer : "");
+	d->strict_gl = false;
 	snprintf(d->dir, sizeof(d->dir), "/tmp/spindle-test-XXXXXX");
 	CHECK(mkdtemp(d->dir) != NULL);
 	snprintf(d->socket, sizeof(d->socket), "%s/spindle.sock", d->dir);
@@ -40,8 +77,9 @@ void daemon_start(struct daemon *d)
 			dup2(log, 2);
 		unsetenv("LISTEN_FDS");
 		unsetenv("LISTEN_PID");
-		execl(exe, exe, "--device", "sim", "--profile", "small", "--socket", d->socket, "--config",
-		      "/dev/null", "--verbose", (char *)NULL);
+		const char *argv[] = { exe, "--device", "sim", "--profile", "small", "--socket", d->socket, "--config",
+				       "/dev/null", "--verbose", renderer ? "--renderer" : NULL, renderer, NULL };
+		execv(exe, (char *const *)argv);
 		_exit(127);
 	}
 	for (int i = 0; i < 400; i++) {
@@ -89,8 +127,25 @@ void daemon_stop(struct daemon *d)
 	}
 	struct stat st;
 	CHECK(stat(d->socket, &st) < 0); /* removed on exit */
+	if (d->strict_gl && daemon_log_contains(d, "falling back to the CPU renderer")) {
+		fprintf(stderr, "the %s renderer failed and the CPU renderer took over; spindled's log:\n",
+			d->renderer);
+		print_log(d);
+		CHECK(false);
+	}
 	unlink(d->log);
 	rmdir(d->dir);
+}
+
+bool daemon_log_contains(struct daemon *d, const char *text)
+{
+	FILE *f = fopen(d->log, "r");
+	CHECK(f != NULL);
+	static char buf[1 << 20];
+	size_t n = fread(buf, 1, sizeof(buf) - 1, f);
+	fclose(f);
+	buf[n] = '\0';
+	return strstr(buf, text) != NULL;
 }
 
 int daemon_fd_count(struct daemon *d)

@@ -22,13 +22,29 @@ struct daemon {
 	char dir[64];
 	char socket[128];
 	char log[128];
+	char renderer[16]; /* --renderer given, "" for the default */
+	bool strict_gl;    /* a GL renderer must render every volume itself */
 };
 
 /* Starts spindled (path in $SPINDLED) with --device sim --profile small,
- * and waits until its socket accepts connections. */
+ * and waits until its socket accepts connections. With
+ * $SPINDLE_TEST_RENDERER set (egl, osmesa, cpu, auto) it passes --renderer
+ * and, but for auto, checks that the daemon runs that renderer
+ * (daemon_require_renderer(): skipped when it is unavailable here, failed
+ * when another one runs); for egl and osmesa, daemon_stop() then also
+ * checks that no run-time failure handed the rendering over to the CPU
+ * renderer, unless $SPINDLE_GL_FAULT injects one. */
 void daemon_start(struct daemon *d);
+/* The same with an explicit --renderer (NULL: none), and no checks on
+ * which renderer runs. */
+void daemon_start_renderer(struct daemon *d, const char *renderer);
+/* Checks that the daemon runs renderer name; exits 77 (skipped) when it
+ * logged that the renderer is unavailable here (no EGL, no OSMesa). */
+void daemon_require_renderer(struct daemon *d, const char *name);
 /* SIGTERM, then checks it exited 0; removes its files. */
 void daemon_stop(struct daemon *d);
+/* Whether the daemon's log (its stderr) holds text, so far. */
+bool daemon_log_contains(struct daemon *d, const char *text);
 /* True while the daemon process runs. */
 bool daemon_alive(struct daemon *d);
 /* Open fds of the daemon, from /proc (for leak checks). */

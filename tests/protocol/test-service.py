@@ -96,11 +96,35 @@ def test_config():
                          ('colour = blue\n', "unknown key 'colour'"),
                          ('max-clients = -3\n', "bad value for 'max-clients'"),
                          ('projector-buffers = 7\n', "bad value for 'projector-buffers'"),
-                         ('renderer = egl\n', "bad value for 'renderer'")):
+                         ('renderer = vulkan\n', "bad value for 'renderer'")):
         with open(conf, 'w') as f:
             f.write(text)
         p = subprocess.run([spindled, '-c', conf, '-s', sock], capture_output=True, text=True, timeout=10)
         check(p.returncode == 2 and needle in p.stderr, f'{text!r}: exit 2 with {needle!r}: {p.stderr!r}')
+    # Every renderer name is accepted, from the file or the command line;
+    # one that can't run here falls back to the CPU renderer with a warning.
+    for name in ('auto', 'cpu', 'egl', 'osmesa'):
+        with open(conf, 'w') as f:
+            f.write(f'profile = small\nrenderer = {name}\n')
+        log = os.path.join(tmp, f'r-{name}.log')
+        for args in (['-c', conf], ['-c', '/dev/null', '-p', 'small', '--renderer', name]):
+            if os.path.exists(sock):
+                os.unlink(sock)
+            with open(log, 'w') as f:
+                d = subprocess.Popen([spindled, '-s', sock] + args, stderr=f)
+            wait_for(sock)
+            check(status(sock)['width'] == '128', f'serving with renderer {name}')
+            d.send_signal(signal.SIGTERM)
+            check(d.wait(timeout=10) == 0, f'renderer {name}: exit 0')
+            with open(log) as f:
+                text = f.read()
+            ran = [l.split('renderer: ', 1)[1] for l in text.splitlines() if 'info: renderer: ' in l]
+            check(len(ran) == 1, f'renderer {name}: one "renderer: NAME" line in {text!r}')
+            if name in ('egl', 'osmesa') and ran[0] != name:
+                check(f"renderer '{name}' unavailable" in text and ran[0] == 'cpu',
+                      f'renderer {name} unavailable: a warning and the CPU renderer: {text!r}')
+            elif name != 'auto':
+                check(ran[0] == name, f'renderer {name} runs: {text!r}')
     p = subprocess.run([spindled, '-c', os.path.join(tmp, 'missing.conf')], capture_output=True,
                        text=True, timeout=10)
     check(p.returncode == 2, 'a named config file that is missing is an error')

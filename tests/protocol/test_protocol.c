@@ -746,6 +746,106 @@ static void test_back_and_forth(void)
 	daemon_stop(&d);
 }
 
+/* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
+
+/* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
+static struct spindle_layer *show_disk(struct spindle *sp, struct spindle_frame *frame)
+{
+	static float v[64 * 9];
+	uint32_t n = disk(v, 0.7, 0.3, 64);
+	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)n * 12);
+	struct spindle_list *list = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	CHECK(buf && list && layer);
+	CHECK(spindle_list_set_color(list, 0, 255, 0, 255) == 0);
+	CHECK(spindle_list_triangles(list, buf, 0, n, 0) == 0);
+	CHECK(spindle_layer_set_list(layer, list) == 0);
+	CHECK(spindle_commit_and_wait(sp, frame) == 0);
+	CHECK(frame->volume_seq > 0 && frame->time_ns > 0);
+	return layer;
+}
+
+/* The GL context is lost after the first volume (SPINDLE_GL_FAULT=lost):
+ * the daemon says so, renders on the CPU from then on, and every changed
+ * commit is still rendered, shown (its frame callback arrives with a newer
+ * volume) and right (the CPU renderer's exact disk). */
+static void test_gl_lost(const char *backend)
+{
+	CHECK(setenv("SPINDLE_GL_FAULT", "lost", 1) == 0);
+	struct daemon d;
+	daemon_start_renderer(&d, backend);
+	daemon_require_renderer(&d, backend);
+	struct spindle *sp = client_connect(&d);
+	struct spindle_frame prev, f;
+	struct spindle_layer *layer = show_disk(sp, &prev); /* rendered on GL */
+	CHECK(!daemon_log_contains(&d, "falling back"));
+	for (int i = 1; i <= 6; i++) {
+		double y = 0.3 - 0.1 * i;
+		float m[16];
+		memcpy(m, identity, sizeof(m));
+		m[13] = (float)(y - 0.3);
+		struct spindle_status before = status_of(sp);
+		CHECK(spindle_layer_set_transform(layer, m) == 0);
+		CHECK(spindle_commit_and_wait(sp, &f) == 0);
+		CHECK(f.volume_seq > prev.volume_seq && f.time_ns > prev.time_ns);
+		CHECK_EQ(status_of(sp).volumes_rendered, before.volumes_rendered + 1);
+		struct volume *vol = capture_volume(sp);
+		check_disk(vol, 0.7, y, 1);
+		CHECK(count_lit(vol, 0) == 0 && count_lit(vol, 2) == 0);
+		volume_destroy(vol);
+		prev = f;
+	}
+	CHECK(daemon_log_contains(&d, "context lost"));
+	char line[80];
+	snprintf(line, sizeof(line), "GL renderer (%s) failed", backend);
+	CHECK(daemon_log_contains(&d, line));
+	CHECK(daemon_log_contains(&d, "falling back to the CPU renderer"));
+	CHECK(daemon_alive(&d));
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static void test_gl_lost_egl(void)
+{
+	test_gl_lost("egl");
+}
+
+static void test_gl_lost_osmesa(void)
+{
+	test_gl_lost("osmesa");
+}
+
+/* No GL at start (fault: no display, or shaders that do not compile): the
+ * daemon warns, starts on the CPU renderer and serves. */
+static void test_gl_unavailable(const char *fault, const char *why)
+{
+	CHECK(setenv("SPINDLE_GL_FAULT", fault, 1) == 0);
+	struct daemon d;
+	daemon_start_renderer(&d, "egl");
+	CHECK(daemon_log_contains(&d, why));
+	CHECK(daemon_log_contains(&d, "warning: renderer 'egl' unavailable"));
+	CHECK(daemon_log_contains(&d, "using the CPU renderer"));
+	CHECK(daemon_log_contains(&d, "renderer: cpu\n"));
+	struct spindle *sp = client_connect(&d);
+	struct spindle_frame f;
+	show_disk(sp, &f);
+	struct volume *vol = capture_volume(sp);
+	check_disk(vol, 0.7, 0.3, 1);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
+static void test_gl_no_display(void)
+{
+	test_gl_unavailable("display", "no egl display (fault injected");
+}
+
+static void test_gl_bad_shader(void)
+{
+	test_gl_unavailable("shader", "shader does not compile");
+}
+
 static const struct {
 	const char *name;
 	void (*run)(void);
@@ -766,6 +866,10 @@ static const struct {
 	{ "layers", test_layers },
 	{ "unchanged", test_unchanged },
 	{ "back-and-forth", test_back_and_forth },
+	{ "gl-lost-egl", test_gl_lost_egl },
+	{ "gl-lost-osmesa", test_gl_lost_osmesa },
+	{ "gl-no-display", test_gl_no_display },
+	{ "gl-bad-shader", test_gl_bad_shader },
 };
 
 int main(int argc, char **argv)
