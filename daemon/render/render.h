@@ -49,6 +49,9 @@ struct render_gl_options {
 			      * read back whole, halftone and pack on the CPU */
 	bool no_fallback;    /* a GL failure fails the render instead of
 			      * handing over to the CPU renderer (tests) */
+	uint32_t max_prims;  /* binned primitives a volume may have on GL; more
+			      * render that volume on the CPU. 0 = as many as
+			      * the primitive texture holds (tests set less) */
 };
 
 struct renderer_impl {

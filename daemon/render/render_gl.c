@@ -82,7 +82,9 @@ struct render_gl {
 	uint8_t *rgba;      /* naive: one image read back */
 	uint64_t volumes;
 
-	struct renderer *cpu; /* after a failure: the CPU renderer takes over */
+	struct renderer *cpu; /* renders what GL cannot, created when first needed */
+	bool gl_dead;         /* GL failed: every volume renders on the CPU */
+	bool told_too_big;    /* logged that a scene exceeds the texture */
 	/* Per render: */
 	struct volume *vol;
 	uint64_t wait_ns, copy_ns;
@@ -331,6 +333,12 @@ static int upload(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	const struct bin_set *b = &r->bins;
+	uint64_t texels = (uint64_t)b->prim_count * GL_PRIM_TEXELS;
+	uint64_t rows = (texels + r->tex_width - 1) / r->tex_width;
+	GLint max_tex = 0;
+	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
+	if (rows > (uint64_t)max_tex || (r->opts.max_prims && b->prim_count > r->opts.max_prims))
+		return -E2BIG;
 	if (b->prim_count > r->staging_cap) {
 		size_t cap = b->prim_count + b->prim_count / 2;
 		uint32_t *s = realloc(r->staging, cap * GL_PRIM_TEXELS * 16);
@@ -341,12 +349,6 @@ static int upload(struct render_gl *r)
 	}
 	struct stage_job job = { b, r->staging, pool_workers(r->pool) };
 	pool_run(r->pool, stage_worker, &job);
-	uint64_t texels = (uint64_t)b->prim_count * GL_PRIM_TEXELS;
-	uint64_t rows = (texels + r->tex_width - 1) / r->tex_width;
-	GLint max_tex = 0;
-	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
-	if (rows > (uint64_t)max_tex)
-		return -E2BIG;
 	if (rows < 1)
 		rows = 1;
 	if (rows > r->tex_rows) {
@@ -641,30 +643,23 @@ static int check_context(struct render_gl *r)
 	return 0;
 }
 
-static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out);
-
-/* Hands over to the CPU renderer for good. */
-static int fall_back(struct render_gl *r, int why)
+/* Renders on the CPU renderer, created the first time it is needed. */
+static int render_on_cpu(struct render_gl *r, const struct scene *scene, struct volume *out)
 {
-	log_error("GL renderer (%s) failed (%s): falling back to the CPU renderer", gl_backend_name(r->ctx.backend),
-		  strerror(-why));
-	destroy_gl(r);
-	r->cpu = render_cpu_create(&r->base.geom, r->opts.threads);
-	if (!r->cpu) {
+	if (!r->cpu && !(r->cpu = render_cpu_create(&r->base.geom, r->opts.threads))) {
 		log_error("CPU renderer: %s", strerror(errno));
 		return -errno;
 	}
-	return 0;
+	int e = render_volume(r->cpu, scene, out);
+	r->base.stats = r->cpu->stats;
+	return e;
 }
 
 static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
 {
 	struct render_gl *r = (struct render_gl *)base;
-	if (r->cpu) {
-		int e = render_volume(r->cpu, scene, out);
-		r->base.stats = r->cpu->stats;
-		return e;
-	}
+	if (r->gl_dead)
+		return render_on_cpu(r, scene, out);
 	uint64_t t0 = (uint64_t)now_ns();
 	memset(&r->base.stats, 0, sizeof(r->base.stats));
 	volume_clear(out);
@@ -685,11 +680,24 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	}
 	gl_context_unbind(&r->ctx);
 	r->volumes++;
-	if (err < 0 && (err == -ENOMEM || err == -E2BIG || r->opts.no_fallback))
-		return err; /* this scene only, or the caller wants to know */
+	if (err == -E2BIG && !r->opts.no_fallback) {
+		/* This scene only: the next one may fit again. */
+		if (!r->told_too_big)
+			log_warn("GL renderer: %u primitives do not fit the primitive texture: volumes that large "
+				 "render on the CPU",
+				 r->bins.prim_count);
+		r->told_too_big = true;
+		return render_on_cpu(r, scene, out);
+	}
+	if (err < 0 && (err == -ENOMEM || r->opts.no_fallback))
+		return err;
 	if (err < 0) {
-		err = fall_back(r, err);
-		return err < 0 ? err : render_gl_volume(base, scene, out);
+		/* For good: the context is gone or cannot be trusted. */
+		log_error("GL renderer (%s) failed (%s): falling back to the CPU renderer",
+			  gl_backend_name(r->ctx.backend), strerror(-err));
+		destroy_gl(r);
+		r->gl_dead = true;
+		return render_on_cpu(r, scene, out);
 	}
 	struct render_stats *st = &r->base.stats;
 	st->total_ns = (uint64_t)now_ns() - t0;
