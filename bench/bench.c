@@ -301,6 +301,11 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 	printf("Variants (%u cores here; the reference is %s):\n", cores(), REFERENCE_VARIANT);
 	for (int i = 0; i < nvars; i++) {
 		char th[32];
+		if (vars[i].gl[0]) {
+			printf("- %s: GL renderer%s on %s; binning on one thread per core\n", vars[i].name,
+			       vars[i].naive ? " (the naive pipeline)" : "", render_gl_describe(vars[i].r));
+			continue;
+		}
 		if (vars[i].threads)
 			snprintf(th, sizeof(th), "%u thread%s", vars[i].threads, vars[i].threads > 1 ? "s" : "");
 		else

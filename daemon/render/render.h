@@ -87,6 +87,8 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 /* Whether r is a GL renderer on a hardware GPU (not llvmpipe or another
  * software rasterizer). */
 bool render_gl_is_hardware(const struct renderer *r);
+/* GL_RENDERER and GL_VERSION of a GL renderer's context ("" otherwise). */
+const char *render_gl_describe(const struct renderer *r);
 
 /* Picks a renderer by name ("cpu", "egl", "osmesa", "auto"), with up to threads worker
  * threads (0 = one per core). NULL + errno (ENOENT: unknown or not built)

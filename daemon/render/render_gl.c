@@ -17,6 +17,7 @@
  * non-empty packed tiles cross back. */
 #include <errno.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
@@ -85,6 +86,7 @@ struct render_gl {
 	struct renderer *cpu; /* renders what GL cannot, created when first needed */
 	bool gl_dead;         /* GL failed: every volume renders on the CPU */
 	bool told_too_big;    /* logged that a scene exceeds the texture */
+	char description[300]; /* GL_RENDERER, GL_VERSION */
 	/* Per render: */
 	struct volume *vol;
 	uint64_t wait_ns, copy_ns;
@@ -735,6 +737,13 @@ bool render_gl_is_hardware(const struct renderer *base)
 	return r->have_ctx && r->ctx.hardware;
 }
 
+const char *render_gl_describe(const struct renderer *base)
+{
+	if (base->impl != &render_egl_impl && base->impl != &render_osmesa_impl)
+		return "";
+	return ((const struct render_gl *)base)->description;
+}
+
 struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts)
 {
 	static const struct render_gl_options defaults = { 0 };
@@ -776,9 +785,12 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 		err = build_programs(r);
 	if (err == 0)
 		err = create_objects(r);
-	if (err == 0)
-		log_info("GL renderer %s: %s, %s%s, %u images per batch", gl_backend_name(backend), r->ctx.renderer,
-			 r->ctx.version, r->ctx.hardware ? "" : " (software)", r->batch);
+	if (err == 0) {
+		snprintf(r->description, sizeof(r->description), "%s, %s%s", r->ctx.renderer, r->ctx.version,
+			 r->ctx.hardware ? "" : " (software)");
+		log_info("GL renderer %s: %s, %u images per batch", gl_backend_name(backend), r->description,
+			 r->batch);
+	}
 	if (r->have_ctx)
 		gl_context_unbind(&r->ctx);
 	if (err < 0) {
