@@ -101,27 +101,32 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 	"}\n";
 
 /* Sections, drawn as GL_LINES and again as GL_POINTS (so a section shorter
- * than a pixel still lights one): vertices 4p .. 4p + 3 of primitive p are
- * two segments. A triangle's first segment is its section with the slice
- * plane t = 0, which lights it where it is edge-on to the projection; a
- * segment primitive is clipped exactly to each lobe, one segment each. */
+ * than a pixel still lights one): vertices 16p .. 16p + 15 of primitive p
+ * are up to eight segments, two vertices each. A segment primitive is
+ * clipped exactly to each lobe (vertices 0-3). A triangle gives its section
+ * with the slice plane t = 0 (vertices 0-1), which lights it where it is
+ * edge-on to the projection, and its three edges clipped exactly to each
+ * lobe (vertices 4-15), which light it where the face pass's sample points
+ * miss it: a small or thin triangle inside the wedge that does not reach
+ * the slice plane. */
 static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"flat out uint v_rgb;\n"
 	"void main() {\n"
-	"	uint p = uint(gl_VertexID) >> 2, j = uint(gl_VertexID) & 3u;\n"
+	"	uint p = uint(gl_VertexID) >> 4, j = uint(gl_VertexID) & 15u;\n"
 	"	uvec4 t0 = texel(3u * p), t1 = texel(3u * p + 1u);\n"
 	"	bool tri = (t0.w & 255u) == 3u;\n"
 	"	v_rgb = t0.w >> 8;\n"
 	"	gl_PointSize = 1.0;\n"
 	"	gl_Position = OFF;\n"
-	"	if ((tri && j >= 2u) || !in_image(t1.w))\n"
+	"	if ((tri ? j == 2u || j == 3u : j >= 4u) || !in_image(t1.w))\n"
 	"		return;\n"
 	"	vec3 a = syt(t0), b = syt(t1);\n"
-	"	if (tri) {\n"
+	"	vec3 c = tri ? syt(texel(3u * p + 2u)) : a;\n"
+	"	if (tri && j < 2u) {\n"
 	"		/* The plane is closed: an edge touching it adds its point,\n"
 	"		 * an edge lying in it both ends (a mesh edge exactly on the\n"
 	"		 * slice plane, e.g. a seam at azimuth 0, is its section). */\n"
-	"		vec3 c = syt(texel(3u * p + 2u)), q[6];\n"
+	"		vec3 q[6];\n"
 	"		vec3 e0[3] = vec3[3](a, b, c), e1[3] = vec3[3](b, c, a);\n"
 	"		int n = 0;\n"
 	"		for (int i = 0; i < 3; i++) {\n"
@@ -150,6 +155,13 @@ static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"				end = i;\n"
 	"		gl_Position = project(vec3(q[end].xy, 0.0), vec2(0.0));\n"
 	"		return;\n"
+	"	}\n"
+	"	if (tri) { /* edge e, clipped like a segment */\n"
+	"		uint e = (j - 4u) >> 2;\n"
+	"		vec3 v[3] = vec3[3](a, b, c);\n"
+	"		a = v[e];\n"
+	"		b = v[(e + 1u) % 3u];\n"
+	"		j &= 3u;\n"
 	"	}\n"
 	"	/* Lobe L: t - L tau s <= 0 and -t - L tau s <= 0, for lambda in [0, 1]. */\n"
 	"	float L = j < 2u ? 1.0 : -1.0, tau = u_slice.z, lo = 0.0, hi = 1.0;\n"

@@ -426,8 +426,8 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	draw_runs(r, runs, n, GL_TRIANGLES, 3);
 	gl->UseProgram(r->section.id);
 	set_image_uniforms(r, &r->section, k, slot);
-	draw_runs(r, runs, n, GL_LINES, 4);
-	draw_runs(r, runs, n, GL_POINTS, 4);
+	draw_runs(r, runs, n, GL_LINES, 16);
+	draw_runs(r, runs, n, GL_POINTS, 16);
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
 		gl->UseProgram(r->point.id);
