@@ -19,7 +19,8 @@
  *          (the naive pipeline), log2 of the primitive texture's width;
  * u_slice: cos theta_k, sin theta_k, tau, b (the hyperbolic bias);
  * u_eye:   De (eye distance), T (slab half thickness), jitter x, y (NDC);
- * u_frame: 1 / h, 2 / W, 2 / H, 0. */
+ * u_frame: 1 / h, 2 / W, 2 / H, and for the section program which slots
+ *          it draws (0 or 1). */
 #define GL_SHADER_COMMON                                                                          \
 	"precision highp float;\n"                                                                \
 	"precision highp int;\n"                                                                  \
@@ -101,8 +102,9 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 	"}\n";
 
 /* Sections, drawn as GL_LINES and again as GL_POINTS (so a section shorter
- * than a pixel still lights one): vertices 16p .. 16p + 15 of primitive p
- * are up to eight segments, two vertices each. A segment primitive is
+ * than a pixel still lights one): primitive p has 16 vertex slots, up to
+ * eight segments of two vertices each, drawn as two draws (slots 0-3, and
+ * slots 4-15 where the scene has triangles). A segment primitive is
  * clipped exactly to each lobe (vertices 0-3). A triangle gives its section
  * with the slice plane t = 0 (vertices 0-1), which lights it where it is
  * edge-on to the projection, and its three edges clipped exactly to each
@@ -112,7 +114,10 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"flat out uint v_rgb;\n"
 	"void main() {\n"
-	"	uint p = uint(gl_VertexID) >> 4, j = uint(gl_VertexID) & 15u;\n"
+	"	/* u_frame.w: 0 draws slots 0-3 (4 vertices a primitive), 1 the edge\n"
+	"	 * slots 4-15 (12 vertices a primitive). */\n"
+	"	uint id = uint(gl_VertexID), edges = uint(u_frame.w);\n"
+	"	uint p = edges == 0u ? id >> 2 : id / 12u, j = edges == 0u ? id & 3u : id % 12u + 4u;\n"
 	"	uvec4 t0 = texel(3u * p), t1 = texel(3u * p + 1u);\n"
 	"	bool tri = (t0.w & 255u) == 3u;\n"
 	"	v_rgb = t0.w >> 8;\n"

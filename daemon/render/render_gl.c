@@ -17,6 +17,7 @@
  * non-empty packed tiles cross back. */
 #include <errno.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -76,6 +77,7 @@ struct render_gl {
 	bool atlas_dirty;          /* a render stopped half-way: clear first */
 	uint32_t tex_width, tex_shift, tex_rows;
 	uint32_t *staging;  /* primitives in the texture's layout */
+	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
 	size_t staging_cap; /* primitives */
 	size_t point_buf_bytes;
 	struct gl_batch out[2];
@@ -302,10 +304,12 @@ static void destroy_gl(struct render_gl *r)
 /* Rearranges primitives [begin, end) of the bins into the texture layout
  * of gl_shaders.h: each vertex in a texel of its own, with the two words of
  * flags in the texels' fourth components. */
-static void stage_prims(const struct bin_prim *src, uint32_t *dst, uint32_t begin, uint32_t end)
+static uint32_t stage_prims(const struct bin_prim *src, uint32_t *dst, uint32_t begin, uint32_t end)
 {
+	uint32_t triangles = 0;
 	for (uint32_t i = begin; i < end; i++) {
 		const uint32_t *w = (const uint32_t *)&src[i];
+		triangles += src[i].nverts == 3;
 		uint32_t *d = dst + (size_t)i * 12;
 		memcpy(d, w, 12);
 		d[3] = w[9];
@@ -314,20 +318,23 @@ static void stage_prims(const struct bin_prim *src, uint32_t *dst, uint32_t begi
 		memcpy(d + 8, w + 6, 12);
 		d[11] = 0;
 	}
+	return triangles;
 }
 
 struct stage_job {
 	const struct bin_set *bins;
 	uint32_t *dst;
 	unsigned workers;
+	atomic_uint triangles;
 };
 
 static void stage_worker(void *arg, unsigned worker)
 {
-	const struct stage_job *j = arg;
+	struct stage_job *j = arg;
 	uint64_t n = j->bins->prim_count;
-	stage_prims(j->bins->prims, j->dst, (uint32_t)(n * worker / j->workers),
-		    (uint32_t)(n * (worker + 1) / j->workers));
+	uint32_t t = stage_prims(j->bins->prims, j->dst, (uint32_t)(n * worker / j->workers),
+				(uint32_t)(n * (worker + 1) / j->workers));
+	atomic_fetch_add(&j->triangles, t);
 }
 
 /* Uploads the binned primitives and points. */
@@ -349,8 +356,9 @@ static int upload(struct render_gl *r)
 		r->staging = s;
 		r->staging_cap = cap;
 	}
-	struct stage_job job = { b, r->staging, pool_workers(r->pool) };
+	struct stage_job job = { b, r->staging, pool_workers(r->pool), 0 };
 	pool_run(r->pool, stage_worker, &job);
+	r->triangles = atomic_load(&job.triangles);
 	if (rows < 1)
 		rows = 1;
 	if (rows > r->tex_rows) {
@@ -426,8 +434,15 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	draw_runs(r, runs, n, GL_TRIANGLES, 3);
 	gl->UseProgram(r->section.id);
 	set_image_uniforms(r, &r->section, k, slot);
-	draw_runs(r, runs, n, GL_LINES, 16);
-	draw_runs(r, runs, n, GL_POINTS, 16);
+	draw_runs(r, runs, n, GL_LINES, 4);
+	draw_runs(r, runs, n, GL_POINTS, 4);
+	if (r->triangles) {
+		const struct geometry *gg = &r->base.geom;
+		gl->Uniform4f(r->section.uni[UNI_FRAME], (float)(1.0 / gg->half_height), 2.0f / (float)gg->width,
+			      2.0f / (float)gg->height, 1.0f);
+		draw_runs(r, runs, n, GL_LINES, 12);
+		draw_runs(r, runs, n, GL_POINTS, 12);
+	}
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
 		gl->UseProgram(r->point.id);
