@@ -401,6 +401,34 @@ static void check_faults(const struct geometry *g, const char *backend)
 	tscene_free(&second);
 }
 
+/* A scene with more primitives than the GL renderer takes (max_prims,
+ * standing in for the texture's limit) renders on the CPU, bit for bit the
+ * CPU renderer's; the next scene that fits renders on GL again, exactly as
+ * a fresh GL renderer draws it. */
+static void check_too_big(const struct geometry *g, const char *backend)
+{
+	struct tscene big, wall;
+	build_scene(SC_TRIANGLES, g, &big);
+	build_scene(SC_WALL, g, &wall);
+	struct render_gl_options o = { .backend = backend, .threads = 2, .max_prims = 2 };
+	struct renderer *r = render_gl_create(g, &o), *fresh = gl_create(g, backend, false);
+	CHECK_MSG(r, "%s max_prims: %s", backend, strerror(errno));
+	struct volume *ref = rtest_render(g, big.scene.draws, big.scene.draw_count, 2);
+	struct volume *vol = render_with(r, &big.scene);
+	CHECK_MSG(rtest_same(vol, ref), "%s: a scene over max_prims is not the CPU renderer's", backend);
+	volume_destroy(vol);
+	volume_destroy(ref);
+	ref = render_with(fresh, &wall.scene);
+	vol = render_with(r, &wall.scene);
+	CHECK_MSG(rtest_same(vol, ref), "%s: after a scene over max_prims, one that fits is not GL's", backend);
+	volume_destroy(vol);
+	volume_destroy(ref);
+	render_destroy(r);
+	render_destroy(fresh);
+	tscene_free(&big);
+	tscene_free(&wall);
+}
+
 /* Whether the build has this backend: only OSMesa may be missing (ENOENT);
  * any other failure to create a renderer fails the test. */
 static bool have_backend(const struct geometry *g, const char *backend)
@@ -433,6 +461,7 @@ int main(int argc, char **argv)
 		check_reuse(&small, b);
 		check_reuse(&odd, b);
 		check_faults(&small, b);
+		check_too_big(&small, b);
 	}
 	CHECK_MSG(disagreements == 0, "%d disagreements with the CPU reference (above)", disagreements);
 	return check_done();
