@@ -538,21 +538,29 @@ static void shift_x(float m[16], float dx)
 	m[12] = dx;
 }
 
-/* A sphere (blue) on one layer, shown; frame says by which volume. */
-static struct spindle_layer *show_sphere(struct spindle *sp, struct spindle_frame *frame)
+/* n triangle vertices v in one colour on a layer of their own, committed
+ * and shown; frame says by which volume. */
+static struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *frame, const float *v,
+					    uint32_t n, uint8_t r, uint8_t g, uint8_t b)
 {
-	static float v[48 * 24 * 18];
-	uint32_t n = sphere(v, 0.6, 48, 24);
 	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)n * 12);
 	struct spindle_list *list = spindle_list_create(sp);
 	struct spindle_layer *layer = spindle_layer_create(sp);
 	CHECK(buf && list && layer);
-	CHECK(spindle_list_set_color(list, 0, 0, 255, 255) == 0);
+	CHECK(spindle_list_set_color(list, r, g, b, 255) == 0);
 	CHECK(spindle_list_triangles(list, buf, 0, n, 0) == 0);
 	CHECK(spindle_layer_set_list(layer, list) == 0);
 	CHECK(spindle_commit_and_wait(sp, frame) == 0);
 	CHECK(frame->volume_seq > 0 && frame->time_ns > 0);
 	return layer;
+}
+
+/* A sphere (blue) on one layer, shown. */
+static struct spindle_layer *show_sphere(struct spindle *sp, struct spindle_frame *frame)
+{
+	static float v[48 * 24 * 18];
+	uint32_t n = sphere(v, 0.6, 48, 24);
+	return show_triangles(sp, frame, v, n, 0, 0, 255);
 }
 
 /* Frames of changed commits: each is a new volume, shown later. */
@@ -753,16 +761,7 @@ static struct spindle_layer *show_disk(struct spindle *sp, struct spindle_frame 
 {
 	static float v[64 * 9];
 	uint32_t n = disk(v, 0.7, 0.3, 64);
-	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)n * 12);
-	struct spindle_list *list = spindle_list_create(sp);
-	struct spindle_layer *layer = spindle_layer_create(sp);
-	CHECK(buf && list && layer);
-	CHECK(spindle_list_set_color(list, 0, 255, 0, 255) == 0);
-	CHECK(spindle_list_triangles(list, buf, 0, n, 0) == 0);
-	CHECK(spindle_layer_set_list(layer, list) == 0);
-	CHECK(spindle_commit_and_wait(sp, frame) == 0);
-	CHECK(frame->volume_seq > 0 && frame->time_ns > 0);
-	return layer;
+	return show_triangles(sp, frame, v, n, 0, 255, 0);
 }
 
 /* The GL context is lost after the first volume (SPINDLE_GL_FAULT=lost):
