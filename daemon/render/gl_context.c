@@ -268,3 +268,47 @@ void gl_context_destroy(struct gl_context *c)
 	free(p);
 	c->priv = NULL;
 }
+
+GLuint gl_shader_compile(const struct gl_api *gl, GLenum type, const char *src, const char *what, bool broken)
+{
+	GLuint s = gl->CreateShader(type);
+	const char *srcs[2] = { src, broken ? "#error fault injected by SPINDLE_GL_FAULT\n" : "" };
+	gl->ShaderSource(s, 2, srcs, NULL);
+	gl->CompileShader(s);
+	GLint ok = 0;
+	gl->GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+	if (ok)
+		return s;
+	char msg[512] = "";
+	gl->GetShaderInfoLog(s, sizeof(msg), NULL, msg);
+	log_warn("GL renderer: the %s shader does not compile: %s", what, msg);
+	gl->DeleteShader(s);
+	return 0;
+}
+
+GLuint gl_program_link(const struct gl_api *gl, const GLuint *shaders, int n, const char *what)
+{
+	GLuint p = 0;
+	bool ok = true;
+	for (int i = 0; i < n; i++)
+		ok = ok && shaders[i];
+	if (ok) {
+		p = gl->CreateProgram();
+		for (int i = 0; i < n; i++)
+			gl->AttachShader(p, shaders[i]);
+		gl->LinkProgram(p);
+		GLint linked = 0;
+		gl->GetProgramiv(p, GL_LINK_STATUS, &linked);
+		if (!linked) {
+			char msg[512] = "";
+			gl->GetProgramInfoLog(p, sizeof(msg), NULL, msg);
+			log_warn("GL renderer: the %s program does not link: %s", what, msg);
+			gl->DeleteProgram(p);
+			p = 0;
+		}
+	}
+	for (int i = 0; i < n; i++)
+		if (shaders[i])
+			gl->DeleteShader(shaders[i]);
+	return p;
+}

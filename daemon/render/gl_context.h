@@ -47,6 +47,12 @@ void gl_context_unbind(struct gl_context *c);
 /* Releases and destroys; accepts a context whose creation failed. */
 void gl_context_destroy(struct gl_context *c);
 
+/* Compiles src (with "#error" appended when broken, the injected fault),
+ * or links shaders (any 0 fails) into a program and deletes the shaders.
+ * 0 on failure, with the info log in a warning naming what. */
+GLuint gl_shader_compile(const struct gl_api *gl, GLenum type, const char *src, const char *what, bool broken);
+GLuint gl_program_link(const struct gl_api *gl, const GLuint *shaders, int n, const char *what);
+
 /* "egl", "osmesa" */
 const char *gl_backend_name(enum gl_backend b);
 

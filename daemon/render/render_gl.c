@@ -94,60 +94,13 @@ struct render_gl {
 	uint64_t wait_ns, copy_ns;
 };
 
-static GLuint compile(struct render_gl *r, GLenum type, const char *src, const char *what)
-{
-	const struct gl_api *gl = r->gl;
-	GLuint s = gl->CreateShader(type);
-	/* The injected fault: a source that cannot compile. */
-	const char *srcs[2] = { src, r->fault == GL_FAULT_SHADER ? "#error fault injected by SPINDLE_GL_FAULT\n" : "" };
-	gl->ShaderSource(s, 2, srcs, NULL);
-	gl->CompileShader(s);
-	GLint ok = 0;
-	gl->GetShaderiv(s, GL_COMPILE_STATUS, &ok);
-	if (!ok) {
-		char msg[512] = "";
-		gl->GetShaderInfoLog(s, sizeof(msg), NULL, msg);
-		log_warn("GL renderer: the %s shader does not compile: %s", what, msg);
-		gl->DeleteShader(s);
-		return 0;
-	}
-	return s;
-}
-
-/* Links the given shaders (0 = compile failed) into a program; 0 on error. */
-static GLuint link_program(struct render_gl *r, const GLuint *shaders, int n, const char *what)
-{
-	const struct gl_api *gl = r->gl;
-	GLuint p = 0;
-	bool ok = true;
-	for (int i = 0; i < n; i++)
-		ok = ok && shaders[i];
-	if (ok) {
-		p = gl->CreateProgram();
-		for (int i = 0; i < n; i++)
-			gl->AttachShader(p, shaders[i]);
-		gl->LinkProgram(p);
-		GLint linked = 0;
-		gl->GetProgramiv(p, GL_LINK_STATUS, &linked);
-		if (!linked) {
-			char msg[512] = "";
-			gl->GetProgramInfoLog(p, sizeof(msg), NULL, msg);
-			log_warn("GL renderer: the %s program does not link: %s", what, msg);
-			gl->DeleteProgram(p);
-			p = 0;
-		}
-	}
-	for (int i = 0; i < n; i++)
-		if (shaders[i])
-			gl->DeleteShader(shaders[i]);
-	return p;
-}
-
 static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs,
 			const char *what)
 {
-	GLuint sh[2] = { compile(r, GL_VERTEX_SHADER, vs, what), compile(r, GL_FRAGMENT_SHADER, fs, what) };
-	p->id = link_program(r, sh, 2, what);
+	bool bad = r->fault == GL_FAULT_SHADER;
+	GLuint sh[2] = { gl_shader_compile(r->gl, GL_VERTEX_SHADER, vs, what, bad),
+			 gl_shader_compile(r->gl, GL_FRAGMENT_SHADER, fs, what, bad) };
+	p->id = gl_program_link(r->gl, sh, 2, what);
 	if (!p->id)
 		return -EINVAL;
 	for (int i = 0; i < UNI_COUNT; i++)
@@ -164,10 +117,11 @@ static int build_programs(struct render_gl *r)
 		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, "point");
 	if (e < 0)
 		return e;
-	GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, "pack");
-	r->pack = link_program(r, &cs, 1, "pack");
-	cs = compile(r, GL_COMPUTE_SHADER, gl_list_cs, "list");
-	r->list = link_program(r, &cs, 1, "list");
+	bool bad = r->fault == GL_FAULT_SHADER;
+	GLuint cs = gl_shader_compile(r->gl, GL_COMPUTE_SHADER, gl_pack_cs, "pack", bad);
+	r->pack = gl_program_link(r->gl, &cs, 1, "pack");
+	cs = gl_shader_compile(r->gl, GL_COMPUTE_SHADER, gl_list_cs, "list", bad);
+	r->list = gl_program_link(r->gl, &cs, 1, "list");
 	if (!r->pack || !r->list)
 		return -EINVAL;
 	r->pack_uni = r->gl->GetUniformLocation(r->pack, "u_pack");
@@ -187,7 +141,9 @@ static GLuint make_texture(const struct gl_api *gl, GLenum fmt, uint32_t w, uint
 	return t;
 }
 
-static int create_objects(struct render_gl *r)
+/* Checks what the pipeline needs of the context and sizes the batch and the
+ * primitive texture from its limits. */
+static int check_limits(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	const struct geometry *g = &r->base.geom;
@@ -216,22 +172,14 @@ static int create_objects(struct render_gl *r)
 	for (r->tex_shift = 12; (1u << r->tex_shift) > (uint32_t)max_tex; r->tex_shift--)
 		;
 	r->tex_width = 1u << r->tex_shift;
+	return 0;
+}
 
-	gl->GenVertexArrays(1, &r->vao);
-	gl->BindVertexArray(r->vao);
-	gl->GenBuffers(1, &r->point_buf);
-	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
-	gl->VertexAttribIPointer(0, 2, GL_UNSIGNED_INT, sizeof(struct bin_point), NULL);
-	gl->EnableVertexAttribArray(0);
-
-	r->atlas = make_texture(gl, GL_RGBA8, g->width, g->height * r->batch);
-	gl->GenFramebuffers(1, &r->fbo);
-	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
-	gl->FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, r->atlas, 0);
-	if (gl->CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-		log_warn("GL renderer: the RGBA8 atlas is not a complete framebuffer");
-		return -ENOTSUP;
-	}
+/* The storage buffers of the pack pass: two output sets (double
+ * buffering), the tile marks and the tile list, all zero. */
+static int create_buffers(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
 	size_t tiles = (size_t)r->batch * r->tiles_per_image;
 	for (int i = 0; i < 2; i++) {
 		gl->GenBuffers(1, &r->out[i].tiles);
@@ -252,8 +200,36 @@ static int create_objects(struct render_gl *r)
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
 	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles * 2 + 4) * 4), zero, GL_DYNAMIC_COPY);
 	free(zero);
+	return 0;
+}
+
+static int create_objects(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	int e = check_limits(r);
+	if (e < 0)
+		return e;
+	gl->GenVertexArrays(1, &r->vao);
+	gl->BindVertexArray(r->vao);
+	gl->GenBuffers(1, &r->point_buf);
+	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
+	gl->VertexAttribIPointer(0, 2, GL_UNSIGNED_INT, sizeof(struct bin_point), NULL);
+	gl->EnableVertexAttribArray(0);
+
+	r->atlas = make_texture(gl, GL_RGBA8, g->width, g->height * r->batch);
+	gl->GenFramebuffers(1, &r->fbo);
+	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
+	gl->FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, r->atlas, 0);
+	if (gl->CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+		log_warn("GL renderer: the RGBA8 atlas is not a complete framebuffer");
+		return -ENOTSUP;
+	}
+	e = create_buffers(r);
+	if (e < 0)
+		return e;
 	r->atlas_dirty = true;
-	r->slot_of = malloc(tiles * sizeof(*r->slot_of));
+	r->slot_of = malloc((size_t)r->batch * r->tiles_per_image * sizeof(*r->slot_of));
 	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
 	if (!r->slot_of || (r->opts.naive && !r->rgba))
 		return -ENOMEM;
@@ -487,6 +463,33 @@ static void pack_batch(struct render_gl *r, struct gl_batch *out)
 	gl->ActiveTexture(GL_TEXTURE0);
 }
 
+/* Reads the tile numbers of a packed batch into slot_of (each tile's slot
+ * in the output, or -1). Returns how many tiles were packed, or -EIO when
+ * the list cannot be read or is corrupt (out of range, repeated). */
+static int map_slots(struct render_gl *r, const struct gl_batch *out)
+{
+	const struct gl_api *gl = r->gl;
+	uint32_t tiles = out->n * r->tiles_per_image;
+	gl->BindBuffer(GL_COPY_READ_BUFFER, out->ids);
+	const uint32_t *ids = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
+	if (!ids)
+		return -EIO;
+	uint32_t count = ids[0];
+	int err = count > tiles ? -EIO : 0;
+	for (uint32_t t = 0; t < tiles; t++)
+		r->slot_of[t] = -1;
+	for (uint32_t i = 0; err == 0 && i < count; i++) {
+		if (ids[1 + i] >= tiles || r->slot_of[ids[1 + i]] >= 0)
+			err = -EIO;
+		else
+			r->slot_of[ids[1 + i]] = (int32_t)i;
+	}
+	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
+	if (err < 0)
+		log_error("GL renderer: the pack pass returned a corrupt tile list");
+	return err < 0 ? err : (int)count;
+}
+
 /* Waits for a packed batch and appends its tiles, in tile order, to the
  * volume. */
 static int collect_batch(struct render_gl *r, struct gl_batch *out)
@@ -505,28 +508,10 @@ static int collect_batch(struct render_gl *r, struct gl_batch *out)
 			  (unsigned long long)(GL_FENCE_TIMEOUT_NS / 1000000000ull));
 		return -ETIMEDOUT;
 	}
-	uint32_t tiles = out->n * r->tiles_per_image;
-	gl->BindBuffer(GL_COPY_READ_BUFFER, out->ids);
-	const uint32_t *ids = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
-	if (!ids)
-		return -EIO;
-	uint32_t count = ids[0];
-	int err = count > tiles ? -EIO : 0;
-	for (uint32_t t = 0; t < tiles; t++)
-		r->slot_of[t] = -1;
-	for (uint32_t i = 0; err == 0 && i < count; i++) {
-		if (ids[1 + i] >= tiles || r->slot_of[ids[1 + i]] >= 0)
-			err = -EIO;
-		else
-			r->slot_of[ids[1 + i]] = (int32_t)i;
-	}
-	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
-	if (err < 0) {
-		log_error("GL renderer: the pack pass returned a corrupt tile list");
-		return err;
-	}
-	if (count == 0)
-		return 0;
+	int count = map_slots(r, out);
+	if (count <= 0)
+		return count;
+	int err = 0;
 	gl->BindBuffer(GL_COPY_READ_BUFFER, out->tiles);
 	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES),
 						 GL_MAP_READ_BIT);
@@ -547,7 +532,7 @@ static int collect_batch(struct render_gl *r, struct gl_batch *out)
 		}
 	}
 	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
-	r->base.stats.tiles += count;
+	r->base.stats.tiles += (uint64_t)count;
 	r->copy_ns += (uint64_t)now_ns() - t1;
 	return err;
 }
