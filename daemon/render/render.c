@@ -19,13 +19,12 @@ struct renderer *render_create(const char *name, const struct geometry *geom, un
 		 * llvmpipe, which docs/performance.md measures slower than
 		 * the CPU renderer on every scene: take the CPU renderer. */
 		gl.backend = "egl";
+		gl.hardware_only = true;
 		struct renderer *r = render_gl_create(geom, &gl);
-		if (r && render_gl_is_hardware(r))
-			return r;
 		if (r)
-			log_info("renderer auto: no hardware GPU (EGL gives a software rasterizer): "
-				 "the CPU renderer is faster here");
-		render_destroy(r);
+			return r;
+		log_info("renderer auto: no hardware GPU for EGL: the CPU renderer (faster than a "
+			 "software rasterizer, docs/performance.md)");
 	}
 	return render_cpu_create(geom, threads);
 }

@@ -49,6 +49,8 @@ struct render_gl_options {
 			      * read back whole, halftone and pack on the CPU */
 	bool no_fallback;    /* a GL failure fails the render instead of
 			      * handing over to the CPU renderer (tests) */
+	bool hardware_only;  /* fail (ENODEV) on a software rasterizer, before
+			      * building shaders: what "auto" asks for */
 	uint32_t max_prims;  /* binned primitives a volume may have on GL; more
 			      * render that volume on the CPU. 0 = as many as
 			      * the primitive texture holds (tests set less) */
@@ -84,9 +86,6 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom,
  * fence that never signals) it logs why and renders on the CPU from then
  * on, unless opts->no_fallback. */
 struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts);
-/* Whether r is a GL renderer on a hardware GPU (not llvmpipe or another
- * software rasterizer). */
-bool render_gl_is_hardware(const struct renderer *r);
 /* GL_RENDERER and GL_VERSION of a GL renderer's context ("" otherwise). */
 const char *render_gl_describe(const struct renderer *r);
 

@@ -729,14 +729,6 @@ static void render_gl_destroy(struct renderer *base)
 static const struct renderer_impl render_egl_impl = { "egl", render_gl_volume, render_gl_destroy };
 static const struct renderer_impl render_osmesa_impl = { "osmesa", render_gl_volume, render_gl_destroy };
 
-bool render_gl_is_hardware(const struct renderer *base)
-{
-	if (base->impl != &render_egl_impl && base->impl != &render_osmesa_impl)
-		return false;
-	const struct render_gl *r = (const struct render_gl *)base;
-	return r->have_ctx && r->ctx.hardware;
-}
-
 const char *render_gl_describe(const struct renderer *base)
 {
 	if (base->impl != &render_egl_impl && base->impl != &render_osmesa_impl)
@@ -781,6 +773,10 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 		r->have_ctx = true;
 	}
 	r->gl = &r->ctx.gl;
+	if (err == 0 && opts->hardware_only && !r->ctx.hardware) {
+		log_info("GL renderer %s: %s is a software rasterizer", gl_backend_name(backend), r->ctx.renderer);
+		err = -ENODEV;
+	}
 	if (err == 0)
 		err = build_programs(r);
 	if (err == 0)

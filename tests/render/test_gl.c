@@ -429,6 +429,22 @@ static void check_too_big(const struct geometry *g, const char *backend)
 	tscene_free(&wall);
 }
 
+/* hardware_only ("auto"'s probe): no renderer on a software rasterizer
+ * (ENODEV), or one that is not one. */
+static void check_hardware_only(const struct geometry *g, const char *backend)
+{
+	struct render_gl_options o = { .backend = backend, .threads = 2, .hardware_only = true };
+	errno = 0;
+	struct renderer *r = render_gl_create(g, &o);
+	if (!r) {
+		CHECK_MSG(errno == ENODEV, "%s hardware_only: errno %d", backend, errno);
+		return;
+	}
+	CHECK_MSG(!strstr(render_gl_describe(r), "(software)"), "%s hardware_only gave %s", backend,
+		  render_gl_describe(r));
+	render_destroy(r);
+}
+
 /* Whether the build has this backend: only OSMesa may be missing (ENOENT);
  * any other failure to create a renderer fails the test. */
 static bool have_backend(const struct geometry *g, const char *backend)
@@ -462,6 +478,7 @@ int main(int argc, char **argv)
 		check_reuse(&odd, b);
 		check_faults(&small, b);
 		check_too_big(&small, b);
+		check_hardware_only(&small, b);
 	}
 	CHECK_MSG(disagreements == 0, "%d disagreements with the CPU reference (above)", disagreements);
 	return check_done();
