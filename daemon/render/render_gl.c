@@ -35,7 +35,10 @@ _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two wo
 
 #define GL_MAX_BATCH 16
 #define GL_PRIM_TEXELS 3 /* RGBA32UI texels per primitive (gl_shaders.h) */
-#define GL_TILE_WORDS (VOLUME_TILE_BYTES / 4)
+/* u_frame.w of the section program: which of a primitive's 16 vertex
+ * slots a draw covers (gl_shaders.h). */
+#define GL_SECTION_SLOTS 0.0f /* 0-3: sections, 4 vertices a primitive */
+#define GL_EDGE_SLOTS 1.0f    /* 4-15: triangle edges, 12 a primitive */
 /* Half thickness of the slab the fragment shader accepts on the axis, in
  * pixels: the b of t^2 <= (s tau)^2 + b^2. */
 #define GL_AXIS_BIAS_PX 0.25
@@ -79,7 +82,6 @@ struct render_gl {
 	uint32_t *staging;  /* primitives in the texture's layout */
 	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
 	size_t staging_cap; /* primitives */
-	size_t point_buf_bytes;
 	struct gl_batch out[2];
 	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
 	uint8_t *rgba;      /* naive: one image read back */
@@ -358,9 +360,15 @@ static int upload(struct render_gl *r)
 	return 0;
 }
 
-static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, uint32_t k, uint32_t slot)
+/* The drawing programs' uniforms for image k in batch slot `slot`
+ * (gl_shaders.h), computed once per image. */
+struct image_uniforms {
+	GLuint image[4], tile[4];
+	float slice[4], eye[4], frame[4];
+};
+
+static void image_uniforms(const struct render_gl *r, uint32_t k, uint32_t slot, struct image_uniforms *u)
 {
-	const struct gl_api *gl = r->gl;
 	const struct geometry *g = &r->base.geom;
 	double theta = geometry_image_angle(g, k);
 	double tau = tan(M_PI / g->images_per_rev);
@@ -372,14 +380,28 @@ static void set_image_uniforms(struct render_gl *r, const struct gl_program *p, 
 	/* R2 low-discrepancy sequence: neighbouring images sample far apart. */
 	double jx = fmod(0.5 + 0.7548776662466927 * k, 1.0) - 0.5;
 	double jy = fmod(0.5 + 0.5698402909980532 * k, 1.0) - 0.5;
-	gl->Uniform4ui(p->uni[UNI_IMAGE], k, r->images, r->opts.naive ? 1u : 0u, r->tex_shift);
-	gl->Uniform4f(p->uni[UNI_SLICE], (float)cos(theta), (float)sin(theta), (float)tau, (float)bias);
-	gl->Uniform4f(p->uni[UNI_EYE], (float)eye, (float)slab, (float)(2 * GL_JITTER_PX * jx * 2.0 / g->width),
-		      (float)(2 * GL_JITTER_PX * jy * 2.0 / g->height));
-	gl->Uniform4f(p->uni[UNI_FRAME], (float)(1.0 / g->half_height), 2.0f / (float)g->width,
-		      2.0f / (float)g->height, 0.0f);
+	*u = (struct image_uniforms){
+		.image = { k, r->images, r->opts.naive ? 1u : 0u, r->tex_shift },
+		.tile = { r->vol->tiles_x, r->tiles_per_image, slot, g->height },
+		.slice = { (float)cos(theta), (float)sin(theta), (float)tau, (float)bias },
+		.eye = { (float)eye, (float)slab, (float)(2 * GL_JITTER_PX * jx * 2.0 / g->width),
+			 (float)(2 * GL_JITTER_PX * jy * 2.0 / g->height) },
+		.frame = { (float)(1.0 / g->half_height), 2.0f / (float)g->width, 2.0f / (float)g->height,
+			   GL_SECTION_SLOTS },
+	};
+}
+
+/* Makes p current with u. */
+static void use_program(struct render_gl *r, const struct gl_program *p, const struct image_uniforms *u)
+{
+	const struct gl_api *gl = r->gl;
+	gl->UseProgram(p->id);
+	gl->Uniform4ui(p->uni[UNI_IMAGE], u->image[0], u->image[1], u->image[2], u->image[3]);
+	gl->Uniform4ui(p->uni[UNI_TILE], u->tile[0], u->tile[1], u->tile[2], u->tile[3]);
+	gl->Uniform4f(p->uni[UNI_SLICE], u->slice[0], u->slice[1], u->slice[2], u->slice[3]);
+	gl->Uniform4f(p->uni[UNI_EYE], u->eye[0], u->eye[1], u->eye[2], u->eye[3]);
+	gl->Uniform4f(p->uni[UNI_FRAME], u->frame[0], u->frame[1], u->frame[2], u->frame[3]);
 	gl->Uniform1i(p->uni[UNI_PRIMS], 0);
-	gl->Uniform4ui(p->uni[UNI_TILE], r->vol->tiles_x, r->tiles_per_image, slot, g->height);
 }
 
 /* Draws the runs of b->prims with the current program: verts vertices
@@ -404,25 +426,22 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	} else {
 		n = bin_runs(b, k, runs);
 	}
+	struct image_uniforms u;
+	image_uniforms(r, k, slot, &u);
 	gl->Viewport(0, (GLint)(slot * g->height), (GLsizei)g->width, (GLsizei)g->height);
-	gl->UseProgram(r->face.id);
-	set_image_uniforms(r, &r->face, k, slot);
+	use_program(r, &r->face, &u);
 	draw_runs(r, runs, n, GL_TRIANGLES, 3);
-	gl->UseProgram(r->section.id);
-	set_image_uniforms(r, &r->section, k, slot);
+	use_program(r, &r->section, &u);
 	draw_runs(r, runs, n, GL_LINES, 4);
 	draw_runs(r, runs, n, GL_POINTS, 4);
 	if (r->triangles) {
-		const struct geometry *gg = &r->base.geom;
-		gl->Uniform4f(r->section.uni[UNI_FRAME], (float)(1.0 / gg->half_height), 2.0f / (float)gg->width,
-			      2.0f / (float)gg->height, 1.0f);
+		gl->Uniform4f(r->section.uni[UNI_FRAME], u.frame[0], u.frame[1], u.frame[2], GL_EDGE_SLOTS);
 		draw_runs(r, runs, n, GL_LINES, 12);
 		draw_runs(r, runs, n, GL_POINTS, 12);
 	}
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
-		gl->UseProgram(r->point.id);
-		set_image_uniforms(r, &r->point, k, slot);
+		use_program(r, &r->point, &u);
 		gl->DrawArrays(GL_POINTS, (GLint)p0, (GLsizei)(p1 - p0));
 	}
 }
