@@ -149,3 +149,26 @@ halftone_fn halftone_pick(const char *name)
 			return v->fn;
 	return NULL;
 }
+
+int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
+{
+	const struct geometry *g = &vol->geom;
+	uint8_t tile[VOLUME_TILE_BYTES];
+	for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
+		uint32_t u0 = t % vol->tiles_x * VOLUME_TILE, v0 = t / vol->tiles_x * VOLUME_TILE;
+		memset(tile, 0, sizeof(tile));
+		for (uint32_t y = 0; y < VOLUME_TILE && v0 + y < g->height; y++) {
+			for (uint32_t x = 0; x < VOLUME_TILE && u0 + x < g->width; x++) {
+				const uint8_t *px = rgba + ((size_t)(v0 + y) * g->width + u0 + x) * 4;
+				uint8_t thr = render_dither_threshold(k, u0 + x, v0 + y);
+				for (int c = 0; c < 3; c++)
+					if (px[c] > thr)
+						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));
+			}
+		}
+		int e = volume_image_append(vol, k, t, tile);
+		if (e < 0)
+			return e;
+	}
+	return 0;
+}

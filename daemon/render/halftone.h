@@ -51,4 +51,11 @@ const struct halftone_variant *halftone_variants(void);
  * not runnable here. */
 halftone_fn halftone_pick(const char *name);
 
+/* The slow, obvious way, for the naive GL pipeline: halftones and packs a
+ * whole W x H RGBA8 image (row 0 first, 4 bytes a pixel, alpha ignored)
+ * into image k of vol, pixel by pixel, appending its non-empty tiles.
+ * Returns 0 or -ENOMEM. */
+struct volume;
+int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba);
+
 #endif

@@ -1,20 +1,20 @@
 /* The GL renderer: DESIGN.md section 5's pipeline on OpenGL ES 3.1 (EGL) or
- * desktop OpenGL 4.5 (OSMesa), with the same GLSL.
+ * desktop OpenGL 4.5 (OSMesa), with the same GLSL (gl_shaders.h).
  *
  * Per volume the CPU bins the scene exactly as the CPU renderer does
- * (bin.h) and uploads the sorted primitives as a texture of raw words and
- * the per-image points as a vertex buffer. Images are drawn in batches into
- * an RGBA8 atlas (image b of a batch at rows b*H .. b*H + H - 1), each with
- * its own projection: a thin slab around the slice plane, seen in
- * perspective from a point on the slice's normal, its sample grid jittered
- * by a sub-pixel offset fixed per image. Per image, only the runs of
- * primitives binned to it are drawn, three ways (gl_shaders.h): faces
- * clipped to the bow tie in the fragment shader, sections with the slice
- * plane as lines and points, and the binned points. Colours combine by MAX
- * blending. A compute pass then halftones, packs and finds the non-empty
- * tiles of the whole batch, compacting them into a buffer the CPU maps once
- * the batch's fence has signalled, while the GPU draws the next batch; only
- * non-empty packed tiles cross back. */
+ * (bin.h) and uploads the sorted primitives as a texture, three texels a
+ * primitive, and the per-image points as a vertex buffer. Images are drawn
+ * in batches into an RGBA8 atlas (image b of a batch at rows b*H .. b*H +
+ * H - 1), each with its own projection: a thin slab around the slice plane,
+ * seen in perspective from a point on the slice's normal, its sample grid
+ * jittered by a sub-pixel offset fixed per image. Per image, only the runs
+ * of primitives binned to it are drawn: faces clipped to the bow tie in the
+ * fragment shader; sections with the slice plane, triangle edges and
+ * segments clipped to the lobes, as lines and points; the binned points.
+ * Colours combine by MAX blending, and fragments mark the tile rows they
+ * touch. gl_pack.c then halftones and packs the touched tiles of the batch
+ * on the GPU and collects the non-empty ones while the GPU draws the next
+ * batch. This file: set-up, upload, drawing, the render and its failures. */
 #include <errno.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -29,72 +29,9 @@
 #include "log.h"
 #include "pool.h"
 #include "render.h"
+#include "render_gl_priv.h"
 
-_Static_assert(sizeof(struct bin_prim) == 11 * 4, "bin_prim is 9 vertex words and 2 more");
-_Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
-
-#define GL_MAX_BATCH 16
-#define GL_PRIM_TEXELS 3 /* RGBA32UI texels per primitive (gl_shaders.h) */
-/* u_frame.w of the section program: which of a primitive's 16 vertex
- * slots a draw covers (gl_shaders.h). */
-#define GL_SECTION_SLOTS 0.0f /* 0-3: sections, 4 vertices a primitive */
-#define GL_EDGE_SLOTS 1.0f    /* 4-15: triangle edges, 12 a primitive */
-/* Half thickness of the slab the fragment shader accepts on the axis, in
- * pixels: the b of t^2 <= (s tau)^2 + b^2. */
-#define GL_AXIS_BIAS_PX 0.25
-/* Jitter of the sample grid, at most this many pixels either way. */
-#define GL_JITTER_PX 0.25
-#define GL_FENCE_TIMEOUT_NS 5000000000ull
-
-enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_TILE, UNI_COUNT };
 static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims", "u_tile" };
-
-struct gl_program {
-	GLuint id;
-	GLint uni[UNI_COUNT];
-};
-
-/* One batch's output on the GPU, and what the CPU needs to collect it. */
-struct gl_batch {
-	GLuint tiles, ids; /* shader storage: packed tiles; count + tile ids */
-	GLsync fence;      /* NULL when nothing is pending */
-	uint32_t first, n; /* volume images first .. first + n - 1 */
-};
-
-struct render_gl {
-	struct renderer base;
-	struct render_gl_options opts;
-	struct gl_context ctx;
-	bool have_ctx;
-	enum gl_fault fault;
-	const struct gl_api *gl;
-	struct pool *pool;
-	struct bin_set bins;
-	uint32_t images, tiles_per_image, batch;
-
-	struct gl_program face, section, point;
-	GLuint pack, list;
-	GLint pack_uni, pack_colour, list_count;
-	GLuint vao, point_buf, prim_tex, atlas, fbo;
-	GLuint touched, tile_list; /* tile marks of a batch; touched tiles as a list */
-	bool atlas_dirty;          /* a render stopped half-way: clear first */
-	uint32_t tex_width, tex_shift, tex_rows;
-	uint32_t *staging;  /* primitives in the texture's layout */
-	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
-	size_t staging_cap; /* primitives */
-	struct gl_batch out[2];
-	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
-	uint8_t *rgba;      /* naive: one image read back */
-	uint64_t volumes;
-
-	struct renderer *cpu; /* renders what GL cannot, created when first needed */
-	bool gl_dead;         /* GL failed: every volume renders on the CPU */
-	bool told_too_big;    /* logged that a scene exceeds the texture */
-	char description[300]; /* GL_RENDERER, GL_VERSION */
-	/* Per render: */
-	struct volume *vol;
-	uint64_t wait_ns, copy_ns;
-};
 
 static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs,
 			const char *what)
@@ -177,34 +114,6 @@ static int check_limits(struct render_gl *r)
 	return 0;
 }
 
-/* The storage buffers of the pack pass: two output sets (double
- * buffering), the tile marks and the tile list, all zero. */
-static int create_buffers(struct render_gl *r)
-{
-	const struct gl_api *gl = r->gl;
-	size_t tiles = (size_t)r->batch * r->tiles_per_image;
-	for (int i = 0; i < 2; i++) {
-		gl->GenBuffers(1, &r->out[i].tiles);
-		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].tiles);
-		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(tiles * VOLUME_TILE_BYTES), NULL, GL_STREAM_READ);
-		gl->GenBuffers(1, &r->out[i].ids);
-		gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->out[i].ids);
-		gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles + 1) * 4), NULL, GL_STREAM_READ);
-	}
-	/* The list: a 3-word header padded to 16 bytes, then (tile, rows). */
-	uint32_t *zero = calloc(tiles * 2 + 4, 4);
-	if (!zero)
-		return -ENOMEM;
-	gl->GenBuffers(1, &r->touched);
-	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->touched);
-	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)(tiles * 4), zero, GL_DYNAMIC_COPY);
-	gl->GenBuffers(1, &r->tile_list);
-	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
-	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((tiles * 2 + 4) * 4), zero, GL_DYNAMIC_COPY);
-	free(zero);
-	return 0;
-}
-
 static int create_objects(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
@@ -227,7 +136,7 @@ static int create_objects(struct render_gl *r)
 		log_warn("GL renderer: the RGBA8 atlas is not a complete framebuffer");
 		return -ENOTSUP;
 	}
-	e = create_buffers(r);
+	e = gl_pack_create_buffers(r);
 	if (e < 0)
 		return e;
 	r->atlas_dirty = true;
@@ -254,7 +163,7 @@ static void destroy_gl(struct render_gl *r)
 	if (!r->have_ctx)
 		return;
 	const struct gl_api *gl = r->gl;
-	if (gl_context_bind(&r->ctx) == 0) {
+	if (r->have_api && gl_context_bind(&r->ctx) == 0) {
 		for (int i = 0; i < 2; i++) {
 			if (r->out[i].fence)
 				gl->DeleteSync(r->out[i].fence);
@@ -446,150 +355,10 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	}
 }
 
-/* Queues halftone + pack of the batch just drawn into out: the touched
- * tiles are listed, then packed (and zeroed in the atlas) by an indirect
- * dispatch over the list. */
-static void pack_batch(struct render_gl *r, struct gl_batch *out)
-{
-	const struct gl_api *gl = r->gl;
-	const struct geometry *g = &r->base.geom;
-	static const uint32_t zero = 0, list_head[3] = { 0, 1, 1 };
-	uint32_t tiles = out->n * r->tiles_per_image;
-	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, out->ids);
-	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, 4, &zero);
-	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->tile_list);
-	gl->BufferSubData(GL_SHADER_STORAGE_BUFFER, 0, sizeof(list_head), list_head);
-	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-	gl->UseProgram(r->list);
-	gl->Uniform1ui(r->list_count, tiles);
-	gl->DispatchCompute((tiles + 63) / 64, 1, 1);
-	gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-
-	gl->UseProgram(r->pack);
-	gl->ActiveTexture(GL_TEXTURE1);
-	gl->BindTexture(GL_TEXTURE_2D, r->atlas);
-	gl->Uniform1i(r->pack_colour, 1);
-	gl->Uniform4ui(r->pack_uni, out->first, g->width, g->height, r->tiles_per_image);
-	gl->BindImageTexture(0, r->atlas, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA8);
-	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, out->tiles);
-	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out->ids);
-	gl->BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, r->tile_list);
-	gl->DispatchComputeIndirect(0);
-	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
-			  GL_SHADER_STORAGE_BARRIER_BIT);
-	out->fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-	gl->Flush();
-	gl->ActiveTexture(GL_TEXTURE0);
-}
-
-/* Reads the tile numbers of a packed batch into slot_of (each tile's slot
- * in the output, or -1). Returns how many tiles were packed, or -EIO when
- * the list cannot be read or is corrupt (out of range, repeated). */
-static int map_slots(struct render_gl *r, const struct gl_batch *out)
-{
-	const struct gl_api *gl = r->gl;
-	uint32_t tiles = out->n * r->tiles_per_image;
-	gl->BindBuffer(GL_COPY_READ_BUFFER, out->ids);
-	const uint32_t *ids = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
-	if (!ids)
-		return -EIO;
-	uint32_t count = ids[0];
-	int err = count > tiles ? -EIO : 0;
-	for (uint32_t t = 0; t < tiles; t++)
-		r->slot_of[t] = -1;
-	for (uint32_t i = 0; err == 0 && i < count; i++) {
-		if (ids[1 + i] >= tiles || r->slot_of[ids[1 + i]] >= 0)
-			err = -EIO;
-		else
-			r->slot_of[ids[1 + i]] = (int32_t)i;
-	}
-	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
-	if (err < 0)
-		log_error("GL renderer: the pack pass returned a corrupt tile list");
-	return err < 0 ? err : (int)count;
-}
-
-/* Waits for a packed batch and appends its tiles, in tile order, to the
- * volume. */
-static int collect_batch(struct render_gl *r, struct gl_batch *out)
-{
-	const struct gl_api *gl = r->gl;
-	if (!out->fence)
-		return 0;
-	uint64_t t0 = (uint64_t)now_ns();
-	GLenum w = gl->ClientWaitSync(out->fence, GL_SYNC_FLUSH_COMMANDS_BIT, GL_FENCE_TIMEOUT_NS);
-	gl->DeleteSync(out->fence);
-	out->fence = NULL;
-	uint64_t t1 = (uint64_t)now_ns();
-	r->wait_ns += t1 - t0;
-	if (w != GL_ALREADY_SIGNALED && w != GL_CONDITION_SATISFIED) {
-		log_error("GL renderer: a batch did not finish within %llu s",
-			  (unsigned long long)(GL_FENCE_TIMEOUT_NS / 1000000000ull));
-		return -ETIMEDOUT;
-	}
-	int count = map_slots(r, out);
-	if (count <= 0)
-		return count;
-	int err = 0;
-	gl->BindBuffer(GL_COPY_READ_BUFFER, out->tiles);
-	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES),
-						 GL_MAP_READ_BIT);
-	if (!data)
-		return -EIO;
-	for (uint32_t i = 0; err == 0 && i < out->n; i++) {
-		const int32_t *slot = r->slot_of + (size_t)i * r->tiles_per_image;
-		for (uint32_t t = 0; err == 0 && t < r->tiles_per_image; t++) {
-			if (slot[t] < 0)
-				continue;
-			uint8_t *dst = volume_image_next(r->vol, out->first + i);
-			if (!dst) {
-				err = -ENOMEM;
-				break;
-			}
-			memcpy(dst, data + (size_t)slot[t] * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
-			err = volume_image_push(r->vol, out->first + i, t);
-		}
-	}
-	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
-	r->base.stats.tiles += (uint64_t)count;
-	r->copy_ns += (uint64_t)now_ns() - t1;
-	return err;
-}
-
-/* The naive pipeline's back end: the whole RGBA image read back,
- * halftoned and packed on the CPU. */
-static int readback_naive(struct render_gl *r, uint32_t k)
-{
-	const struct gl_api *gl = r->gl;
-	const struct geometry *g = &r->base.geom;
-	uint64_t t0 = (uint64_t)now_ns();
-	gl->ReadPixels(0, 0, (GLsizei)g->width, (GLsizei)g->height, GL_RGBA, GL_UNSIGNED_BYTE, r->rgba);
-	uint64_t t1 = (uint64_t)now_ns();
-	r->wait_ns += t1 - t0;
-	uint8_t tile[VOLUME_TILE_BYTES];
-	for (uint32_t t = 0; t < r->tiles_per_image; t++) {
-		uint32_t tx = t % r->vol->tiles_x, ty = t / r->vol->tiles_x;
-		memset(tile, 0, sizeof(tile));
-		for (uint32_t y = 0; y < VOLUME_TILE && ty * VOLUME_TILE + y < g->height; y++) {
-			uint32_t v = ty * VOLUME_TILE + y;
-			for (uint32_t x = 0; x < VOLUME_TILE && tx * VOLUME_TILE + x < g->width; x++) {
-				uint32_t u = tx * VOLUME_TILE + x;
-				const uint8_t *px = r->rgba + ((size_t)v * g->width + u) * 4;
-				uint8_t thr = render_dither_threshold(k, u, v);
-				for (int c = 0; c < 3; c++)
-					if (px[c] > thr)
-						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));
-			}
-		}
-		int e = volume_image_append(r->vol, k, t, tile);
-		if (e < 0)
-			return e;
-	}
-	r->copy_ns += (uint64_t)now_ns() - t1;
-	return 0;
-}
-
-static int render_batches(struct render_gl *r)
+/* Binds what every draw uses. The pack pass leaves the atlas and the tile
+ * marks zero; after a render that stopped half-way (or a naive one) they
+ * may not be: then both are cleared. */
+static int begin_batches(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
@@ -599,8 +368,6 @@ static int render_batches(struct render_gl *r)
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r->touched);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, r->tile_list);
 	if (r->atlas_dirty || r->opts.naive) {
-		/* The pack pass leaves the atlas zero; after a failed render
-		 * it may not be, and the marks may be stale: clear both. */
 		size_t bytes = (size_t)r->batch * r->tiles_per_image * 4;
 		uint32_t *zero = calloc(1, bytes);
 		if (!zero)
@@ -611,7 +378,15 @@ static int render_batches(struct render_gl *r)
 		free(zero);
 	}
 	r->atlas_dirty = true;
-	int err = 0, cur = 0;
+	return 0;
+}
+
+static int render_batches(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	int err = begin_batches(r), cur = 0;
+	if (err < 0)
+		return err;
 	for (uint32_t first = 0; first < r->images && err == 0; first += r->batch) {
 		uint32_t n = r->images - first < r->batch ? r->images - first : r->batch;
 		if (r->opts.naive)
@@ -619,20 +394,20 @@ static int render_batches(struct render_gl *r)
 		for (uint32_t i = 0; i < n; i++)
 			draw_image(r, first + i, i);
 		if (r->opts.naive) {
-			err = readback_naive(r, first);
+			err = gl_pack_naive(r, first);
 			continue;
 		}
 		gl->MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 		struct gl_batch *out = &r->out[cur];
 		out->first = first;
 		out->n = n;
-		pack_batch(r, out);
+		gl_pack_batch(r, out);
 		/* Collect the previous batch while this one runs. */
 		cur ^= 1;
-		err = collect_batch(r, &r->out[cur]);
+		err = gl_pack_collect(r, &r->out[cur]);
 	}
 	for (int i = 0; i < 2; i++) {
-		int e = collect_batch(r, &r->out[cur ^ 1]);
+		int e = gl_pack_collect(r, &r->out[cur ^ 1]);
 		err = err ? err : e;
 		cur ^= 1;
 	}
@@ -674,6 +449,21 @@ static int render_on_cpu(struct render_gl *r, const struct scene *scene, struct 
 	int e = render_volume(r->cpu, scene, out);
 	r->base.stats = r->cpu->stats;
 	return e;
+}
+
+/* render_stats of a GL render that began at t0 and finished binning at t1
+ * (docs/rendering.md says what each time covers). */
+static void set_stats(struct render_gl *r, uint64_t t0, uint64_t t1)
+{
+	struct render_stats *st = &r->base.stats;
+	st->total_ns = (uint64_t)now_ns() - t0;
+	st->bin_ns = t1 - t0;
+	st->pack_ns = r->wait_ns + r->copy_ns;
+	st->raster_ns = st->total_ns - st->bin_ns - st->pack_ns;
+	st->prims = r->bins.prim_count + r->bins.point_count;
+	st->threads = pool_workers(r->pool);
+	if (r->opts.naive)
+		st->tiles = volume_tile_count(r->vol);
 }
 
 static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
@@ -720,15 +510,7 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 		r->gl_dead = true;
 		return render_on_cpu(r, scene, out);
 	}
-	struct render_stats *st = &r->base.stats;
-	st->total_ns = (uint64_t)now_ns() - t0;
-	st->bin_ns = t1 - t0;
-	st->pack_ns = r->wait_ns + r->copy_ns;
-	st->raster_ns = st->total_ns - st->bin_ns - st->pack_ns;
-	st->prims = r->bins.prim_count + r->bins.point_count;
-	st->threads = pool_workers(r->pool);
-	if (r->opts.naive)
-		st->tiles = volume_tile_count(out);
+	set_stats(r, t0, t1);
 	return 0;
 }
 
@@ -753,6 +535,32 @@ const char *render_gl_describe(const struct renderer *base)
 	if (base->impl != &render_egl_impl && base->impl != &render_osmesa_impl)
 		return "";
 	return ((const struct render_gl *)base)->description;
+}
+
+/* Makes the context (left unbound) and everything the pipeline keeps in
+ * it. */
+static int open_gl(struct render_gl *r, enum gl_backend backend)
+{
+	int err = gl_context_create(&r->ctx, backend);
+	r->have_ctx = true;
+	r->have_api = err == 0;
+	r->gl = &r->ctx.gl;
+	if (err == 0 && r->opts.hardware_only && !r->ctx.hardware) {
+		log_info("GL renderer %s: %s is a software rasterizer", gl_backend_name(backend), r->ctx.renderer);
+		err = -ENODEV;
+	}
+	if (err == 0)
+		err = build_programs(r);
+	if (err == 0)
+		err = create_objects(r);
+	if (err == 0) {
+		snprintf(r->description, sizeof(r->description), "%s, %s%s", r->ctx.renderer, r->ctx.version,
+			 r->ctx.hardware ? "" : " (software)");
+		log_info("GL renderer %s: %s, %u images per batch", gl_backend_name(backend), r->description,
+			 r->batch);
+	}
+	gl_context_unbind(&r->ctx);
+	return err;
 }
 
 struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts)
@@ -787,27 +595,8 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 	r->pool = err == 0 ? pool_create(threads) : NULL;
 	if (err == 0 && !r->pool)
 		err = -ENOMEM;
-	if (err == 0) {
-		err = gl_context_create(&r->ctx, backend);
-		r->have_ctx = true;
-	}
-	r->gl = &r->ctx.gl;
-	if (err == 0 && opts->hardware_only && !r->ctx.hardware) {
-		log_info("GL renderer %s: %s is a software rasterizer", gl_backend_name(backend), r->ctx.renderer);
-		err = -ENODEV;
-	}
 	if (err == 0)
-		err = build_programs(r);
-	if (err == 0)
-		err = create_objects(r);
-	if (err == 0) {
-		snprintf(r->description, sizeof(r->description), "%s, %s%s", r->ctx.renderer, r->ctx.version,
-			 r->ctx.hardware ? "" : " (software)");
-		log_info("GL renderer %s: %s, %u images per batch", gl_backend_name(backend), r->description,
-			 r->batch);
-	}
-	if (r->have_ctx)
-		gl_context_unbind(&r->ctx);
+		err = open_gl(r, backend);
 	if (err < 0) {
 		render_gl_destroy(&r->base);
 		errno = -err;

@@ -1,0 +1,91 @@
+/* The GL renderer's state, shared by render_gl.c (set-up, upload, drawing,
+ * the render) and gl_pack.c (the GPU halftone + pack pass and reading its
+ * output back). Private to daemon/render/. */
+#ifndef SPINDLE_RENDER_GL_PRIV_H
+#define SPINDLE_RENDER_GL_PRIV_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "bin.h"
+#include "gl_context.h"
+#include "render.h"
+
+_Static_assert(sizeof(struct bin_prim) == 11 * 4, "bin_prim is 9 vertex words and 2 more");
+_Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
+
+#define GL_MAX_BATCH 16
+#define GL_PRIM_TEXELS 3 /* RGBA32UI texels per primitive (gl_shaders.h) */
+/* u_frame.w of the section program: which of a primitive's 16 vertex
+ * slots a draw covers (gl_shaders.h). */
+#define GL_SECTION_SLOTS 0.0f /* 0-3: sections, 4 vertices a primitive */
+#define GL_EDGE_SLOTS 1.0f    /* 4-15: triangle edges, 12 a primitive */
+/* Half thickness of the slab the fragment shader accepts on the axis, in
+ * pixels: the b of t^2 <= (s tau)^2 + b^2. */
+#define GL_AXIS_BIAS_PX 0.25
+/* Jitter of the sample grid, at most this many pixels either way. */
+#define GL_JITTER_PX 0.25
+#define GL_FENCE_TIMEOUT_NS 5000000000ull
+
+enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_TILE, UNI_COUNT };
+
+struct gl_program {
+	GLuint id;
+	GLint uni[UNI_COUNT];
+};
+
+/* One batch's output on the GPU, and what the CPU needs to collect it. */
+struct gl_batch {
+	GLuint tiles, ids; /* shader storage: packed tiles; count + tile ids */
+	GLsync fence;      /* NULL when nothing is pending */
+	uint32_t first, n; /* volume images first .. first + n - 1 */
+};
+
+struct render_gl {
+	struct renderer base;
+	struct render_gl_options opts;
+	struct gl_context ctx;
+	bool have_ctx;
+	bool have_api; /* the context was made and its entry points loaded */
+	enum gl_fault fault;
+	const struct gl_api *gl;
+	struct pool *pool;
+	struct bin_set bins;
+	uint32_t images, tiles_per_image, batch;
+
+	struct gl_program face, section, point;
+	GLuint pack, list;
+	GLint pack_uni, pack_colour, list_count;
+	GLuint vao, point_buf, prim_tex, atlas, fbo;
+	GLuint touched, tile_list; /* tile marks of a batch; touched tiles as a list */
+	bool atlas_dirty;          /* a render stopped half-way: clear first */
+	uint32_t tex_width, tex_shift, tex_rows;
+	uint32_t *staging;  /* primitives in the texture's layout */
+	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
+	size_t staging_cap; /* primitives */
+	struct gl_batch out[2];
+	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
+	uint8_t *rgba;      /* naive: one image read back */
+	uint64_t volumes;
+
+	struct renderer *cpu; /* renders what GL cannot, created when first needed */
+	bool gl_dead;         /* GL failed: every volume renders on the CPU */
+	bool told_too_big;    /* logged that a scene exceeds the texture */
+	char description[300]; /* GL_RENDERER, GL_VERSION */
+	/* Per render: */
+	struct volume *vol;
+	uint64_t wait_ns, copy_ns;
+};
+
+/* gl_pack.c */
+/* The storage buffers of the pack pass, all zero. 0 or -ENOMEM. */
+int gl_pack_create_buffers(struct render_gl *r);
+/* Queues the pack of the batch just drawn into out, with a fence. */
+void gl_pack_batch(struct render_gl *r, struct gl_batch *out);
+/* Waits for out's fence and appends its tiles to r->vol. 0 (also when
+ * nothing is pending) or -ETIMEDOUT, -EIO, -ENOMEM, -EINVAL. */
+int gl_pack_collect(struct render_gl *r, struct gl_batch *out);
+/* The naive back end: reads image k back whole and packs it on the CPU. */
+int gl_pack_naive(struct render_gl *r, uint32_t k);
+
+#endif
