@@ -101,7 +101,7 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	return 0;
 }
 
-static void on_swapped(void *data, uint32_t buffer, int64_t time_ns)
+static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
 {
 	struct devices *dev = data;
 	pipeline_swapped(dev->srv->pipe, buffer, time_ns);

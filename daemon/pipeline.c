@@ -90,7 +90,7 @@ static void upload_ready(struct pipeline *p)
 		struct volume *v = p->content[b];
 		p->content[b] = p->work;
 		p->work = v;
-		int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b]);
+		int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], NULL);
 		if (r < 0) {
 			log_warn("projector upload failed: %s", strerror(-r));
 			return;

@@ -20,6 +20,7 @@ struct proj_sim {
 	struct projwire_info info;
 	uint8_t *wire; /* encode buffer, grown as needed */
 	size_t wire_cap;
+	uint64_t bytes_sent, device_errors;
 };
 
 static const struct projector_impl sim_impl;
@@ -86,7 +87,8 @@ static bool volume_fits(const struct proj_sim *s, const struct volume *vol)
 	       vol->image_count == s->info.images_per_volume;
 }
 
-static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol)
+static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol,
+		      const struct volume *base)
 {
 	struct proj_sim *s = (struct proj_sim *)p;
 	struct projwire_status st;
@@ -99,7 +101,7 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		return r;
 	if (buffer == st.shown || buffer == st.pending)
 		return -EBUSY;
-	size_t size = projwire_volume_size(vol);
+	size_t size = projwire_upload_size(vol, base);
 	if (size > s->wire_cap) {
 		uint8_t *w = realloc(s->wire, size);
 		if (!w)
@@ -107,9 +109,10 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		s->wire = w;
 		s->wire_cap = size;
 	}
-	size_t len = projwire_volume_encode(vol, buffer, s->wire);
+	size_t len = projwire_upload_encode(vol, base, buffer, s->wire);
 	for (size_t off = 0; off < len; off += BULK_CHUNK)
 		proj_simdev_bulk_out(s->dev, s->wire + off, len - off < BULK_CHUNK ? len - off : BULK_CHUNK);
+	s->bytes_sent += len;
 	return 0;
 }
 
@@ -131,9 +134,12 @@ static void handle_event(struct proj_sim *s, const struct projwire_event *ev)
 	const struct projector_listener *l = s->base.listener;
 	if (ev->type == PROJWIRE_EV_SWAPPED) {
 		if (l && l->swapped)
-			l->swapped(s->base.listener_data, ev->buffer, ev->time_ns);
+			l->swapped(s->base.listener_data, ev->buffer, ev->time_ns, ev->seq);
 		return;
 	}
+	s->device_errors++;
+	if (l && l->error)
+		l->error(s->base.listener_data, ev->buffer, projwire_error_to_errno(ev->error));
 	log_warn("sim projector: device error %u on buffer %d (volume %llu)", (unsigned)ev->error,
 		 ev->buffer == PROJWIRE_NO_BUFFER ? -1 : (int)ev->buffer, (unsigned long long)ev->seq);
 }
@@ -165,6 +171,26 @@ static const struct volume *sim_shown(struct projector *p)
 	return proj_simdev_shown(((struct proj_sim *)p)->dev);
 }
 
+static void sim_get_stats(struct projector *p, struct projector_stats *out)
+{
+	struct proj_sim *s = (struct proj_sim *)p;
+	struct projwire_status st;
+	*out = (struct projector_stats){
+		.present = true,
+		.bytes_sent = s->bytes_sent,
+		.device_errors = s->device_errors,
+		.arrivals = 1,
+		.angle_err_p50 = -1,
+		.angle_err_p99 = -1,
+		.angle_err_max = -1,
+	};
+	if (get_status(s, &st) < 0)
+		return;
+	out->revolutions = st.revolutions;
+	out->swaps = st.swaps;
+	out->underruns = st.underruns;
+}
+
 static void sim_destroy(struct projector *p)
 {
 	struct proj_sim *s = (struct proj_sim *)p;
@@ -184,6 +210,7 @@ static const struct projector_impl sim_impl = {
 	.get_fd = sim_get_fd,
 	.dispatch = sim_dispatch,
 	.shown = sim_shown,
+	.get_stats = sim_get_stats,
 	.destroy = sim_destroy,
 };
 

@@ -2,7 +2,8 @@
  * daemon uploads a volume into a free buffer and asks for a swap; the device
  * shows that buffer from the next revolution start and reports the swap.
  * Backends: "sim" (a simulated projector speaking the projector wire
- * protocol of proto/projector.md through drivers/projwire), later "usb". */
+ * protocol of proto/projector.md through drivers/projwire) and "usb" (a
+ * real one through libusb, proj_usb.c). */
 #ifndef SPINDLE_PROJECTOR_H
 #define SPINDLE_PROJECTOR_H
 
@@ -21,24 +22,57 @@ struct projector_info {
 	uint64_t link_bytes_per_sec; /* sustained upload rate, 0 = unknown */
 };
 
+/* Counters for status; every field 0 when unknown. */
+struct projector_stats {
+	bool present;           /* a device is attached and set up */
+	uint64_t revolutions;   /* revolution starts the device saw */
+	uint64_t swaps;
+	uint64_t underruns;     /* swaps that missed a revolution start for want of data */
+	uint64_t bytes_sent;    /* bulk OUT bytes the host completed, since creation */
+	uint64_t device_errors; /* ERROR events and stalled requests */
+	uint64_t arrivals;      /* times a device was set up (hot-plug included) */
+	/* Slice angle error, in slices, over the revolutions shown so far:
+	 * measured against the true rotor by the simulated projector; negative
+	 * when the backend cannot know it. */
+	double angle_err_p50, angle_err_p99, angle_err_max;
+};
+
+/* Listener callbacks run from dispatch() only, never from another call. */
 struct projector_listener {
-	/* buffer is shown from the revolution that started at time_ns. */
-	void (*swapped)(void *data, uint32_t buffer, int64_t time_ns);
-	/* The device failed or went away; the projector object stays valid
-	 * but every call returns -ENODEV. */
+	/* buffer, holding volume seq, is shown from the revolution that
+	 * started at time_ns. */
+	void (*swapped)(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq);
+	/* The device refused or lost what was sent to buffer
+	 * (PROJWIRE_NO_BUFFER: no buffer concerned); err is a negative errno.
+	 * The buffer's content is unknown from now on and a swap pending on it
+	 * is dropped: the owner uploads again, in full. */
+	void (*error)(void *data, uint32_t buffer, int err);
+	/* The device failed or went away. Every call returns -ENODEV until
+	 * arrived(); the projector object stays valid. */
 	void (*gone)(void *data, int err);
+	/* A device was attached after creation (plugged in, or re-plugged)
+	 * and set up: dark, every buffer empty, nothing shown. get_info()
+	 * describes it. A device present at creation is set up by create and
+	 * not reported (get_stats().present says). */
+	void (*arrived)(void *data);
 };
 
 struct projector_impl {
 	const char *name;
+	/* -ENODEV while no device is present. */
 	int (*get_info)(struct projector *p, struct projector_info *out);
 	/* Dark (true) or lit (false). Takes effect at once. */
 	int (*blank)(struct projector *p, bool blank);
-	/* Revolution period and the time of the latest index pulse. */
+	/* Revolution period and the time of a recent revolution start. */
 	int (*set_timing)(struct projector *p, int64_t period_ns, int64_t index_ns);
 	/* Writes vol into buffer (not the one shown nor one awaiting a swap).
-	 * Returns 0 once queued; -EBUSY if that buffer is not free. */
-	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol);
+	 * base is what the buffer holds now as far as the caller knows (the
+	 * last volume it uploaded there, completed without error), or NULL
+	 * when unknown or empty: with a base only the tiles that differ are
+	 * sent. Returns 0 once queued (vol and base need not outlive the
+	 * call); -EBUSY if that buffer is not free; -ENODEV with no device. */
+	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol,
+		      const struct volume *base);
 	/* Shows buffer from the next revolution start after its upload is
 	 * complete; swapped() reports it. */
 	int (*swap)(struct projector *p, uint32_t buffer);
@@ -48,6 +82,8 @@ struct projector_impl {
 	/* The volume on display now as the device holds it, when the device
 	 * can tell (sim); NULL otherwise. Valid until the next dispatch. */
 	const struct volume *(*shown)(struct projector *p);
+	void (*get_stats)(struct projector *p, struct projector_stats *out);
+	/* Blanks the device, cancels whatever is in flight and frees. */
 	void (*destroy)(struct projector *p);
 };
 
@@ -69,6 +105,21 @@ struct proj_sim_config {
 /* A simulated projector on the simulated rotor. Starts blanked. NULL + errno
  * on failure. The rotor must outlive it. */
 struct projector *proj_sim_create(struct sim_rotor *rotor, const struct proj_sim_config *cfg,
+				  const struct projector_listener *listener, void *data);
+
+struct proj_usb_config {
+	uint16_t vid, pid;   /* 0 = any; the interface must be Spindle's (class
+			      * ff, subclass 53, protocol 01) either way */
+	char bus_path[32];   /* "BUS-PORT.PORT..." as in sysfs (e.g. "1-2.4"),
+			      * empty = any */
+	struct geometry geom; /* what the daemon renders: a device reporting
+			       * another geometry is refused (logged) */
+};
+
+/* The USB projector. Succeeds without a device attached: it is set up when
+ * it arrives (hot-plug), and arrived()/gone() report it. NULL + errno when
+ * libusb cannot start. */
+struct projector *proj_usb_create(const struct proj_usb_config *cfg,
 				  const struct projector_listener *listener, void *data);
 
 /* Counters the simulated projector keeps (for status and tests). */

@@ -427,3 +427,16 @@ int projwire_event_decode(const uint8_t *in, size_t len, struct projwire_event *
 		return -EPROTO;
 	return (int)(PROJWIRE_HEADER_SIZE + payload);
 }
+
+size_t projwire_upload_size(const struct volume *vol, const struct volume *base)
+{
+	(void)base; /* delta volumes: next commit */
+	return projwire_volume_size(vol);
+}
+
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
+			      uint8_t *out)
+{
+	(void)base;
+	return projwire_volume_encode(vol, buffer, out);
+}

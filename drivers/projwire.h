@@ -182,6 +182,14 @@ void projwire_end_encode(uint8_t out[PROJWIRE_END_SIZE], uint32_t image_records,
  * Returns the bytes written. */
 size_t projwire_volume_encode(const struct volume *vol, uint32_t buffer, uint8_t *out);
 
+/* The upload of vol into a buffer that holds base (NULL: empty or unknown).
+ * Without base it is projwire_volume_encode(); with one (a version 1.1
+ * device) it is a delta volume carrying only the tiles that differ, so an
+ * unchanged volume costs a few dozen bytes. The size is exact. */
+size_t projwire_upload_size(const struct volume *vol, const struct volume *base);
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
+			      uint8_t *out);
+
 /* ---- Bulk OUT decoder (device side) ---- */
 
 struct projwire_sink {
