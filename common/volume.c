@@ -53,6 +53,33 @@ void volume_clear(struct volume *vol)
 	vol->shown_ns = 0;
 }
 
+void volume_image_clear(struct volume *vol, uint32_t k)
+{
+	memset(vol->images[k].mask, 0, vol->mask_bytes);
+	vol->images[k].tile_count = vol->images[k].next_tile = 0;
+}
+
+void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint32_t kb)
+{
+	struct volume_image *x = &a->images[ka], *y = &b->images[kb];
+	/* The masks stay where they are (one block per volume); their bytes
+	 * move. */
+	for (uint32_t i = 0; i < a->mask_bytes; i++) {
+		uint8_t m = x->mask[i];
+		x->mask[i] = y->mask[i];
+		y->mask[i] = m;
+	}
+	struct volume_image t = *x;
+	x->tile_count = y->tile_count;
+	x->tile_cap = y->tile_cap;
+	x->next_tile = y->next_tile;
+	x->tiles = y->tiles;
+	y->tile_count = t.tile_count;
+	y->tile_cap = t.tile_cap;
+	y->next_tile = t.next_tile;
+	y->tiles = t.tiles;
+}
+
 int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n)
 {
 	struct volume_image *img = &vol->images[k];

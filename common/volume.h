@@ -73,6 +73,12 @@ uint8_t *volume_image_next(struct volume *vol, uint32_t k);
  * greater than every stored tile and not all zero. 0 or -EINVAL. */
 int volume_image_push(struct volume *vol, uint32_t k, uint32_t t);
 
+/* Empties image k; keeps its storage. */
+void volume_image_clear(struct volume *vol, uint32_t k);
+/* Exchanges the contents of image ka of a and image kb of b (volumes of the
+ * same geometry): tiles, mask and counts, without copying tiles. */
+void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint32_t kb);
+
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
 int volume_copy(struct volume *dst, const struct volume *src);
 

@@ -66,12 +66,17 @@ static void report_error(struct proj_simdev *dev, int err, uint32_t buffer)
 	queue_event(dev, &ev);
 }
 
-static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, int *err)
+static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
+			      int *err)
 {
 	struct proj_simdev *dev = data;
-	if (buffer == dev->shown || buffer == dev->pending) {
+	*err = 0;
+	if (buffer == dev->shown || buffer == dev->pending)
 		*err = -EBUSY;
-		report_error(dev, -EBUSY, buffer);
+	else if (base_seq && (dev->buf[buffer].state != PROJWIRE_BUF_READY || dev->buf[buffer].vol->seq != *base_seq))
+		*err = -ENODATA; /* a delta on content the buffer does not hold */
+	if (*err) {
+		report_error(dev, *err, buffer);
 		return NULL;
 	}
 	dev->buf[buffer].state = PROJWIRE_BUF_WRITING;

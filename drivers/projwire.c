@@ -428,15 +428,121 @@ int projwire_event_decode(const uint8_t *in, size_t len, struct projwire_event *
 	return (int)(PROJWIRE_HEADER_SIZE + payload);
 }
 
+/* ---- Delta volumes (1.1) ---- */
+
+void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer,
+				 uint32_t image_count, uint64_t seq, uint64_t base_seq)
+{
+	header_encode(out, PROJWIRE_DELTA_BEGIN, PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE);
+	le_put32(out + 8, buffer);
+	le_put32(out + 12, image_count);
+	le_put64(out + 16, seq);
+	le_put64(out + 24, base_seq);
+}
+
+/* The tiles of image k that differ between vol and base: counts them and,
+ * when mask is given, writes the change mask and the new tiles (all zero
+ * for a tile that vol no longer has). */
+static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask,
+			    uint8_t *tiles)
+{
+	const struct volume_image *a = &vol->images[k], *b = &base->images[k];
+	const uint8_t *pa = a->tiles, *pb = b->tiles;
+	uint32_t n = 0, end = a->next_tile > b->next_tile ? a->next_tile : b->next_tile;
+	if (mask)
+		memset(mask, 0, vol->mask_bytes);
+	for (uint32_t t = 0; t < end; t++) {
+		if (!(t % 8) && !(a->mask[t / 8] | b->mask[t / 8])) {
+			t += 7; /* nothing in this mask byte */
+			continue;
+		}
+		int ia = volume_tile_present(a, t), ib = volume_tile_present(b, t);
+		if ((ia || ib) && (ia != ib || memcmp(pa, pb, VOLUME_TILE_BYTES))) {
+			if (mask) {
+				mask[t / 8] |= (uint8_t)(1u << (t % 8));
+				if (ia)
+					memcpy(tiles + (size_t)n * VOLUME_TILE_BYTES, pa, VOLUME_TILE_BYTES);
+				else
+					memset(tiles + (size_t)n * VOLUME_TILE_BYTES, 0, VOLUME_TILE_BYTES);
+			}
+			n++;
+		}
+		pa += ia ? VOLUME_TILE_BYTES : 0;
+		pb += ib ? VOLUME_TILE_BYTES : 0;
+	}
+	return n;
+}
+
+static size_t delta_image_size(const struct volume *vol, uint32_t tiles)
+{
+	return PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD + vol->mask_bytes + (size_t)tiles * VOLUME_TILE_BYTES;
+}
+
+static bool delta_fits(const struct volume *vol, const struct volume *base)
+{
+	return base && base->image_count == vol->image_count && base->mask_bytes == vol->mask_bytes &&
+	       base->tiles_x == vol->tiles_x;
+}
+
+static size_t delta_size(const struct volume *vol, const struct volume *base)
+{
+	size_t n = PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE;
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		uint32_t t = delta_tiles(vol, base, k, NULL, NULL);
+		n += t ? delta_image_size(vol, t) : 0;
+	}
+	return n;
+}
+
+/* A delta when there is a base and it is the smaller form: a delta sends
+ * removed tiles as zeros, so a volume unlike its base is cheaper whole. */
+static bool use_delta(const struct volume *vol, const struct volume *base, size_t *size)
+{
+	*size = projwire_volume_size(vol);
+	if (!delta_fits(vol, base))
+		return false;
+	size_t d = delta_size(vol, base);
+	if (d >= *size)
+		return false;
+	*size = d;
+	return true;
+}
+
 size_t projwire_upload_size(const struct volume *vol, const struct volume *base)
 {
-	(void)base; /* delta volumes: next commit */
-	return projwire_volume_size(vol);
+	size_t size;
+	use_delta(vol, base, &size);
+	return size;
+}
+
+/* A delta volume: an IMAGE_DELTA record for each image with a changed
+ * tile; images not sent keep what the buffer holds. */
+static size_t delta_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out)
+{
+	size_t n = PROJWIRE_DELTA_BEGIN_SIZE;
+	uint32_t images = 0;
+	projwire_delta_begin_encode(out, buffer, vol->image_count, vol->seq, base->seq);
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		uint8_t *rec = out + n, *mask = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
+		uint32_t t = delta_tiles(vol, base, k, mask, mask + vol->mask_bytes);
+		if (!t)
+			continue;
+		size_t size = delta_image_size(vol, t);
+		header_encode(rec, PROJWIRE_IMAGE_DELTA, (uint32_t)(size - PROJWIRE_HEADER_SIZE));
+		le_put32(rec + 8, k);
+		le_put32(rec + 12, t);
+		n += size;
+		images++;
+	}
+	projwire_end_encode(out + n, images, projwire_crc32(0, out, n));
+	return n + PROJWIRE_END_SIZE;
 }
 
 size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
 			      uint8_t *out)
 {
-	(void)base;
-	return projwire_volume_encode(vol, buffer, out);
+	size_t size;
+	if (!use_delta(vol, base, &size))
+		return projwire_volume_encode(vol, buffer, out);
+	return delta_encode(vol, base, buffer, out);
 }

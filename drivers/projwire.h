@@ -1,4 +1,4 @@
-/* The projector wire protocol (proto/projector.md, version 1.0): one codec for
+/* The projector wire protocol (proto/projector.md, version 1.1): one codec for
  * both ends. The host side (the USB driver, the simulated projector's host
  * half) uses the encoders; the device side (the simulated projector's device
  * model, device firmware tests) uses the strict, incremental decoder and the
@@ -18,7 +18,7 @@
 #include "volume.h"
 
 #define PROJWIRE_VERSION_MAJOR 1
-#define PROJWIRE_VERSION_MINOR 0
+#define PROJWIRE_VERSION_MINOR 1 /* 1.1: delta volumes */
 
 /* USB interface descriptor of a Spindle projector. */
 #define PROJWIRE_USB_CLASS 0xff
@@ -38,6 +38,7 @@
 #define PROJWIRE_BEGIN_SIZE (PROJWIRE_HEADER_SIZE + 16)
 #define PROJWIRE_IMAGE_HEAD 8 /* image index, tile count; then the mask */
 #define PROJWIRE_END_SIZE (PROJWIRE_HEADER_SIZE + 8)
+#define PROJWIRE_DELTA_BEGIN_SIZE (PROJWIRE_HEADER_SIZE + 24)
 #define PROJWIRE_EVENT_MAX (PROJWIRE_HEADER_SIZE + 24)
 
 #define PROJWIRE_MAX_BUFFERS 4
@@ -46,8 +47,9 @@
 enum projwire_record_type {
 	PROJWIRE_VOLUME_BEGIN = 0x01,
 	PROJWIRE_IMAGE = 0x02,
-	PROJWIRE_IMAGE_DELTA = 0x03, /* reserved: not valid in version 1.0 */
+	PROJWIRE_IMAGE_DELTA = 0x03, /* 1.1: changed tiles of one image */
 	PROJWIRE_VOLUME_END = 0x04,
+	PROJWIRE_DELTA_BEGIN = 0x05, /* 1.1: a volume built on the buffer's content */
 	PROJWIRE_EV_SWAPPED = 0x81,
 	PROJWIRE_EV_ERROR = 0x82,
 };
@@ -176,6 +178,8 @@ void projwire_begin_encode(uint8_t out[PROJWIRE_BEGIN_SIZE], uint32_t buffer, ui
 /* Writes image k's IMAGE record (projwire_image_size() bytes). */
 size_t projwire_image_encode(const struct volume *vol, uint32_t k, uint8_t *out);
 void projwire_end_encode(uint8_t out[PROJWIRE_END_SIZE], uint32_t image_records, uint32_t crc);
+void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer,
+				 uint32_t image_count, uint64_t seq, uint64_t base_seq);
 
 /* The whole upload of vol into buffer: VOLUME_BEGIN, an IMAGE record for
  * each non-empty image, VOLUME_END. out has projwire_volume_size() bytes.
@@ -184,8 +188,9 @@ size_t projwire_volume_encode(const struct volume *vol, uint32_t buffer, uint8_t
 
 /* The upload of vol into a buffer that holds base (NULL: empty or unknown).
  * Without base it is projwire_volume_encode(); with one (a version 1.1
- * device) it is a delta volume carrying only the tiles that differ, so an
- * unchanged volume costs a few dozen bytes. The size is exact. */
+ * device) it is a delta volume carrying only the tiles that differ when
+ * that is smaller, so an unchanged volume costs 48 bytes. The size is
+ * exact; both calls compare the volumes (a few ms at perspecta). */
 size_t projwire_upload_size(const struct volume *vol, const struct volume *base);
 size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
 			      uint8_t *out);
@@ -193,10 +198,13 @@ size_t projwire_upload_encode(const struct volume *vol, const struct volume *bas
 /* ---- Bulk OUT decoder (device side) ---- */
 
 struct projwire_sink {
-	/* VOLUME_BEGIN for buffer: returns the volume to write into (the
-	 * decoder clears it), or NULL with a negative errno in *err to refuse
-	 * (-EBUSY for a buffer shown or awaiting a swap). */
-	struct volume *(*begin)(void *data, uint32_t buffer, uint64_t seq, int *err);
+	/* VOLUME_BEGIN (base_seq NULL) or DELTA_BEGIN for buffer: returns the
+	 * volume to write into, or NULL with a negative errno in *err to refuse
+	 * (-EBUSY for a buffer shown or awaiting a swap; for a delta, -ENODATA
+	 * unless the buffer is ready and holds volume *base_seq). The decoder
+	 * clears it for a whole volume and edits it in place for a delta. */
+	struct volume *(*begin)(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
+				int *err);
 	/* The volume begun for buffer is complete and valid (err 0), or failed
 	 * (negative errno: its contents are garbage and must never be shown).
 	 * buffer is PROJWIRE_NO_BUFFER for an error outside a volume. */

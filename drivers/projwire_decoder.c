@@ -5,7 +5,12 @@
  * the image head and mask before any tile. Tiles stream straight into the
  * buffer's volume, which stays invalid until VOLUME_END's CRC matches, so a
  * volume is never shown half-written or corrupted. After any error the
- * decoder drops bytes until it sees a VOLUME_BEGIN header again. */
+ * decoder drops bytes until it sees a VOLUME_BEGIN or DELTA_BEGIN header
+ * again.
+ *
+ * A delta volume (1.1) edits the buffer's volume in place, one image at a
+ * time: the image's old tiles and the record's changed ones are merged, in
+ * tile order, into a scratch image that is then exchanged with it. */
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +44,9 @@ struct projwire_decoder {
 
 	/* The volume being written. */
 	struct volume *vol;
+	bool delta;
+	struct volume *scratch; /* a delta's merged image (image 0), made on first use */
+	uint32_t base_next, base_tile; /* merge cursors: tile number, stored index */
 	uint32_t buffer;
 	uint32_t crc, images;
 	int64_t image; /* index of the current or last image, -1 before any */
@@ -84,6 +92,7 @@ void projwire_decoder_destroy(struct projwire_decoder *d)
 	if (!d)
 		return;
 	free(d->head);
+	volume_destroy(d->scratch);
 	free(d);
 }
 
@@ -136,17 +145,19 @@ static int header_check(struct projwire_decoder *d)
 	switch (d->type) {
 	case PROJWIRE_VOLUME_BEGIN:
 		return d->length == PROJWIRE_BEGIN_SIZE - PROJWIRE_HEADER_SIZE ? 0 : -EPROTO;
+	case PROJWIRE_DELTA_BEGIN:
+		return d->length == PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE ? 0 : -EPROTO;
 	case PROJWIRE_VOLUME_END:
 		if (!d->vol)
 			return -EPROTO;
 		return d->length == PROJWIRE_END_SIZE - PROJWIRE_HEADER_SIZE ? 0 : -EPROTO;
 	case PROJWIRE_IMAGE:
-		if (!d->vol || d->length < fixed || d->length > d->max_record ||
-		    (d->length - fixed) % VOLUME_TILE_BYTES)
+	case PROJWIRE_IMAGE_DELTA:
+		/* Each kind of image only in its kind of volume. */
+		if (!d->vol || d->delta != (d->type == PROJWIRE_IMAGE_DELTA) || d->length < fixed ||
+		    d->length > d->max_record || (d->length - fixed) % VOLUME_TILE_BYTES)
 			return -EPROTO;
 		return 0;
-	case PROJWIRE_IMAGE_DELTA:
-		return -EOPNOTSUPP;
 	default:
 		return -EPROTO;
 	}
@@ -161,14 +172,15 @@ static void header_done(struct projwire_decoder *d)
 		d->hdr_fill = PROJWIRE_HEADER_SIZE;
 		return;
 	}
-	if (d->type == PROJWIRE_VOLUME_BEGIN) {
+	if (d->type == PROJWIRE_VOLUME_BEGIN || d->type == PROJWIRE_DELTA_BEGIN) {
 		if (d->vol)
 			fail(d, -ECANCELED, true); /* abandon the open volume */
 		d->crc = 0;
 	}
 	if (d->type != PROJWIRE_VOLUME_END)
 		d->crc = projwire_crc32(d->crc, d->hdr, PROJWIRE_HEADER_SIZE);
-	d->head_need = d->type == PROJWIRE_IMAGE ? PROJWIRE_IMAGE_HEAD + d->mask_bytes : d->length;
+	bool image = d->type == PROJWIRE_IMAGE || d->type == PROJWIRE_IMAGE_DELTA;
+	d->head_need = image ? PROJWIRE_IMAGE_HEAD + d->mask_bytes : d->length;
 	d->head_fill = 0;
 	d->state = DEC_HEAD;
 }
@@ -178,17 +190,23 @@ static int begin_done(struct projwire_decoder *d)
 	uint32_t buffer = le_get32(d->head);
 	uint32_t count = le_get32(d->head + 4);
 	uint64_t seq = le_get64(d->head + 8);
+	bool delta = d->type == PROJWIRE_DELTA_BEGIN;
+	uint64_t base_seq = delta ? le_get64(d->head + 16) : 0;
 	if (buffer >= d->buffers || count != d->image_count)
 		return -EBADMSG;
+	if (delta && !d->scratch && !(d->scratch = volume_create(&d->geom)))
+		return -ENOMEM;
 	int err = -EBUSY;
-	struct volume *vol = d->sink->begin(d->data, buffer, seq, &err);
+	struct volume *vol = d->sink->begin(d->data, buffer, seq, delta ? &base_seq : NULL, &err);
 	if (!vol) {
 		fail(d, err < 0 ? err : -EBUSY, false); /* the sink knows already */
 		return 0;
 	}
-	volume_clear(vol);
+	if (!delta)
+		volume_clear(vol);
 	vol->seq = seq;
 	d->vol = vol;
+	d->delta = delta;
 	d->buffer = buffer;
 	d->images = 0;
 	d->image = -1;
@@ -204,6 +222,38 @@ static int mask_popcount(const struct projwire_decoder *d, const uint8_t *mask)
 	return n;
 }
 
+/* Delta merge: copies the buffer's own tiles numbered below t into the
+ * scratch image, and steps over tile t itself (the record replaces it). */
+static int merge_base(struct projwire_decoder *d, uint32_t t)
+{
+	const struct volume_image *img = &d->vol->images[d->image];
+	for (; d->base_next < t && d->base_next < img->next_tile; d->base_next++) {
+		if (!volume_tile_present(img, d->base_next))
+			continue;
+		const uint8_t *src = img->tiles + (size_t)d->base_tile++ * VOLUME_TILE_BYTES;
+		int r = volume_image_append(d->scratch, 0, d->base_next, src);
+		if (r < 0)
+			return r;
+	}
+	if (t < img->next_tile && volume_tile_present(img, t))
+		d->base_tile++;
+	d->base_next = t + 1;
+	return 0;
+}
+
+/* The last tile of an image record is in. */
+static int image_done(struct projwire_decoder *d)
+{
+	expect_header(d);
+	if (!d->delta)
+		return 0;
+	int r = merge_base(d, d->tiles_per_image);
+	if (r < 0)
+		return r;
+	volume_image_exchange(d->vol, (uint32_t)d->image, d->scratch, 0);
+	return 0;
+}
+
 static int image_head_done(struct projwire_decoder *d)
 {
 	uint32_t k = le_get32(d->head);
@@ -217,17 +267,21 @@ static int image_head_done(struct projwire_decoder *d)
 	if ((uint32_t)mask_popcount(d, mask) != count ||
 	    d->length != PROJWIRE_IMAGE_HEAD + d->mask_bytes + count * VOLUME_TILE_BYTES)
 		return -EBADMSG;
-	if (volume_image_reserve(d->vol, k, count) < 0)
+	struct volume *into = d->delta ? d->scratch : d->vol;
+	uint32_t into_k = d->delta ? 0 : k;
+	if (d->delta)
+		volume_image_clear(d->scratch, 0);
+	if (volume_image_reserve(into, into_k, count) < 0)
 		return -ENOMEM;
 	d->image = k;
 	d->images++;
 	d->next_bit = 0;
+	d->base_next = d->base_tile = 0;
 	d->tiles_left = count;
 	d->tile_fill = 0;
-	if (count)
-		d->state = DEC_TILES;
-	else
-		expect_header(d);
+	if (!count)
+		return image_done(d);
+	d->state = DEC_TILES;
 	return 0;
 }
 
@@ -246,8 +300,10 @@ static int head_done(struct projwire_decoder *d)
 {
 	switch (d->type) {
 	case PROJWIRE_VOLUME_BEGIN:
+	case PROJWIRE_DELTA_BEGIN:
 		return begin_done(d);
 	case PROJWIRE_IMAGE:
+	case PROJWIRE_IMAGE_DELTA:
 		return image_head_done(d);
 	default:
 		return end_done(d);
@@ -255,8 +311,9 @@ static int head_done(struct projwire_decoder *d)
 }
 
 /* Pixels past W and H in edge tiles are always 0 (volume.h); an all-zero
- * tile must not be sent. Either would make the device's buffer differ from
- * the volume the host meant. */
+ * tile must not be sent, except in a delta, where it empties the tile.
+ * Either would make the device's buffer differ from the volume the host
+ * meant. */
 static bool tile_valid(const struct projwire_decoder *d, uint32_t t, const uint8_t *tile)
 {
 	uint32_t x0 = (t % d->tiles_x) * VOLUME_TILE, y0 = (t / d->tiles_x) * VOLUME_TILE;
@@ -272,7 +329,7 @@ static bool tile_valid(const struct projwire_decoder *d, uint32_t t, const uint8
 			any |= bits != 0;
 		}
 	}
-	return any;
+	return any || d->delta;
 }
 
 static int tile_done(struct projwire_decoder *d)
@@ -284,12 +341,15 @@ static int tile_done(struct projwire_decoder *d)
 	d->next_bit = t + 1;
 	if (!tile_valid(d, t, d->tile))
 		return -EBADMSG;
-	int r = volume_image_append(d->vol, (uint32_t)d->image, t, d->tile);
+	int r = d->delta ? merge_base(d, t) : 0;
+	if (r == 0)
+		r = volume_image_append(d->delta ? d->scratch : d->vol, d->delta ? 0 : (uint32_t)d->image, t,
+					d->tile);
 	if (r < 0)
 		return r;
 	d->tile_fill = 0;
 	if (--d->tiles_left == 0)
-		expect_header(d);
+		return image_done(d);
 	return 0;
 }
 
@@ -309,6 +369,10 @@ static size_t sync_step(struct projwire_decoder *d, const uint8_t *buf)
 		PROJWIRE_MAGIC0, PROJWIRE_MAGIC1, PROJWIRE_VOLUME_BEGIN, 0,
 		PROJWIRE_BEGIN_SIZE - PROJWIRE_HEADER_SIZE, 0, 0, 0,
 	};
+	static const uint8_t delta_hdr[PROJWIRE_HEADER_SIZE] = {
+		PROJWIRE_MAGIC0, PROJWIRE_MAGIC1, PROJWIRE_DELTA_BEGIN, 0,
+		PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE, 0, 0, 0,
+	};
 	if (d->hdr_fill == PROJWIRE_HEADER_SIZE) {
 		memmove(d->hdr, d->hdr + 1, PROJWIRE_HEADER_SIZE - 1);
 		d->hdr_fill--;
@@ -317,7 +381,8 @@ static size_t sync_step(struct projwire_decoder *d, const uint8_t *buf)
 	size_t used = 0;
 	if (buf)
 		d->hdr[d->hdr_fill++] = buf[used++];
-	if (d->hdr_fill == PROJWIRE_HEADER_SIZE && !memcmp(d->hdr, begin_hdr, PROJWIRE_HEADER_SIZE))
+	if (d->hdr_fill == PROJWIRE_HEADER_SIZE &&
+	    (!memcmp(d->hdr, begin_hdr, PROJWIRE_HEADER_SIZE) || !memcmp(d->hdr, delta_hdr, PROJWIRE_HEADER_SIZE)))
 		header_done(d);
 	return used;
 }

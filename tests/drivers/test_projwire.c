@@ -23,12 +23,17 @@ struct test_sink {
 	int begins, ends, stray_errors, last_err;
 };
 
-static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, int *err)
+static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
+			      int *err)
 {
 	struct test_sink *s = data;
 	CHECK(buffer < BUFFERS);
 	if (s->busy[buffer]) {
 		*err = -EBUSY;
+		return NULL;
+	}
+	if (base_seq && (s->result[buffer] != 0 || s->vols[buffer]->seq != *base_seq)) {
+		*err = -ENODATA;
 		return NULL;
 	}
 	s->begins++;
@@ -263,7 +268,7 @@ static void test_rejects(void)
 	expect_reject(padding_pixel, -EBADMSG, true);
 	expect_reject(crc_field, -EILSEQ, true);
 	expect_reject(seq_bit, -EILSEQ, true);
-	expect_reject(delta_record, -EOPNOTSUPP, true);
+	expect_reject(delta_record, -EPROTO, true); /* a delta image in a whole volume */
 	expect_reject(image_before_begin, -EPROTO, false);
 	expect_reject(truncate_tail, -EPROTO, true);
 }
@@ -551,12 +556,70 @@ static void test_crc_and_errors(void)
 	CHECK_EQ(projwire_error_to_errno(1000), -EIO);
 }
 
+/* Encodes r->src as a delta against base for buffer. */
+static uint8_t *encode_delta(struct rig *r, const struct volume *base, uint32_t buffer, size_t *len)
+{
+	size_t size = projwire_upload_size(r->src, base);
+	uint8_t *out = malloc(size);
+	CHECK(out);
+	*len = projwire_upload_encode(r->src, base, buffer, out);
+	CHECK_EQ(*len, size);
+	return out;
+}
+
+/* Delta volumes (1.1): a buffer edited into the next volume is bit for bit
+ * that volume, whatever the change; the bytes scale with the change. */
+static void test_delta(void)
+{
+	struct rig r;
+	rig_init(&r);
+	struct volume *base = volume_create(&geom);
+	CHECK(base);
+	random_volume(base, 5, 100);
+	CHECK_EQ(volume_copy(r.src, base), 0);
+	size_t len, full = projwire_volume_size(base);
+	uint8_t *wire = encode(&r, 2, &len);
+	CHECK_EQ(feed_chunked(r.dec, wire, len, 300), 0);
+	free(wire);
+	for (int i = 0; i < 40; i++) {
+		uint32_t permille = i == 0 ? 0 : i < 20 ? 100 : 1 + rnd_below(1000);
+		mutate_volume(r.src, base, permille, 101 + (uint64_t)i);
+		wire = encode_delta(&r, base, 2, &len);
+		if (permille == 0)
+			CHECK_EQ(len, PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE);
+		if (permille == 100)
+			CHECK_MSG(len < full / 4, "10%% change: %zu of %zu bytes", len, full);
+		CHECK_EQ(feed_chunked(r.dec, wire, len, i % 2 ? 7 : 4000), 0);
+		CHECK_EQ(r.sink.result[2], 0);
+		CHECK(volumes_equal(r.sink.vols[2], r.src));
+		free(wire);
+		CHECK_EQ(volume_copy(base, r.src), 0);
+	}
+	/* On a base the buffer does not hold: refused, the buffer untouched. */
+	mutate_volume(r.src, base, 100, 500);
+	base->seq = 77;
+	wire = encode_delta(&r, base, 2, &len);
+	CHECK_EQ(projwire_decoder_feed(r.dec, wire, len), -ENODATA);
+	CHECK(r.sink.vols[2]->seq == 140);
+	/* A corrupt delta leaves the buffer invalid, never half-edited. */
+	base->seq = 140;
+	free(wire);
+	wire = encode_delta(&r, base, 2, &len);
+	wire[len - 1] ^= 1;
+	CHECK_EQ(projwire_decoder_feed(r.dec, wire, len), -EILSEQ);
+	CHECK_EQ(r.sink.result[2], -EILSEQ);
+	free(wire);
+	volume_destroy(base);
+	rig_finish(&r);
+}
+
 int main(void)
 {
 	test_crc_and_errors();
 	test_control();
 	test_info_status_events();
 	test_round_trip();
+	test_delta();
 	test_rejects();
 	test_image_order();
 	test_busy_and_abandon();

@@ -64,6 +64,36 @@ static inline void random_volume(struct volume *vol, uint32_t density, uint64_t 
 	}
 }
 
+/* dst = src with about permille/1000 of its tiles changed: of the changed
+ * ones, a third removed and the rest redrawn; as many new tiles added
+ * elsewhere as were removed. */
+static inline void mutate_volume(struct volume *dst, const struct volume *src, uint32_t permille, uint64_t seq)
+{
+	uint8_t tile[VOLUME_TILE_BYTES];
+	volume_clear(dst);
+	dst->seq = seq;
+	for (uint32_t k = 0; k < src->image_count; k++) {
+		const struct volume_image *img = &src->images[k];
+		const uint8_t *p = img->tiles;
+		for (uint32_t t = 0; t < volume_tiles_per_image(src); t++) {
+			bool had = volume_tile_present(img, t);
+			uint32_t roll = rnd_below(3000);
+			if (had && roll < permille) {
+				/* removed */
+			} else if (had && roll < 3 * permille) {
+				random_tile(dst, t, tile);
+				CHECK_EQ(volume_image_append(dst, k, t, tile), 0);
+			} else if (had) {
+				CHECK_EQ(volume_image_append(dst, k, t, p), 0);
+			} else if (img->tile_count && roll < permille / 4) {
+				random_tile(dst, t, tile);
+				CHECK_EQ(volume_image_append(dst, k, t, tile), 0);
+			}
+			p += had ? VOLUME_TILE_BYTES : 0;
+		}
+	}
+}
+
 static inline bool volumes_equal(const struct volume *a, const struct volume *b)
 {
 	if (a->image_count != b->image_count || a->mask_bytes != b->mask_bytes || a->seq != b->seq)
