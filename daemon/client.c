@@ -160,7 +160,8 @@ static int display_get_status(void *target)
 	server_get_status(c->server, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, st.rpm, st.flags, st.volumes_shown, st.underruns,
 					       st.clients, st.volumes_rendered, st.volumes_skipped, st.bytes_uploaded,
-					       st.render_us));
+					       st.render_us, st.jitter_us, st.missed_pulses, st.upload_rate,
+					       st.index_error_us, st.angle_error_p99, st.angle_error_max));
 	return 0;
 }
 

@@ -20,8 +20,9 @@ struct devices {
 	struct sync_source *sync;
 	struct sync_estimator *est;
 	struct projector *proj;
-	sd_event_source *sync_source, *proj_source, *check_timer;
+	sd_event_source *sync_source, *proj_source, *check_timer, *rate_timer;
 	bool blanked;
+	uint64_t rate_bytes, upload_rate; /* bytes_sent at the last sample; bytes/s */
 };
 
 static void set_blank(struct devices *dev, bool blank)
@@ -104,17 +105,43 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
 {
 	struct devices *dev = data;
-	pipeline_swapped(dev->srv->pipe, buffer, time_ns);
+	pipeline_swapped(dev->srv->pipe, buffer, time_ns, seq);
+}
+
+static void on_error(void *data, uint32_t buffer, int err)
+{
+	struct devices *dev = data;
+	pipeline_device_error(dev->srv->pipe, buffer, err);
 }
 
 static void on_gone(void *data, int err)
 {
-	log_error("projector gone: %s", strerror(err));
+	struct devices *dev = data;
+	log_error("projector gone: %s", strerror(-err));
+	dev->blanked = true; /* a missing projector emits no light */
+	pipeline_projector_gone(dev->srv->pipe);
+}
+
+/* A (re)attached projector is dark and empty: give it the timing, light it
+ * if the rotor is locked, and send it the newest volume. */
+static void on_arrived(void *data)
+{
+	struct devices *dev = data;
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	log_info("projector attached");
+	dev->blanked = true;
+	if (st->period_ns > 0)
+		dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
+	pipeline_projector_arrived(dev->srv->pipe);
+	if (st->locked)
+		lock_changed(dev, now_ns());
 }
 
 static const struct projector_listener proj_listener = {
 	.swapped = on_swapped,
+	.error = on_error,
 	.gone = on_gone,
+	.arrived = on_arrived,
 };
 
 static int on_projector(sd_event_source *s, int fd, uint32_t revents, void *data)
@@ -147,6 +174,18 @@ static int open_sim(struct devices *dev)
 	return 0;
 }
 
+/* Once a second: the upload rate over the last second. */
+static int on_rate(sd_event_source *s, uint64_t usec, void *data)
+{
+	struct devices *dev = data;
+	struct projector_stats ps;
+	dev->proj->impl->get_stats(dev->proj, &ps);
+	dev->upload_rate = ps.bytes_sent >= dev->rate_bytes ? ps.bytes_sent - dev->rate_bytes : 0;
+	dev->rate_bytes = ps.bytes_sent;
+	sd_event_source_set_time(s, usec + 1000000);
+	return 0;
+}
+
 static int add_sources(struct devices *dev)
 {
 	sd_event *e = dev->srv->event;
@@ -160,9 +199,12 @@ static int add_sources(struct devices *dev)
 	if (pfd >= 0 && (r = sd_event_add_io(e, &dev->proj_source, pfd, EPOLLIN, on_projector, dev)) < 0)
 		return r;
 	r = sd_event_add_time(e, &dev->check_timer, CLOCK_MONOTONIC, 0, 1000, on_check, dev);
+	if (r < 0 || (r = sd_event_source_set_enabled(dev->check_timer, SD_EVENT_OFF)) < 0)
+		return r;
+	r = sd_event_add_time_relative(e, &dev->rate_timer, CLOCK_MONOTONIC, 1000000, 10000, on_rate, dev);
 	if (r < 0)
 		return r;
-	return sd_event_source_set_enabled(dev->check_timer, SD_EVENT_OFF);
+	return sd_event_source_set_enabled(dev->rate_timer, SD_EVENT_ON);
 }
 
 struct devices *devices_create(struct server *srv)
@@ -202,6 +244,7 @@ void devices_destroy(struct devices *dev)
 	sd_event_source_disable_unref(dev->sync_source);
 	sd_event_source_disable_unref(dev->proj_source);
 	sd_event_source_disable_unref(dev->check_timer);
+	sd_event_source_disable_unref(dev->rate_timer);
 	sync_destroy(dev->sync);
 	sim_rotor_destroy(dev->rotor);
 	sync_estimator_destroy(dev->est);
@@ -226,14 +269,18 @@ const struct volume *devices_shown(struct devices *dev)
 void devices_get_status(struct devices *dev, struct devices_status *out)
 {
 	const struct sync_state *st = sync_estimator_state(dev->est);
-	struct proj_sim_stats ps = { 0 };
-	if (dev->rotor)
-		proj_sim_get_stats(dev->proj, &ps);
+	struct projector_stats ps;
+	dev->proj->impl->get_stats(dev->proj, &ps);
 	*out = (struct devices_status){
 		.rpm = st->locked ? (float)st->rpm : 0.0f,
 		.locked = st->locked,
 		.blanked = dev->blanked,
-		.projector_present = dev->proj != NULL,
+		.projector_present = ps.present,
 		.underruns = ps.underruns,
+		.jitter_us = (float)(st->jitter_ns / 1e3),
+		.missed_pulses = st->missed + st->glitches,
+		.upload_rate = dev->upload_rate,
+		.angle_error_p99 = (float)ps.angle_err_p99,
+		.angle_error_max = (float)ps.angle_err_max,
 	};
 }

@@ -18,6 +18,11 @@ struct devices_status {
 	bool blanked;
 	bool projector_present;
 	uint64_t underruns;
+	float jitter_us;
+	uint64_t missed_pulses;  /* missed and glitch edges */
+	uint64_t upload_rate;    /* bytes/s over the last second */
+	float index_error_us;    /* RMS, predicted vs measured index */
+	float angle_error_p99, angle_error_max; /* slices, < 0: unknown */
 };
 
 /* Opens the devices of srv->cfg.device with srv->geom, and fills

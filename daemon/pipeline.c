@@ -23,9 +23,14 @@ struct pipeline {
 	struct renderer *renderer;
 	struct projector *proj;
 	uint32_t buffers;
-	/* What the daemon wrote into each projector buffer. */
+	/* What the daemon wrote into each projector buffer, and whether the
+	 * device is known to hold it (no error since): deltas build on that. */
 	struct volume *content[MAX_BUFFERS];
+	bool known[MAX_BUFFERS];
 	int shown, pending, uploaded; /* buffer indices, -1 for none */
+	int latest;   /* the buffer holding the newest volume sent, -1 for none */
+	int resend;   /* a buffer whose volume the device lost, to send again */
+	int failures; /* device errors since the last swap */
 	/* The render target; holds a finished volume while ready is set. */
 	struct volume *work;
 	bool dirty, busy, ready;
@@ -82,25 +87,51 @@ static bool buffer_free(const struct pipeline *p, int b)
 	return b != p->shown && b != p->pending && b != p->uploaded;
 }
 
+/* Sends content[b] into buffer b: a delta against what b held (old),
+ * when the device is known to hold that. */
+static int send(struct pipeline *p, int b, const struct volume *old)
+{
+	int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], p->known[b] ? old : NULL);
+	if (r < 0) {
+		p->known[b] = false;
+		if (r != -ENODEV)
+			log_warn("projector upload failed: %s", strerror(-r));
+		return r;
+	}
+	p->known[b] = true; /* until the device reports an error on it */
+	p->stats.last_upload_bytes = (uint64_t)r;
+	p->stats.bytes_uploaded += (uint64_t)r;
+	p->stats.volumes_uploaded++;
+	p->uploaded = p->latest = b;
+	return 0;
+}
+
 static void upload_ready(struct pipeline *p)
 {
 	for (int b = 0; b < (int)p->buffers; b++) {
 		if (!buffer_free(p, b))
 			continue;
-		struct volume *v = p->content[b];
+		struct volume *old = p->content[b];
 		p->content[b] = p->work;
-		p->work = v;
-		int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], NULL);
-		if (r < 0) {
-			log_warn("projector upload failed: %s", strerror(-r));
+		if (send(p, b, old) < 0) {
+			p->content[b] = old; /* keep the rendered volume for later */
 			return;
 		}
-		p->stats.last_upload_bytes = volume_sparse_bytes(p->content[b]);
-		p->stats.bytes_uploaded += p->stats.last_upload_bytes;
-		p->uploaded = b;
+		p->work = old;
 		p->ready = false;
 		return;
 	}
+}
+
+/* The device lost buffer resend's volume (an error, or a re-plug): that
+ * volume goes again, whole, unless a newer one is on its way. */
+static void resend_lost(struct pipeline *p)
+{
+	int b = p->resend;
+	p->resend = -1;
+	if (p->ready || b == p->shown || p->failures > 3)
+		return;
+	send(p, b, NULL);
 }
 
 /* The scene being built is the one last rendered: the volume of that
@@ -149,6 +180,8 @@ static void keep_rendered(struct pipeline *p)
 
 static void pipeline_kick(struct pipeline *p)
 {
+	if (p->resend >= 0 && p->uploaded < 0 && p->pending < 0)
+		resend_lost(p);
 	if (p->ready && p->uploaded < 0)
 		upload_ready(p);
 	if (p->uploaded >= 0 && p->pending < 0) {
@@ -202,18 +235,56 @@ void pipeline_mark_dirty(struct pipeline *p)
 	pipeline_kick(p);
 }
 
-void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns)
+void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns, uint64_t seq)
 {
-	if (buffer >= p->buffers || (int)buffer != p->pending) {
-		log_warn("projector swapped to unexpected buffer %u", buffer);
+	if (buffer >= p->buffers || (int)buffer != p->pending || p->content[buffer]->seq != seq) {
+		log_warn("projector swapped to unexpected buffer %u (volume %llu)", buffer,
+			 (unsigned long long)seq);
 		return;
 	}
 	p->shown = (int)buffer;
 	p->pending = -1;
+	p->failures = 0;
 	struct volume *v = p->content[buffer];
 	v->shown_ns = (uint64_t)time_ns;
 	p->stats.volumes_shown++;
 	server_volume_shown(p->srv, v->seq, time_ns);
+	pipeline_kick(p);
+}
+
+void pipeline_device_error(struct pipeline *p, uint32_t buffer, int err)
+{
+	if (buffer >= p->buffers)
+		return; /* about no buffer: nothing the daemon holds is affected */
+	int b = (int)buffer;
+	p->known[b] = false;
+	if (b != p->pending && b != p->uploaded)
+		return;
+	/* The device dropped the swap along with the volume. */
+	if (b == p->pending)
+		p->pending = -1;
+	else
+		p->uploaded = -1;
+	p->failures++;
+	if (p->failures > 3)
+		log_error("projector keeps refusing volume %llu: %s; waiting for the next scene",
+			  (unsigned long long)p->content[b]->seq, strerror(-err));
+	p->resend = b;
+	pipeline_kick(p);
+}
+
+void pipeline_projector_gone(struct pipeline *p)
+{
+	p->shown = p->pending = p->uploaded = p->resend = -1;
+	for (uint32_t b = 0; b < MAX_BUFFERS; b++)
+		p->known[b] = false;
+}
+
+void pipeline_projector_arrived(struct pipeline *p)
+{
+	pipeline_projector_gone(p); /* a new device holds nothing */
+	p->failures = 0;
+	p->resend = p->latest;
 	pipeline_kick(p);
 }
 
@@ -264,7 +335,7 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 	p->proj = proj;
 	/* A device with more buffers than we use is fine: we use three. */
 	p->buffers = info.buffers > MAX_BUFFERS ? MAX_BUFFERS : info.buffers;
-	p->shown = p->pending = p->uploaded = -1;
+	p->shown = p->pending = p->uploaded = p->latest = p->resend = -1;
 	p->next_seq = 1;
 	p->building = &p->snaps[0];
 	p->last = &p->snaps[1];

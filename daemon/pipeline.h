@@ -21,8 +21,9 @@ struct pipeline_stats {
 	uint64_t volumes_skipped;   /* scenes identical to the last rendered */
 	uint64_t volumes_shown;
 	uint32_t last_render_us;    /* wall time of the last render */
-	uint64_t last_upload_bytes; /* sparse payload of the last upload */
-	uint64_t bytes_uploaded;    /* sparse payload of every upload */
+	uint64_t volumes_uploaded;
+	uint64_t last_upload_bytes; /* wire bytes of the last upload (whole or delta) */
+	uint64_t bytes_uploaded;    /* wire bytes of every upload */
 };
 
 /* Takes ownership of renderer; the projector stays the caller's and says
@@ -37,8 +38,15 @@ void pipeline_destroy(struct pipeline *p);
  * on its way) shows those commits too, and nothing is rendered or
  * uploaded. */
 void pipeline_mark_dirty(struct pipeline *p);
-/* The projector reports buffer shown from time_ns on. */
-void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns);
+/* The projector reports buffer, holding volume seq, shown from time_ns on. */
+void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns, uint64_t seq);
+/* The projector lost what was sent to buffer (its error event): a swap
+ * pending on it is dropped and its volume sent again, whole. */
+void pipeline_device_error(struct pipeline *p, uint32_t buffer, int err);
+/* The projector went away: nothing is shown or pending. When one arrives
+ * (dark, empty), the newest volume is sent again, whole. */
+void pipeline_projector_gone(struct pipeline *p);
+void pipeline_projector_arrived(struct pipeline *p);
 /* Whether a swap was asked for and not yet reported: a newer volume may
  * be shown from the next revolution start on. */
 bool pipeline_swap_pending(const struct pipeline *p);

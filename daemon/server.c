@@ -259,6 +259,12 @@ void server_get_status(struct server *srv, struct server_status *out)
 		.volumes_skipped = ps.volumes_skipped,
 		.bytes_uploaded = ps.bytes_uploaded,
 		.render_us = ps.last_render_us,
+		.jitter_us = ds.jitter_us,
+		.missed_pulses = ds.missed_pulses,
+		.upload_rate = ds.upload_rate,
+		.index_error_us = ds.index_error_us,
+		.angle_error_p99 = ds.angle_error_p99,
+		.angle_error_max = ds.angle_error_max,
 	};
 }
 

@@ -48,6 +48,11 @@ struct server_status {
 	uint64_t volumes_skipped;
 	uint64_t bytes_uploaded;
 	uint32_t render_us;
+	float jitter_us;
+	uint64_t missed_pulses;
+	uint64_t upload_rate;
+	float index_error_us;
+	float angle_error_p99, angle_error_max;
 };
 
 /* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */

@@ -113,7 +113,7 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 	for (size_t off = 0; off < len; off += BULK_CHUNK)
 		proj_simdev_bulk_out(s->dev, s->wire + off, len - off < BULK_CHUNK ? len - off : BULK_CHUNK);
 	s->bytes_sent += len;
-	return 0;
+	return (int)len;
 }
 
 static int sim_swap(struct projector *p, uint32_t buffer)

@@ -69,8 +69,9 @@ struct projector_impl {
 	 * base is what the buffer holds now as far as the caller knows (the
 	 * last volume it uploaded there, completed without error), or NULL
 	 * when unknown or empty: with a base only the tiles that differ are
-	 * sent. Returns 0 once queued (vol and base need not outlive the
-	 * call); -EBUSY if that buffer is not free; -ENODEV with no device. */
+	 * sent. Returns the wire bytes queued (> 0) once queued (vol and base
+	 * need not outlive the call); -EBUSY if that buffer is not free;
+	 * -ENODEV with no device. */
 	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol,
 		      const struct volume *base);
 	/* Shows buffer from the next revolution start after its upload is

@@ -148,6 +148,12 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 		.volumes_skipped = a->volumes_skipped,
 		.bytes_uploaded = a->bytes_uploaded,
 		.render_us = a->render_us,
+		.jitter_us = a->jitter_us,
+		.missed_pulses = a->missed_pulses,
+		.upload_rate = a->upload_rate,
+		.index_error_us = a->index_error_us,
+		.angle_error_p99 = a->angle_error_p99,
+		.angle_error_max = a->angle_error_max,
 	};
 	sp->status_serial++;
 	return 0;

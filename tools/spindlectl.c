@@ -107,6 +107,13 @@ static void print_status(const struct spindle_status *st)
 {
 	printf("measured rpm: %.1f\n", st->rpm);
 	printf("locked: %s\n", st->locked ? "yes" : "no");
+	printf("period jitter: %.1f us\n", st->jitter_us);
+	printf("index prediction error: %.1f us\n", st->index_error_us);
+	printf("missed or glitch pulses: %llu\n", (unsigned long long)st->missed_pulses);
+	if (st->angle_error_p99 >= 0)
+		printf("slice angle error: p99 %.3f, max %.3f slices\n", st->angle_error_p99, st->angle_error_max);
+	else
+		printf("slice angle error: unknown\n");
 	printf("blanked: %s\n", st->blanked ? "yes" : "no");
 	printf("projector present: %s\n", st->projector_present ? "yes" : "no");
 	printf("volumes shown: %llu\n", (unsigned long long)st->volumes_shown);
@@ -114,6 +121,7 @@ static void print_status(const struct spindle_status *st)
 	printf("volumes rendered: %llu\n", (unsigned long long)st->volumes_rendered);
 	printf("volumes skipped: %llu\n", (unsigned long long)st->volumes_skipped);
 	printf("bytes uploaded: %llu\n", (unsigned long long)st->bytes_uploaded);
+	printf("upload rate: %llu bytes/s\n", (unsigned long long)st->upload_rate);
 	printf("render time: %.3f ms\n", st->render_us / 1e3);
 	printf("clients: %u\n", st->clients);
 }

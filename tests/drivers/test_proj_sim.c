@@ -103,7 +103,7 @@ static void test_upload_swap(void)
 	struct projector *p = r.p;
 	int64_t period = sim_rotor_period_ns(r.rotor);
 	random_volume(r.vol, 3, 1);
-	CHECK_EQ(p->impl->upload(p, 0, r.vol, NULL), 0);
+	CHECK(p->impl->upload(p, 0, r.vol, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 2), -ENODATA); /* never written */
 	int64_t asked = now_ns();
 	CHECK_EQ(p->impl->swap(p, 0), 0);
@@ -125,7 +125,7 @@ static void test_upload_swap(void)
 	/* The shown buffer and one awaiting a swap are not writable. */
 	CHECK_EQ(p->impl->upload(p, 0, r.vol, NULL), -EBUSY);
 	random_volume(r.vol, 5, 2);
-	CHECK_EQ(p->impl->upload(p, 1, r.vol, NULL), 0);
+	CHECK(p->impl->upload(p, 1, r.vol, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 1), 0);
 	CHECK_EQ(p->impl->upload(p, 1, r.vol, NULL), -EBUSY);
 	CHECK_EQ(p->impl->swap(p, 2), -EBUSY); /* one swap at a time */
@@ -134,7 +134,7 @@ static void test_upload_swap(void)
 	CHECK_EQ(r.ev.buffer, 1);
 	CHECK(volumes_equal(p->impl->shown(p), r.vol));
 	CHECK_EQ(p->impl->swap(p, 1), -EBUSY); /* already shown */
-	CHECK_EQ(p->impl->upload(p, 0, r.vol, NULL), 0); /* free again */
+	CHECK(p->impl->upload(p, 0, r.vol, NULL) > 0); /* free again */
 
 	struct proj_sim_stats st;
 	proj_sim_get_stats(p, &st);
@@ -155,7 +155,7 @@ static void test_underrun(void)
 	struct rig r0;
 	rig_init(&r0, 0);
 	random_volume(r0.vol, 8, 3); /* every tile of 3/4 of the images */
-	CHECK_EQ(r0.p->impl->upload(r0.p, 0, r0.vol, NULL), 0);
+	CHECK(r0.p->impl->upload(r0.p, 0, r0.vol, NULL) > 0);
 	struct proj_sim_stats st0;
 	proj_sim_get_stats(r0.p, &st0);
 	uint64_t bytes = st0.bytes; /* the wire size of this upload */
@@ -170,7 +170,7 @@ static void test_underrun(void)
 	struct projector *p = r.p;
 	CHECK_EQ(p->impl->blank(p, false), 0);
 	int64_t t0 = now_ns();
-	CHECK_EQ(p->impl->upload(p, 2, vol, NULL), 0);
+	CHECK(p->impl->upload(p, 2, vol, NULL) > 0);
 	int64_t asked = now_ns();
 	CHECK_EQ(p->impl->swap(p, 2), 0);
 	int64_t first_start = sim_rotor_next_index(r.rotor, asked);

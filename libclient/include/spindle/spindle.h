@@ -62,9 +62,16 @@ struct spindle_status {
 	uint64_t underruns;        /* volumes that missed their revolution */
 	uint64_t volumes_rendered; /* volumes rendered */
 	uint64_t volumes_skipped;  /* scenes not rendered: identical to the last rendered */
-	uint64_t bytes_uploaded;   /* sparse volume data (tile masks and non-empty tiles)
-				    * sent to the projector */
+	uint64_t bytes_uploaded;   /* bytes sent to the projector: whole volumes, or
+				    * deltas of only the tiles that changed */
 	uint32_t render_us;        /* wall time of the last render, microseconds (0: none yet) */
+	float jitter_us;           /* RMS deviation of recent revolution periods */
+	uint64_t missed_pulses;    /* index pulses missing or rejected as glitches */
+	uint64_t upload_rate;      /* bytes/s sent to the projector, last second */
+	float index_error_us;      /* RMS error of the predicted revolution start */
+	float angle_error_p99;     /* slice angle error, 99th percentile, in slices
+				    * (< 0: unknown; only the simulated projector knows) */
+	float angle_error_max;     /* largest slice angle error, slices (< 0: unknown) */
 };
 
 /* When a committed state was first shown. A commit that leaves the scene
