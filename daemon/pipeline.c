@@ -106,21 +106,35 @@ static int send(struct pipeline *p, int b, const struct volume *old)
 	return 0;
 }
 
+/* The free buffer holding the newest volume the device is known to have:
+ * the delta against it is the smallest. -1 if none is free. */
+static int pick_buffer(const struct pipeline *p)
+{
+	int best = -1;
+	uint64_t best_seq = 0;
+	for (int b = 0; b < (int)p->buffers; b++) {
+		uint64_t seq = p->known[b] ? p->content[b]->seq + 1 : 0;
+		if (buffer_free(p, b) && (best < 0 || seq > best_seq)) {
+			best = b;
+			best_seq = seq;
+		}
+	}
+	return best;
+}
+
 static void upload_ready(struct pipeline *p)
 {
-	for (int b = 0; b < (int)p->buffers; b++) {
-		if (!buffer_free(p, b))
-			continue;
-		struct volume *old = p->content[b];
-		p->content[b] = p->work;
-		if (send(p, b, old) < 0) {
-			p->content[b] = old; /* keep the rendered volume for later */
-			return;
-		}
-		p->work = old;
-		p->ready = false;
+	int b = pick_buffer(p);
+	if (b < 0)
+		return;
+	struct volume *old = p->content[b];
+	p->content[b] = p->work;
+	if (send(p, b, old) < 0) {
+		p->content[b] = old; /* keep the rendered volume for later */
 		return;
 	}
+	p->work = old;
+	p->ready = false;
 }
 
 /* The device lost buffer resend's volume (an error, or a re-plug): that

@@ -57,7 +57,19 @@ void daemon_require_renderer(struct daemon *d, const char *name)
 	}
 }
 
+static void spawn(struct daemon *d, const char *renderer, const char *config);
+
 void daemon_start_renderer(struct daemon *d, const char *renderer)
+{
+	spawn(d, renderer, NULL);
+}
+
+void daemon_start_config(struct daemon *d, const char *config)
+{
+	spawn(d, NULL, config);
+}
+
+static void spawn(struct daemon *d, const char *renderer, const char *config)
 {
 	const char *exe = getenv("SPINDLED");
 	CHECK(exe != NULL);
@@ -68,6 +80,12 @@ void daemon_start_renderer(struct daemon *d, const char *renderer)
 	CHECK(mkdtemp(d->dir) != NULL);
 	snprintf(d->socket, sizeof(d->socket), "%s/spindle.sock", d->dir);
 	snprintf(d->log, sizeof(d->log), "%s/spindled.log", d->dir);
+	char conf[128] = "/dev/null";
+	if (config) {
+		snprintf(conf, sizeof(conf), "%s/spindled.conf", d->dir);
+		FILE *f = fopen(conf, "w");
+		CHECK(f && fputs(config, f) >= 0 && fclose(f) == 0);
+	}
 	d->pid = fork();
 	CHECK(d->pid >= 0);
 	if (d->pid == 0) {
@@ -78,7 +96,7 @@ void daemon_start_renderer(struct daemon *d, const char *renderer)
 		unsetenv("LISTEN_FDS");
 		unsetenv("LISTEN_PID");
 		const char *argv[] = { exe, "--device", "sim", "--profile", "small", "--socket", d->socket, "--config",
-				       "/dev/null", "--verbose", renderer ? "--renderer" : NULL, renderer, NULL };
+				       conf, "--verbose", renderer ? "--renderer" : NULL, renderer, NULL };
 		execv(exe, (char *const *)argv);
 		_exit(127);
 	}
@@ -134,6 +152,9 @@ void daemon_stop(struct daemon *d)
 		CHECK(false);
 	}
 	unlink(d->log);
+	char conf[128];
+	snprintf(conf, sizeof(conf), "%s/spindled.conf", d->dir);
+	unlink(conf);
 	rmdir(d->dir);
 }
 

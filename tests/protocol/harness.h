@@ -38,6 +38,9 @@ void daemon_start(struct daemon *d);
 /* The same with an explicit --renderer (NULL: none), and no checks on
  * which renderer runs. */
 void daemon_start_renderer(struct daemon *d, const char *renderer);
+/* The same with the config file text config (the daemon's defaults and
+ * renderer otherwise). */
+void daemon_start_config(struct daemon *d, const char *config);
 /* Checks that the daemon runs renderer name; exits 77 (skipped) when it
  * logged that the renderer is unavailable here (no EGL, no OSMesa). */
 void daemon_require_renderer(struct daemon *d, const char *name);

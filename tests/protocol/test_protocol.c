@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "harness.h"
+#include "projwire.h"
 
 #define W 128
 #define H 128
@@ -754,6 +755,69 @@ static void test_back_and_forth(void)
 	daemon_stop(&d);
 }
 
+/* ---- pacing and uploads to the projector ---- */
+
+/* Tiles present in a or b whose content differs between them. */
+static uint64_t tiles_changed(const struct volume *a, const struct volume *b)
+{
+	uint64_t n = 0;
+	for (uint32_t k = 0; k < a->image_count; k++) {
+		const struct volume_image *x = &a->images[k], *y = &b->images[k];
+		const uint8_t *px = x->tiles, *py = y->tiles;
+		for (uint32_t t = 0; t < volume_tiles_per_image(a); t++) {
+			int ix = volume_tile_present(x, t), iy = volume_tile_present(y, t);
+			n += (ix || iy) && (ix != iy || memcmp(px, py, VOLUME_TILE_BYTES));
+			px += ix ? VOLUME_TILE_BYTES : 0;
+			py += iy ? VOLUME_TILE_BYTES : 0;
+		}
+	}
+	return n;
+}
+
+/* A small sphere moving past a large one: each volume is sent as a delta
+ * against the free buffer's content, the volume two back, and costs
+ * exactly the projector protocol's delta of the two (computed here from
+ * captures); about as large a share of the whole as the share of tiles
+ * that changed. An unchanged scene sends nothing. */
+static void test_delta(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	static float big[48 * 24 * 18], ball[24 * 12 * 18];
+	struct spindle_frame f;
+	show_triangles(sp, &f, big, sphere(big, 0.85, 48, 24), 0, 0, 255);
+	struct spindle_layer *layer = show_triangles(sp, &f, ball, sphere(ball, 0.16, 24, 12), 255, 0, 0);
+	struct volume *shown[8];
+	for (int i = 0; i < 8; i++) {
+		struct spindle_status before = status_of(sp);
+		float m[16];
+		shift_x(m, 0.1f + 0.08f * (float)i);
+		CHECK(spindle_layer_set_transform(layer, m) == 0);
+		CHECK(spindle_commit_and_wait(sp, &f) == 0);
+		shown[i] = capture_volume(sp);
+		uint64_t sent = status_of(sp).bytes_uploaded - before.bytes_uploaded;
+		if (i < 3)
+			continue; /* until every buffer holds a volume of this scene */
+		const struct volume *base = shown[i - 2];
+		size_t whole = projwire_volume_size(shown[i]);
+		CHECK_EQ(sent, projwire_upload_size(shown[i], base));
+		double tiles = (double)tiles_changed(shown[i], base) / (double)volume_tile_count(shown[i]);
+		double bytes = (double)sent / (double)whole;
+		printf("volume %d: %.1f%% of %llu tiles changed, %llu of %zu bytes sent (%.1f%%)\n", i, 100 * tiles,
+		       (unsigned long long)volume_tile_count(shown[i]), (unsigned long long)sent, whole, 100 * bytes);
+		CHECK(tiles > 0.05 && tiles < 0.2);
+		CHECK(bytes < tiles * 1.1 + 0.01);
+	}
+	struct spindle_status before = status_of(sp);
+	CHECK(spindle_commit_and_wait(sp, &f) == 0);
+	CHECK_EQ(status_of(sp).bytes_uploaded, before.bytes_uploaded);
+	for (int i = 0; i < 8; i++)
+		volume_destroy(shown[i]);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 /* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
 
 /* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
@@ -865,6 +929,7 @@ static const struct {
 	{ "layers", test_layers },
 	{ "unchanged", test_unchanged },
 	{ "back-and-forth", test_back_and_forth },
+	{ "delta", test_delta },
 	{ "gl-lost-egl", test_gl_lost_egl },
 	{ "gl-lost-osmesa", test_gl_lost_osmesa },
 	{ "gl-no-display", test_gl_no_display },
