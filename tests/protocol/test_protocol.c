@@ -818,6 +818,54 @@ static void test_delta(void)
 	daemon_stop(&d);
 }
 
+/* The big sphere shown on a lit projector, by a daemon with this config;
+ * its frame, the time it was committed, and what was shown. */
+static struct volume *show_big_sphere(const char *config, struct spindle_frame *f, uint64_t *committed,
+				      struct spindle_status *st)
+{
+	struct daemon d;
+	daemon_start_config(&d, config);
+	struct spindle *sp = client_connect(&d);
+	static float axis[6], big[48 * 24 * 18];
+	show_vertices(sp, 1, axis, axis_line(axis), 255, 255, 255); /* lit from here on */
+	uint32_t n = sphere(big, 0.85, 48, 24);
+	struct spindle_status before = status_of(sp);
+	*committed = mono_ns();
+	show_triangles(sp, f, big, n, 0, 0, 255);
+	struct volume *vol = capture_volume(sp);
+	*st = status_of(sp);
+	st->underruns -= before.underruns;
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+	return vol;
+}
+
+/* A volume that takes 1.5 revolutions to cross the link misses the
+ * revolution start after its swap request (one underrun), and is shown
+ * later and whole: bit for bit what an unlimited link shows. */
+static void test_underrun(void)
+{
+	struct spindle_frame f;
+	uint64_t committed;
+	struct spindle_status st;
+	struct volume *ref = show_big_sphere("sim-link-rate = 0\n", &f, &committed, &st);
+	CHECK_EQ(st.underruns, 0);
+	struct geometry g = small();
+	double period = 60.0 / g.rpm;
+	uint64_t rate = (uint64_t)((double)projwire_volume_size(ref) / (1.5 * period));
+	char config[64];
+	snprintf(config, sizeof(config), "sim-link-rate = %llu\n", (unsigned long long)rate);
+	struct volume *late = show_big_sphere(config, &f, &committed, &st);
+	printf("link %llu bytes/s: shown %.1f ms after the commit, %llu underruns\n", (unsigned long long)rate,
+	       (double)(f.time_ns - committed) / 1e6, (unsigned long long)st.underruns);
+	CHECK_EQ(st.underruns, 1);
+	CHECK((double)(f.time_ns - committed) >= 1.5 * period * 1e9);
+	CHECK_EQ(tiles_changed(late, ref), 0);
+	CHECK_EQ(volume_tile_count(late), volume_tile_count(ref));
+	volume_destroy(ref);
+	volume_destroy(late);
+}
+
 /* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
 
 /* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
@@ -930,6 +978,7 @@ static const struct {
 	{ "unchanged", test_unchanged },
 	{ "back-and-forth", test_back_and_forth },
 	{ "delta", test_delta },
+	{ "underrun", test_underrun },
 	{ "gl-lost-egl", test_gl_lost_egl },
 	{ "gl-lost-osmesa", test_gl_lost_osmesa },
 	{ "gl-no-display", test_gl_no_display },
