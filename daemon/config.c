@@ -23,6 +23,8 @@ void config_defaults(struct config *cfg)
 	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s",
 		 env && *env ? env : "/run/spindle/spindle.sock");
 	strcpy(cfg->device, "sim");
+	strcpy(cfg->sync_chip, "gpiochip0");
+	strcpy(cfg->sync_line, "ROTOR_INDEX");
 	strcpy(cfg->profile, "perspecta");
 	strcpy(cfg->renderer, "auto");
 }
@@ -55,12 +57,43 @@ static int set_u32(uint32_t *dst, const char *value, uint32_t min, uint32_t max)
 	return r;
 }
 
+/* May be empty ("" clears it). */
+static int set_optional(char *dst, size_t size, const char *value)
+{
+	return *value ? set_string(dst, size, value) : (*dst = '\0', 0);
+}
+
+static int set_bool(bool *dst, const char *value)
+{
+	if (!strcmp(value, "true") || !strcmp(value, "yes") || !strcmp(value, "1"))
+		return *dst = true, 0;
+	if (!strcmp(value, "false") || !strcmp(value, "no") || !strcmp(value, "0"))
+		return *dst = false, 0;
+	return -EINVAL;
+}
+
+/* A USB id: hexadecimal, "0x" optional (lsusb prints them bare). */
+static int set_u16_hex(uint16_t *dst, const char *value)
+{
+	char *end;
+	errno = 0;
+	unsigned long v = strtoul(value, &end, 16);
+	if (errno || end == value || *end || value[0] == '-' || v > 0xffff)
+		return -EINVAL;
+	*dst = (uint16_t)v;
+	return 0;
+}
+
+static int config_set_hw(struct config *cfg, const char *key, const char *value);
+static int config_set_limits(struct config *cfg, const char *key, const char *value);
+
 int config_set(struct config *cfg, const char *key, const char *value)
 {
 	if (!strcmp(key, "socket"))
 		return set_string(cfg->socket_path, sizeof(cfg->socket_path), value);
 	if (!strcmp(key, "device"))
-		return strcmp(value, "sim") ? -EINVAL : set_string(cfg->device, sizeof(cfg->device), value);
+		return strcmp(value, "sim") && strcmp(value, "hw") ? -EINVAL
+								 : set_string(cfg->device, sizeof(cfg->device), value);
 	if (!strcmp(key, "profile"))
 		return set_string(cfg->profile, sizeof(cfg->profile), value);
 	if (!strcmp(key, "renderer")) {
@@ -79,6 +112,31 @@ int config_set(struct config *cfg, const char *key, const char *value)
 		return set_u32(&cfg->projector_buffers, value, 2, 3);
 	if (!strcmp(key, "sim-link-rate"))
 		return set_u64(&cfg->sim_link_bytes_per_sec, value, 0, UINT64_MAX);
+	if (!strcmp(key, "sim-faults"))
+		return set_optional(cfg->sim_faults, sizeof(cfg->sim_faults), value);
+	return config_set_hw(cfg, key, value);
+}
+
+/* The keys of device = hw. */
+static int config_set_hw(struct config *cfg, const char *key, const char *value)
+{
+	if (!strcmp(key, "sync-chip"))
+		return set_string(cfg->sync_chip, sizeof(cfg->sync_chip), value);
+	if (!strcmp(key, "sync-line"))
+		return set_string(cfg->sync_line, sizeof(cfg->sync_line), value);
+	if (!strcmp(key, "sync-active-low"))
+		return set_bool(&cfg->sync_active_low, value);
+	if (!strcmp(key, "projector-vid"))
+		return set_u16_hex(&cfg->projector_vid, value);
+	if (!strcmp(key, "projector-pid"))
+		return set_u16_hex(&cfg->projector_pid, value);
+	if (!strcmp(key, "projector-path"))
+		return set_optional(cfg->projector_path, sizeof(cfg->projector_path), value);
+	return config_set_limits(cfg, key, value);
+}
+
+static int config_set_limits(struct config *cfg, const char *key, const char *value)
+{
 	if (!strcmp(key, "max-clients"))
 		return set_u32(&cfg->max_clients, value, 1, 65536);
 	if (!strcmp(key, "max-objects"))

@@ -186,6 +186,69 @@ static int on_rate(sd_event_source *s, uint64_t usec, void *data)
 	return 0;
 }
 
+static void usb_config(const struct config *cfg, const struct geometry *geom, struct proj_usb_config *out)
+{
+	*out = (struct proj_usb_config){
+		.vid = cfg->projector_vid,
+		.pid = cfg->projector_pid,
+		.geom = *geom,
+	};
+	snprintf(out->bus_path, sizeof(out->bus_path), "%s", cfg->projector_path);
+}
+
+/* The real devices. A missing projector is fine (it is set up when it is
+ * plugged in); a missing sync line is not: the projector could never be
+ * lit, and the config is wrong. */
+static int open_hw(struct devices *dev)
+{
+	const struct config *cfg = &dev->srv->cfg;
+	struct sync_gpiod_config sc = { .active_low = cfg->sync_active_low };
+	snprintf(sc.chip, sizeof(sc.chip), "%s", cfg->sync_chip);
+	snprintf(sc.line, sizeof(sc.line), "%s", cfg->sync_line);
+	dev->sync = sync_gpiod_create(&sc);
+	if (!dev->sync)
+		return -errno;
+	struct proj_usb_config pc;
+	usb_config(cfg, &dev->srv->geom, &pc);
+	dev->proj = proj_usb_create(&pc, &proj_listener, dev);
+	if (!dev->proj)
+		return -errno;
+	struct projector_stats ps;
+	dev->proj->impl->get_stats(dev->proj, &ps);
+	if (!ps.present)
+		log_warn("no projector attached yet; waiting for one");
+	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "%s:%s + usb projector", cfg->sync_chip,
+		 cfg->sync_line);
+	return 0;
+}
+
+int devices_blank(const struct config *cfg)
+{
+	if (strcmp(cfg->device, "hw") != 0) {
+		log_info("device '%s': no projector outside the daemon, nothing to blank", cfg->device);
+		return 0;
+	}
+	struct geometry geom;
+	if (geometry_from_profile(cfg->profile, &geom) < 0) {
+		log_error("unknown profile '%s'", cfg->profile);
+		return -EINVAL;
+	}
+	struct proj_usb_config pc;
+	usb_config(cfg, &geom, &pc);
+	struct projector *p = proj_usb_create(&pc, NULL, NULL);
+	if (!p) {
+		log_error("cannot open USB: %s", strerror(errno));
+		return -errno;
+	}
+	struct projector_stats ps;
+	p->impl->get_stats(p, &ps);
+	/* Set-up darkened it already; say it once more for the log. */
+	int r = ps.present ? p->impl->blank(p, true) : 0;
+	log_info(ps.present ? "projector blanked" : "no projector attached: nothing to blank");
+	p->impl->destroy(p);
+	return r;
+}
+
 static int add_sources(struct devices *dev)
 {
 	sd_event *e = dev->srv->event;
@@ -220,7 +283,7 @@ struct devices *devices_create(struct server *srv)
 	dev->est = sync_estimator_create(&ec);
 	if (!dev->est)
 		goto err;
-	r = open_sim(dev);
+	r = strcmp(srv->cfg.device, "hw") ? open_sim(dev) : open_hw(dev);
 	if (r < 0)
 		goto err;
 	r = add_sources(dev);

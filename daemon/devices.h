@@ -31,6 +31,11 @@ struct devices *devices_create(struct server *srv);
 /* Blanks the projector and closes everything. Accepts NULL. */
 void devices_destroy(struct devices *dev);
 
+struct config;
+/* spindled --blank: darkens the projector of cfg, if one is attached, and
+ * lets it go. 0 (also with no projector, or device sim) or negative errno. */
+int devices_blank(const struct config *cfg);
+
 struct projector *devices_projector(struct devices *dev);
 /* The volume on display as the projector holds it, if it can tell. */
 const struct volume *devices_shown(struct devices *dev);

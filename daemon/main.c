@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "config.h"
+#include "devices.h"
 #include "log.h"
 #include "server.h"
 
@@ -14,7 +15,10 @@ static void usage(FILE *f)
 	fprintf(f, "Usage: spindled [OPTION]...\n"
 		   "Drive a swept-volume 3-D display and serve its clients.\n\n"
 		   "  -c, --config FILE        configuration file (default " CONFIG_DEFAULT_PATH ")\n"
-		   "  -d, --device NAME        device backend: sim\n"
+		   "  -d, --device NAME        device backends: sim (default), hw (GPIO sync\n"
+		   "                           and USB projector)\n"
+		   "      --blank              darken the projector and exit (for\n"
+		   "                           ExecStopPost=)\n"
 		   "  -p, --profile NAME       device profile: perspecta (default), small\n"
 		   "  -r, --renderer NAME      renderer: auto (default: EGL on a hardware GPU,\n"
 		   "                           else cpu), cpu, egl, osmesa\n"
@@ -49,6 +53,9 @@ static int apply(struct config *cfg, int opt, char *arg)
 	case 'v':
 		cfg->verbose = true;
 		return 0;
+	case 'B':
+		cfg->blank_only = true;
+		return 0;
 	case 'o': {
 		char *eq = strchr(arg, '=');
 		if (!eq) {
@@ -69,7 +76,8 @@ int main(int argc, char **argv)
 		{ "profile", required_argument, NULL, 'p' },  { "renderer", required_argument, NULL, 'r' },
 		{ "socket", required_argument, NULL, 's' },   { "set", required_argument, NULL, 'o' },
 		{ "verbose", no_argument, NULL, 'v' },        { "help", no_argument, NULL, 'h' },
-		{ "version", no_argument, NULL, 'V' },        { 0 },
+		{ "version", no_argument, NULL, 'V' },        { "blank", no_argument, NULL, 'B' },
+		{ 0 },
 	};
 	const char *shortopts = "c:d:p:r:s:o:vh";
 	const char *config_path = NULL;
@@ -99,5 +107,7 @@ int main(int argc, char **argv)
 			return 2;
 	}
 	log_set_level(cfg.verbose ? LOG_LEVEL_DEBUG : LOG_LEVEL_INFO);
+	if (cfg.blank_only)
+		return devices_blank(&cfg) < 0 ? 1 : 0;
 	return server_run(&cfg);
 }
