@@ -186,13 +186,13 @@ static int read_batch(struct sync_gpiod *s, struct raw_edge *raw, int max)
 	return r;
 }
 
-static int gpiod_get_fd(struct sync_source *base)
+static int gpio_get_fd(struct sync_source *base)
 {
 	struct sync_gpiod *s = (struct sync_gpiod *)base;
 	return s->fd;
 }
 
-static int gpiod_read_edges(struct sync_source *base, int64_t *ts, int max)
+static int gpio_read_edges(struct sync_source *base, int64_t *ts, int max)
 {
 	struct sync_gpiod *s = (struct sync_gpiod *)base;
 	int n = 0, r = s->pending_err;
@@ -215,26 +215,26 @@ static int gpiod_read_edges(struct sync_source *base, int64_t *ts, int max)
 	return r < 0 ? r : n;
 }
 
-static void gpiod_destroy(struct sync_source *base)
+static void gpio_destroy(struct sync_source *base)
 {
 	struct sync_gpiod *s = (struct sync_gpiod *)base;
 	v1_release(s);
 	free(s);
 }
 
-static const struct sync_impl gpiod_impl = {
+static const struct sync_impl gpio_impl = {
 	.name = "gpiod",
-	.get_fd = gpiod_get_fd,
-	.read_edges = gpiod_read_edges,
-	.destroy = gpiod_destroy,
+	.get_fd = gpio_get_fd,
+	.read_edges = gpio_read_edges,
+	.destroy = gpio_destroy,
 };
 
-static struct sync_gpiod *gpiod_alloc(int fd, const char *name)
+static struct sync_gpiod *gpio_alloc(int fd, const char *name)
 {
 	struct sync_gpiod *s = calloc(1, sizeof(*s));
 	if (!s)
 		return NULL;
-	s->base.impl = &gpiod_impl;
+	s->base.impl = &gpio_impl;
 	s->fd = fd;
 	snprintf(s->name, sizeof(s->name), "%s", name);
 	return s;
@@ -246,7 +246,7 @@ struct sync_source *sync_gpiod_from_fd(int fd, const char *name)
 	/* Never block the event loop, even if poll() and read() disagree. */
 	if (flags < 0 || fcntl(fd, F_SETFL, flags | O_NONBLOCK) < 0)
 		return NULL;
-	struct sync_gpiod *s = gpiod_alloc(fd, name);
+	struct sync_gpiod *s = gpio_alloc(fd, name);
 	return s ? &s->base : NULL;
 }
 
@@ -271,7 +271,7 @@ struct sync_source *sync_gpiod_create(const struct sync_gpiod_config *cfg)
 	}
 	char name[160];
 	snprintf(name, sizeof(name), "gpio %s line %s", cfg->chip, cfg->line);
-	struct sync_gpiod *s = gpiod_alloc(-1, name);
+	struct sync_gpiod *s = gpio_alloc(-1, name);
 	if (!s)
 		return NULL;
 	const char *why = "";
