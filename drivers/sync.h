@@ -5,6 +5,7 @@
 #ifndef SPINDLE_SYNC_H
 #define SPINDLE_SYNC_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 struct sync_source;
@@ -47,5 +48,18 @@ struct sim_rotor;
  * rotor's true angle passes 0. NULL + errno on failure. The rotor must
  * outlive the source. */
 struct sync_source *sync_sim_create(struct sim_rotor *rotor);
+
+struct sync_gpiod_config {
+	char chip[64]; /* name "gpiochip0", path "/dev/gpiochip0", label, or number */
+	char line[64]; /* offset "17" or line name "ROTOR_INDEX" */
+	bool active_low; /* the physical falling edge is the index */
+};
+
+/* The index pulse from a GPIO line through libgpiod: requests rising-edge
+ * events on cfg's line as consumer "spindled" and holds the line until
+ * destroyed. NULL + errno on failure (ENOENT: no such chip or line, EBUSY:
+ * another consumer holds it, EINVAL: a bad cfg), with a log_error line naming
+ * chip, line and why. cfg is copied. */
+struct sync_source *sync_gpiod_create(const struct sync_gpiod_config *cfg);
 
 #endif
