@@ -79,8 +79,15 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	struct devices *dev = data;
 	int64_t ts[32];
 	int n = sync_read_edges(dev->sync, ts, 32);
+	if (n == -ENODEV || n == -EBADF) {
+		/* The line is gone (its chip removed): stop polling a hung-up
+		 * fd; no edges come, so the check timer unlocks and blanks. */
+		log_error("sync source gone: %s; the projector stays dark", strerror(-n));
+		sd_event_source_set_enabled(s, SD_EVENT_OFF);
+		return 0;
+	}
 	if (n < 0) {
-		log_error("sync source: %s", strerror(-n));
+		log_warn("sync source: %s", strerror(-n));
 		return 0;
 	}
 	const struct sync_state *st = sync_estimator_state(dev->est);
@@ -217,7 +224,7 @@ static int open_hw(struct devices *dev)
 	dev->proj->impl->get_stats(dev->proj, &ps);
 	if (!ps.present)
 		log_warn("no projector attached yet; waiting for one");
-	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "%s:%s + usb projector", cfg->sync_chip,
+	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "%.20s:%.20s + usb projector", cfg->sync_chip,
 		 cfg->sync_line);
 	return 0;
 }

@@ -1,6 +1,6 @@
 /* Rotation sync sources: the index pulse, once per revolution (rising edge),
- * timestamped with CLOCK_MONOTONIC. Backends: "sim" (a simulated rotor),
- * later "gpiod". The estimator turning edges into period/phase/lock lives in
+ * timestamped with CLOCK_MONOTONIC. Backends: "sim" (a simulated rotor) and
+ * "gpiod" (a GPIO line through libgpiod, sync_gpiod.c). The estimator turning edges into period/phase/lock lives in
  * sync_estimator.h and is shared by every backend. */
 #ifndef SPINDLE_SYNC_H
 #define SPINDLE_SYNC_H
