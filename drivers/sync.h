@@ -1,7 +1,8 @@
 /* Rotation sync sources: the index pulse, once per revolution (rising edge),
  * timestamped with CLOCK_MONOTONIC. Backends: "sim" (a simulated rotor) and
- * "gpiod" (a GPIO line through libgpiod, sync_gpiod.c). The estimator turning edges into period/phase/lock lives in
- * sync_estimator.h and is shared by every backend. */
+ * "gpiod" (a GPIO line through libgpiod, sync_gpiod.c). The estimator
+ * turning edges into period/phase/lock lives in sync_estimator.h and is
+ * shared by every backend. */
 #ifndef SPINDLE_SYNC_H
 #define SPINDLE_SYNC_H
 
