@@ -136,10 +136,12 @@ static int ctrl_raw(struct proj_usb *u, const struct projwire_ctrl *c, uint8_t *
 	struct projwire_setup s;
 	projwire_ctrl_encode(c, u->iface, setup, data);
 	projwire_setup_decode(setup, &s);
-	uint8_t *buf = (s.request_type & LIBUSB_ENDPOINT_IN) ? reply : data;
-	int r = libusb_control_transfer(u->handle, s.request_type, s.request, s.value, s.index, buf,
+	bool in = s.request_type & LIBUSB_ENDPOINT_IN;
+	int r = libusb_control_transfer(u->handle, s.request_type, s.request, s.value, s.index, in ? reply : data,
 					s.length, CTRL_TIMEOUT_MS);
-	return r < 0 ? usb_errno(r) : r;
+	if (r < 0)
+		return usb_errno(r);
+	return in ? r : 0; /* the reply length, or 0 as for requests without one */
 }
 
 /* One control request; a stall is turned into the errno the device gives
@@ -649,7 +651,8 @@ static int queue_reserve(struct proj_usb *u, size_t size)
 {
 	if (u->q_head + u->q_len + size <= u->q_cap)
 		return 0;
-	memmove(u->q, u->q + u->q_head, u->q_len);
+	if (u->q_head)
+		memmove(u->q, u->q + u->q_head, u->q_len);
 	u->q_head = 0;
 	if (u->q_len + size <= u->q_cap)
 		return 0;
@@ -944,6 +947,8 @@ static int LIBUSB_CALL hotplug_event(libusb_context *ctx, libusb_device *dev, li
 	u->dbg.hotplug_removals++;
 	if (u->handle && libusb_get_device(u->handle) == dev)
 		u->hp_left = true;
+	if (is_refused(u, dev))
+		u->refused_bus = u->refused_addr = 0; /* its address may come back as another device */
 	return 0;
 }
 

@@ -307,6 +307,9 @@ static void test_error_events(void)
 	wait_for(p, &r.ev.gone, 0, 1000);
 	CHECK_EQ(r.ev.gone_err, -ENODEV);
 	wait_for(p, &r.ev.arrived, 0, 2000);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(p, &dbg);
+	CHECK_EQ(dbg.rescan_opens, 1); /* no uevent: the periodic rescan found it */
 	struct volume *vol = volume_create(&geom);
 	CHECK(vol);
 	random_volume(vol, 2, 31);
