@@ -1,0 +1,447 @@
+/* The USB projector (proj_usb.c) through libusb's real code paths against
+ * the device model, with umockdev standing in for the kernel (usb_emul).
+ * Exits 77 (skipped) when not run under umockdev's preload library. Under
+ * umockdev the device node always polls ready, so the loops below poll
+ * with a short timeout and dispatch each time round. */
+#include <errno.h>
+#include <poll.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "check.h"
+#include "log.h"
+#include "proj_usb_priv.h"
+#include "projector.h"
+#include "projwire.h"
+#include "usb_emul.h"
+#include "volume_util.h"
+
+static const struct geometry geom = {
+	.width = 96, .height = 64, .images_per_rev = 16, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+};
+
+/* Large enough that one volume takes several 256 KiB bulk transfers. */
+static const struct geometry big = {
+	.width = 512, .height = 512, .images_per_rev = 64, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+};
+
+struct events {
+	int swaps, errors, gone, arrived;
+	uint32_t buffer, err_buffer;
+	int64_t time_ns;
+	uint64_t seq;
+	int err, gone_err;
+};
+
+static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
+{
+	struct events *ev = data;
+	ev->swaps++;
+	ev->buffer = buffer;
+	ev->time_ns = time_ns;
+	ev->seq = seq;
+}
+
+static void on_error(void *data, uint32_t buffer, int err)
+{
+	struct events *ev = data;
+	ev->errors++;
+	ev->err_buffer = buffer;
+	ev->err = err;
+}
+
+static void on_gone(void *data, int err)
+{
+	struct events *ev = data;
+	ev->gone++;
+	ev->gone_err = err;
+}
+
+static void on_arrived(void *data)
+{
+	((struct events *)data)->arrived++;
+}
+
+static const struct projector_listener listener = {
+	.swapped = on_swapped, .error = on_error, .gone = on_gone, .arrived = on_arrived,
+};
+
+struct rig {
+	struct usb_emul *emul;
+	struct projector *p;
+	struct events ev;
+	struct proj_usb_config cfg;
+	int fds; /* before the projector: umockdev's own come and go apart */
+};
+
+static void rig_init(struct rig *r, const struct geometry *g, const struct geometry *dev_geom, uint8_t minor)
+{
+	*r = (struct rig){ .cfg = { .geom = *g } };
+	r->emul = usb_emul_create();
+	CHECK(r->emul);
+	if (dev_geom)
+		CHECK_EQ(usb_emul_plug(r->emul, dev_geom, 3, minor), 0);
+	r->fds = count_fds();
+	r->p = proj_usb_create(&r->cfg, &listener, &r->ev);
+	CHECK(r->p);
+}
+
+static void rig_finish(struct rig *r)
+{
+	r->p->impl->destroy(r->p);
+	CHECK_EQ(count_fds(), r->fds); /* nothing of the driver's left open */
+	usb_emul_destroy(r->emul);
+}
+
+/* One turn of the daemon's loop. */
+static void turn(struct projector *p)
+{
+	struct pollfd pfd = { .fd = p->impl->get_fd(p), .events = POLLIN };
+	CHECK(poll(&pfd, 1, 5) >= 0);
+	CHECK_EQ(p->impl->dispatch(p), 0);
+}
+
+/* Dispatches until *count moves past before (at most ms milliseconds);
+ * returns the milliseconds it took. */
+static int64_t wait_for(struct projector *p, const int *count, int before, int ms)
+{
+	int64_t t0 = now_ns(), deadline = t0 + (int64_t)ms * 1000000;
+	while (*count == before) {
+		CHECK_MSG(now_ns() < deadline, "no event in %d ms", ms);
+		turn(p);
+	}
+	return (now_ns() - t0) / 1000000;
+}
+
+static void run_for(struct projector *p, int ms)
+{
+	int64_t deadline = now_ns() + (int64_t)ms * 1000000;
+	while (now_ns() < deadline)
+		turn(p);
+}
+
+static void upload_and_show(struct rig *r, uint32_t buffer, const struct volume *vol)
+{
+	struct projector *p = r->p;
+	int before = r->ev.swaps;
+	CHECK_EQ(p->impl->upload(p, buffer, vol, NULL), 0);
+	CHECK_EQ(p->impl->swap(p, buffer), 0);
+	wait_for(p, &r->ev.swaps, before, 2000);
+	CHECK_EQ(r->ev.buffer, buffer);
+	CHECK_EQ(r->ev.seq, vol->seq);
+	CHECK_EQ(p->impl->blank(p, false), 0);
+	CHECK(usb_emul_shows(r->emul, vol));
+}
+
+static void test_open(void)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, 0);
+	struct projector *p = r.p;
+	struct projector_info info;
+	CHECK_EQ(p->impl->get_info(p, &info), 0);
+	CHECK_EQ(info.geom.width, geom.width);
+	CHECK_EQ(info.geom.height, geom.height);
+	CHECK_EQ(info.geom.images_per_rev, geom.images_per_rev);
+	CHECK(info.geom.mirrored);
+	CHECK_EQ(info.buffers, 3);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK(st.present);
+	CHECK_EQ(st.arrivals, 1);
+	CHECK(st.angle_err_max < 0);
+	CHECK(!usb_emul_lit(r.emul)); /* set up dark */
+	CHECK(!p->impl->shown(p));
+	struct usb_emul_stats es;
+	usb_emul_get_stats(r.emul, &es);
+	CHECK(es.controls >= 3); /* RESET_STREAM, GET_INFO, SET_BLANK */
+	CHECK_EQ(es.unknown_ioctls, 0);
+	CHECK_EQ(p->impl->set_timing(p, 33333333, now_ns()), 0);
+	CHECK_EQ(p->impl->set_timing(p, 0, 0), -EINVAL);
+	CHECK_EQ(r.ev.arrived, 0); /* present at creation: not reported */
+	rig_finish(&r);
+}
+
+static void test_refuse_geometry(void)
+{
+	struct rig r;
+	struct geometry other = geom;
+	other.width = 128;
+	rig_init(&r, &geom, &other, 0);
+	struct projector *p = r.p;
+	struct projector_info info;
+	CHECK_EQ(p->impl->get_info(p, &info), -ENODEV);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK(!st.present);
+	struct volume *vol = volume_create(&geom);
+	CHECK(vol);
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), -ENODEV);
+	CHECK_EQ(p->impl->blank(p, true), -ENODEV);
+	run_for(p, 700); /* a rescan passes by: still refused, never arrived */
+	CHECK_EQ(r.ev.arrived, 0);
+	volume_destroy(vol);
+	rig_finish(&r);
+}
+
+static void test_upload_swap(void)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, 0);
+	struct projector *p = r.p;
+	struct volume *vol = volume_create(&geom);
+	CHECK(vol);
+	random_volume(vol, 3, 11);
+	CHECK_EQ(p->impl->swap(p, 2), -ENODATA); /* never written: a stall, told why */
+	upload_and_show(&r, 0, vol);
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), -EBUSY); /* shown */
+	random_volume(vol, 5, 12);
+	CHECK_EQ(p->impl->upload(p, 1, vol, NULL), 0);
+	CHECK_EQ(p->impl->swap(p, 1), 0);
+	CHECK_EQ(p->impl->upload(p, 1, vol, NULL), -EBUSY); /* awaiting a swap */
+	CHECK_EQ(p->impl->swap(p, 2), -EBUSY);              /* one swap at a time */
+	CHECK_EQ(p->impl->swap(p, 7), -EINVAL);
+	wait_for(p, &r.ev.swaps, 1, 2000);
+	CHECK_EQ(r.ev.buffer, 1);
+	CHECK_EQ(r.ev.seq, 12);
+	CHECK(usb_emul_shows(r.emul, vol));
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), 0); /* free again */
+	run_for(p, 1100);                              /* a keepalive GET_STATUS refreshes the stats */
+	struct projector_stats st;
+	struct usb_emul_stats es;
+	p->impl->get_stats(p, &st);
+	usb_emul_get_stats(r.emul, &es);
+	CHECK_EQ(st.swaps, 2);
+	CHECK(st.revolutions >= 1);
+	CHECK_EQ(st.bytes_sent, es.bulk_bytes);
+	CHECK(st.bytes_sent > 2 * projwire_volume_size(vol) / 2);
+	CHECK_EQ(r.ev.errors, 0);
+	volume_destroy(vol);
+	rig_finish(&r);
+}
+
+static void test_in_flight(struct volume *large)
+{
+	struct rig r;
+	rig_init(&r, &big, &big, 0);
+	struct projector *p = r.p;
+	size_t size = projwire_volume_size(large);
+	CHECK(size > 4 * 256 * 1024); /* more than the transfers in flight hold */
+	upload_and_show(&r, 0, large);
+	struct proj_usb_debug dbg;
+	struct usb_emul_stats es;
+	proj_usb_get_debug(p, &dbg);
+	usb_emul_get_stats(r.emul, &es);
+	CHECK(dbg.max_out_in_flight >= 2);
+	CHECK(es.max_out_in_flight >= 2); /* the device saw them at once too */
+	CHECK_EQ(es.bulk_bytes, size);
+	rig_finish(&r);
+}
+
+/* Bytes one upload puts on the wire. */
+static uint64_t upload_bytes(struct rig *r, uint32_t buffer, const struct volume *vol, const struct volume *base)
+{
+	struct projector_stats st0, st;
+	r->p->impl->get_stats(r->p, &st0);
+	CHECK_EQ(r->p->impl->upload(r->p, buffer, vol, base), 0);
+	run_for(r->p, 50);
+	r->p->impl->get_stats(r->p, &st);
+	return st.bytes_sent - st0.bytes_sent;
+}
+
+static void check_delta(uint8_t minor)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, minor);
+	struct volume *a = volume_create(&geom), *b = volume_create(&geom), *a2 = volume_create(&geom);
+	CHECK(a && b && a2);
+	random_volume(a, 4, 21);
+	random_volume(b, 4, 22);
+	upload_and_show(&r, 0, a);
+	upload_and_show(&r, 1, b); /* buffer 0 holds a, free again */
+	CHECK_EQ(volume_copy(a2, a), 0);
+	a2->seq = 23;
+	uint64_t sent = upload_bytes(&r, 0, a2, a);
+	size_t full = projwire_upload_size(a2, NULL), delta = projwire_upload_size(a2, a);
+	if (minor >= 1 && delta < full)
+		CHECK_EQ(sent, delta); /* the codec encodes deltas: only they go */
+	else
+		CHECK_EQ(sent, full); /* a 1.0 device, or a codec without deltas yet */
+	if (minor >= 1 && delta < full)
+		CHECK(sent < full / 4);
+	CHECK_EQ(r.p->impl->swap(r.p, 0), 0);
+	wait_for(r.p, &r.ev.swaps, 2, 2000);
+	CHECK_EQ(r.ev.seq, 23);
+	CHECK(usb_emul_shows(r.emul, a2));
+	volume_destroy(a);
+	volume_destroy(b);
+	volume_destroy(a2);
+	rig_finish(&r);
+}
+
+static void test_delta(void)
+{
+	check_delta(1);
+	check_delta(0);
+}
+
+static void test_error_events(void)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, 0);
+	struct projector *p = r.p;
+	uint8_t buf[PROJWIRE_EVENT_MAX];
+	struct projwire_event ev = { .type = PROJWIRE_EV_ERROR, .buffer = 1, .error = PROJWIRE_ERR_CRC, .seq = 5 };
+	usb_emul_inject_event(r.emul, buf, projwire_event_encode(&ev, buf));
+	wait_for(p, &r.ev.errors, 0, 1000);
+	CHECK_EQ(r.ev.err_buffer, 1);
+	CHECK_EQ(r.ev.err, -EILSEQ);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK_EQ(st.device_errors, 1);
+
+	/* Nonsense on the events endpoint: a device fault. The device is
+	 * dropped (gone) and, still plugged, set up again by the rescan. */
+	static const uint8_t junk[8] = { 'X', 'Y', 0x81, 0, 0, 0, 0, 0 };
+	usb_emul_inject_event(r.emul, junk, sizeof(junk));
+	wait_for(p, &r.ev.gone, 0, 1000);
+	CHECK_EQ(r.ev.gone_err, -ENODEV);
+	wait_for(p, &r.ev.arrived, 0, 2000);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(p, &dbg);
+	CHECK_EQ(dbg.rescan_opens, 1); /* no uevent: the periodic rescan found it */
+	struct volume *vol = volume_create(&geom);
+	CHECK(vol);
+	random_volume(vol, 2, 31);
+	upload_and_show(&r, 2, vol);
+	volume_destroy(vol);
+	rig_finish(&r);
+}
+
+static void test_keepalive(void)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, 0);
+	struct projector *p = r.p;
+	CHECK_EQ(p->impl->blank(p, false), 0);
+	CHECK(usb_emul_lit(r.emul));
+	run_for(p, 3000);
+	struct usb_emul_stats es;
+	usb_emul_get_stats(r.emul, &es);
+	CHECK(usb_emul_lit(r.emul));
+	CHECK_EQ(es.watchdog_darkened, 0);
+	CHECK_MSG(es.max_ctrl_gap_ns <= 1000000000LL, "EP0 silent for %lld ms", (long long)es.max_ctrl_gap_ns / 1000000);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK(st.revolutions >= 60); /* 1800 rpm for 3 s, from GET_STATUS */
+	rig_finish(&r);
+	CHECK_EQ(r.ev.gone, 0);
+}
+
+/* Pulls the device mid-upload: gone() once, after every transfer's
+ * callback; then every call says -ENODEV. */
+static void unplug_mid_upload(struct rig *r, const struct volume *vol)
+{
+	struct projector *p = r->p;
+	int gone = r->ev.gone;
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), 0);
+	usb_emul_unplug(r->emul);
+	wait_for(p, &r->ev.gone, gone, 2000);
+	run_for(p, 20);
+	CHECK_EQ(r->ev.gone, gone + 1);
+	CHECK_EQ(r->ev.gone_err, -ENODEV);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(p, &dbg);
+	CHECK_EQ(dbg.live_transfers, 0);
+	CHECK_EQ(dbg.allocated_transfers, 0);
+	struct usb_emul_stats es;
+	usb_emul_get_stats(r->emul, &es);
+	CHECK_EQ(es.urbs_outstanding, 0); /* every URB reaped */
+	struct projector_info info;
+	CHECK_EQ(p->impl->get_info(p, &info), -ENODEV);
+	CHECK_EQ(p->impl->upload(p, 1, vol, NULL), -ENODEV);
+	CHECK_EQ(p->impl->swap(p, 1), -ENODEV);
+	CHECK_EQ(p->impl->blank(p, true), -ENODEV);
+	CHECK_EQ(p->impl->set_timing(p, 33333333, now_ns()), -ENODEV);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK(!st.present);
+}
+
+static int64_t replug(struct rig *r, const struct geometry *g)
+{
+	int arrived = r->ev.arrived;
+	CHECK_EQ(usb_emul_plug(r->emul, g, 3, 0), 0);
+	int64_t ms = wait_for(r->p, &r->ev.arrived, arrived, 2000);
+	CHECK_EQ(r->ev.arrived, arrived + 1);
+	struct projector_stats st;
+	r->p->impl->get_stats(r->p, &st);
+	CHECK(st.present);
+	CHECK(!usb_emul_lit(r->emul));
+	return ms;
+}
+
+static void test_hotplug(struct volume *large)
+{
+	struct rig r;
+	rig_init(&r, &big, &big, 0);
+	struct projector *p = r.p;
+	unplug_mid_upload(&r, large);
+	int64_t ms = replug(&r, &big);
+	large->seq = 41;
+	upload_and_show(&r, 1, large);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(p, &dbg);
+	printf("hot-plug: libusb events %s; re-plug found in %lld ms; arrivals seen %llu, removals %llu, "
+	       "found by rescan %llu\n",
+	       dbg.hotplug ? "on" : "off", (long long)ms, (unsigned long long)dbg.hotplug_arrivals,
+	       (unsigned long long)dbg.hotplug_removals, (unsigned long long)dbg.rescan_opens);
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK_EQ(st.arrivals, 2);
+	rig_finish(&r);
+}
+
+static void test_cycles(struct volume *large)
+{
+	struct rig r;
+	rig_init(&r, &big, &big, 0);
+	int fds = count_fds();
+	for (int i = 0; i < 20; i++) {
+		unplug_mid_upload(&r, large);
+		replug(&r, &big);
+	}
+	CHECK_EQ(count_fds(), fds);
+	CHECK_EQ(r.ev.gone, 20);
+	CHECK_EQ(r.ev.arrived, 20);
+	large->seq = 51;
+	upload_and_show(&r, 2, large);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(r.p, &dbg);
+	CHECK_EQ(dbg.gone, 20);
+	rig_finish(&r);
+}
+
+int main(void)
+{
+	struct usb_emul *e = usb_emul_create();
+	if (!e) {
+		printf("SKIP: not running under umockdev (LD_PRELOAD=libumockdev-preload.so.0)\n");
+		return 77;
+	}
+	usb_emul_destroy(e);
+	struct volume *large = volume_create(&big);
+	CHECK(large);
+	random_volume(large, 8, 1);
+	test_open();
+	test_refuse_geometry();
+	test_upload_swap();
+	test_in_flight(large);
+	test_delta();
+	test_error_events();
+	test_keepalive();
+	test_hotplug(large);
+	test_cycles(large);
+	volume_destroy(large);
+	return check_done();
+}
