@@ -27,6 +27,7 @@
 #include "proj_usb_priv.h"
 #include "projector.h"
 #include "projwire.h"
+#include "wire_le.h"
 
 #define OUT_XFERS 4
 #define OUT_CHUNK (256 * 1024)
@@ -664,11 +665,6 @@ static int queue_reserve(struct proj_usb *u, size_t size)
 	return 0;
 }
 
-static uint32_t le32(const uint8_t *b)
-{
-	return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
-}
-
 static int usb_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base)
 {
 	struct proj_usb *u = (struct proj_usb *)p;
@@ -690,11 +686,11 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 	size_t len = projwire_upload_encode(vol, base, buffer, rec);
 	/* Where its first record (VOLUME_BEGIN) ends: from then on the device
 	 * holds the buffer as being written and accepts a swap to it. */
-	u->begin_end[buffer] = u->pos_queued + PROJWIRE_HEADER_SIZE + le32(rec + 4);
+	u->begin_end[buffer] = u->pos_queued + PROJWIRE_HEADER_SIZE + le_get32(rec + 4);
 	u->pos_queued += len;
 	u->q_len += len;
 	pump(u);
-	return 0;
+	return (int)len;
 }
 
 static int send_swap(struct proj_usb *u)
