@@ -133,8 +133,30 @@ def test_config():
     check(p.returncode != 0 and "unknown profile 'huge'" in p.stderr, f'unknown profile: {p.stderr!r}')
 
 
+
+def test_hardware_config():
+    """device = hw: a sync line that cannot be opened is an error at start,
+    naming it; --blank with no projector attached (none is, here) is fine,
+    with device hw and with device sim; bad hw keys are refused."""
+    sock = os.path.join(tmp, 'hw.sock')
+    p = subprocess.run([spindled, '-s', sock, '-c', '/dev/null', '-p', 'small', '--device', 'hw',
+                        '--set', 'sync-chip=spindle-no-such-chip', '--set', 'sync-line=5'],
+                       capture_output=True, text=True, timeout=10)
+    check(p.returncode != 0 and 'spindle-no-such-chip' in p.stderr, f'hw without a sync line: {p.stderr!r}')
+    check(not os.path.exists(sock), 'hw without a sync line: no socket left')
+    for device in ('hw', 'sim'):
+        p = subprocess.run([spindled, '-c', '/dev/null', '-p', 'small', '--device', device, '--blank'],
+                           capture_output=True, text=True, timeout=10)
+        check(p.returncode == 0 and 'nothing to blank' in p.stderr, f'--blank, device {device}: {p.stderr!r}')
+    for key in ('projector-vid=12345', 'projector-pid=-1', 'sync-active-low=maybe', 'device=usb'):
+        p = subprocess.run([spindled, '-c', '/dev/null', '--set', key, '--blank'], capture_output=True,
+                           text=True, timeout=10)
+        check(p.returncode == 2, f'bad value {key} refused')
+
+
 test_notify()
 test_socket_activation()
 test_config()
+test_hardware_config()
 shutil.rmtree(tmp, ignore_errors=True)
 print(f'{checks} passed, 0 failed')
