@@ -7,6 +7,8 @@
 
 /* A run of this many glitches means the estimate, not the pulses, is wrong. */
 #define GLITCH_RUN_RESEED 3
+/* A run of this many edges off the fitted line means the line is wrong. */
+#define OUTLIER_RUN_REFIT 3
 
 struct sync_estimator {
 	struct sync_estimator_config cfg;
@@ -23,7 +25,7 @@ struct sync_estimator {
 	bool have_last;
 	int64_t last_edge, last_rev;
 	uint32_t consecutive; /* consistent revolutions in a row */
-	uint32_t glitch_run;
+	uint32_t glitch_run, outlier_run;
 };
 
 void sync_estimator_config_default(struct sync_estimator_config *cfg, double nominal_rpm)
@@ -72,6 +74,7 @@ static void history_clear(struct sync_estimator *est)
 	est->hist_pos = 0;
 	est->fit_len = 0;
 	est->fit_pos = 0;
+	est->outlier_run = 0;
 	est->consecutive = 0;
 	est->mean_period = 0;
 	est->state.period_ns = 0;
@@ -191,20 +194,24 @@ static double fit_line(const struct sync_estimator *est, double *slope, double *
 	return (sy - *slope * sx) / n;
 }
 
-/* Adds an accepted edge to the fit (after the previous one, which starts
- * a fit anew) and refits period and phase. */
-static void fit_add(struct sync_estimator *est, int64_t prev_rev, int64_t prev_t)
+/* Adds the latest accepted edge to the fit (after the previous one, which
+ * starts a fit anew), or with outlier only moves the phase to it, and
+ * refits period and phase. */
+static void fit_add(struct sync_estimator *est, int64_t prev_rev, int64_t prev_t, bool outlier)
 {
 	if (est->fit_len == 0) {
 		est->fit[0].rev = prev_rev;
 		est->fit[0].t = prev_t;
 		est->fit_len = est->fit_pos = 1;
+		outlier = false;
 	}
-	est->fit[est->fit_pos].rev = est->last_rev;
-	est->fit[est->fit_pos].t = est->last_edge;
-	est->fit_pos = (est->fit_pos + 1) % SYNC_ESTIMATOR_FIT;
-	if (est->fit_len < SYNC_ESTIMATOR_FIT)
-		est->fit_len++;
+	if (!outlier) {
+		est->fit[est->fit_pos].rev = est->last_rev;
+		est->fit[est->fit_pos].t = est->last_edge;
+		est->fit_pos = (est->fit_pos + 1) % SYNC_ESTIMATOR_FIT;
+		if (est->fit_len < SYNC_ESTIMATOR_FIT)
+			est->fit_len++;
+	}
 	double slope, next_var;
 	double at = fit_line(est, &slope, &next_var);
 	est->state.period_ns = llround(slope);
@@ -212,15 +219,29 @@ static void fit_add(struct sync_estimator *est, int64_t prev_rev, int64_t prev_t
 	est->state.fit_err_ns = llround(sqrt(next_var));
 }
 
-/* The residual of edge t, k revolutions after the last, against the
- * prediction: once the fit has enough edges to predict at all. */
-static void track_residual(struct sync_estimator *est, int64_t t, long k)
+/* Judges edge t, k revolutions after the last, against the prediction
+ * (once the fit has enough edges to predict at all) and keeps the RMS of
+ * the residuals. An edge off by more than the tolerance is an outlier,
+ * kept out of the fit: a glitch late in a revolution passes the glitch
+ * test, and one such edge would pull a fit of 64 off by milliseconds. A
+ * run of outliers means the fit, not the edges, is off (a speed ramp the
+ * line lags): it starts over. Returns whether t is an outlier. */
+static bool judge_residual(struct sync_estimator *est, int64_t t, long k)
 {
 	if (est->fit_len < 4)
-		return;
+		return false;
 	double e = (double)(t - est->state.phase_ns - k * est->state.period_ns);
+	if (fabs(e) > est->cfg.tolerance * (double)est->state.period_ns) {
+		if (++est->outlier_run < OUTLIER_RUN_REFIT)
+			return true;
+		est->fit_len = est->fit_pos = 0;
+		est->outlier_run = 0;
+		return false;
+	}
+	est->outlier_run = 0;
 	est->err_sq = est->err_sq ? est->err_sq + (e * e - est->err_sq) / SYNC_ESTIMATOR_FIT : e * e;
 	est->state.phase_err_ns = llround(sqrt(est->err_sq));
+	return false;
 }
 
 static bool is_glitch(struct sync_estimator *est, int64_t dt, double ratio)
@@ -248,13 +269,13 @@ bool sync_estimator_feed(struct sync_estimator *est, int64_t t)
 	if (k > (long)est->cfg.max_missed + 1)
 		return reseed(est, t, SYNC_UNLOCK_TIMEOUT); /* a stall, not missed pulses */
 	est->glitch_run = 0;
-	track_residual(est, t, k);
+	bool outlier = judge_residual(est, t, k);
 	est->last_edge = t;
 	est->last_rev += k;
 	est->state.edge_ns = t;
 	est->state.missed += (uint64_t)(k - 1);
 	take_sample(est, dt / k, k > 1);
-	fit_add(est, prev_rev, prev_t);
+	fit_add(est, prev_rev, prev_t, outlier);
 	return update_lock(est);
 }
 
