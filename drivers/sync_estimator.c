@@ -79,6 +79,7 @@ static void history_clear(struct sync_estimator *est)
 	est->mean_period = 0;
 	est->state.period_ns = 0;
 	est->state.fit_err_ns = 0;
+	est->state.fit_edges = 0;
 	est->state.rpm = 0.0;
 	est->state.jitter_ns = 0;
 }
@@ -217,6 +218,7 @@ static void fit_add(struct sync_estimator *est, int64_t prev_rev, int64_t prev_t
 	est->state.period_ns = llround(slope);
 	est->state.phase_ns = est->last_edge + llround(at);
 	est->state.fit_err_ns = llround(sqrt(next_var));
+	est->state.fit_edges = est->fit_len;
 }
 
 /* Judges edge t, k revolutions after the last, against the prediction
@@ -244,10 +246,17 @@ static bool judge_residual(struct sync_estimator *est, int64_t t, long k)
 	return false;
 }
 
-static bool is_glitch(struct sync_estimator *est, int64_t dt, double ratio)
+/* Too soon after the last accepted edge to be the next. Out of lock the
+ * yardstick is never longer than the nominal period: a rotor spinning up
+ * after a reseed on a slow revolution would otherwise see every other
+ * edge as a glitch and settle on twice the period, never to lock. */
+static bool is_glitch(const struct sync_estimator *est, int64_t dt)
 {
+	int64_t ref = expected_period(est);
+	if (!est->state.locked && ref > est->nominal_period)
+		ref = est->nominal_period;
 	bool judged = est->hist_len > 0; /* the first period has nothing to compare to */
-	return dt <= 0 || (judged && ratio < est->cfg.glitch_fraction);
+	return dt <= 0 || (judged && (double)dt < est->cfg.glitch_fraction * (double)ref);
 }
 
 bool sync_estimator_feed(struct sync_estimator *est, int64_t t)
@@ -259,7 +268,7 @@ bool sync_estimator_feed(struct sync_estimator *est, int64_t t)
 	}
 	int64_t dt = t - est->last_edge, prev_t = est->last_edge, prev_rev = est->last_rev;
 	double ratio = (double)dt / (double)expected_period(est);
-	if (is_glitch(est, dt, ratio)) {
+	if (is_glitch(est, dt)) {
 		est->state.glitches++;
 		if (++est->glitch_run >= GLITCH_RUN_RESEED)
 			return reseed(est, t, SYNC_UNLOCK_UNSTABLE);

@@ -65,6 +65,12 @@ struct sync_state {
 	 * scatter of the edges about it: the slice placement error itself if
 	 * the scatter is sensing noise on a smoothly turning rotor. */
 	int64_t fit_err_ns;
+	/* Edges in the fit now. Right after lock it holds few and the
+	 * prediction is about as noisy as one edge; it needs some 30 edges to
+	 * place slices to a tenth of one edge's jitter: an owner that wants
+	 * accurate slices from the first lit revolution waits for fit_edges
+	 * and fit_err_ns, not just for lock. */
+	uint32_t fit_edges;
 	uint64_t edges;    /* edges fed, glitches included */
 	uint64_t glitches; /* edges rejected as too early */
 	uint64_t missed;   /* pulses inferred missing from gaps */
