@@ -180,10 +180,12 @@ static void sim_get_stats(struct projector *p, struct projector_stats *out)
 		.bytes_sent = s->bytes_sent,
 		.device_errors = s->device_errors,
 		.arrivals = 1,
-		.angle_err_p50 = -1,
-		.angle_err_p99 = -1,
-		.angle_err_max = -1,
 	};
+	struct proj_simdev_stats ds;
+	proj_simdev_get_stats(s->dev, &ds);
+	out->angle_err_p50 = ds.angle_err_p50;
+	out->angle_err_p99 = ds.angle_err_p99;
+	out->angle_err_max = ds.angle_err_max;
 	if (get_status(s, &st) < 0)
 		return;
 	out->revolutions = st.revolutions;
@@ -255,4 +257,14 @@ void proj_sim_get_stats(struct projector *p, struct proj_sim_stats *out)
 	out->swaps = st.swaps;
 	out->underruns = st.underruns;
 	out->bytes = st.bytes;
+	struct proj_simdev_stats ds;
+	proj_simdev_get_stats(((struct proj_sim *)p)->dev, &ds);
+	out->angle_err_p50 = ds.angle_err_p50;
+	out->angle_err_p99 = ds.angle_err_p99;
+	out->angle_err_max = ds.angle_err_max;
+	out->stalls = ds.stalls;
+	out->max_dark_delay_ns = ds.max_dark_delay_ns;
+	out->lit_stopped_ns = ds.lit_stopped_ns;
+	out->lit_untimed_ns = ds.lit_untimed_ns;
+	out->watchdog_blanks = ds.watchdog_blanks;
 }

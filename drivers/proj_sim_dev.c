@@ -16,6 +16,7 @@
 #include "sim_rotor.h"
 
 #define EVENT_QUEUE (64 * PROJWIRE_EVENT_MAX)
+#define WATCHDOG_NS 2000000000LL /* dark without a control request this long */
 
 struct simdev_buffer {
 	struct volume *vol;
@@ -40,6 +41,9 @@ struct proj_simdev {
 	int64_t link_free;    /* when the link is done with the bytes sent so far */
 
 	int64_t rev0; /* rotor revolution at creation */
+	int64_t last_ctrl; /* when the last control request came */
+	struct proj_meter *meter;
+	uint64_t watchdog_blanks;
 	uint64_t swaps, underruns, bytes;
 	uint32_t last_error;
 	uint64_t events_dropped;
@@ -145,13 +149,18 @@ struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geo
 	dev->link_rate = link_bytes_per_sec;
 	dev->blanked = true; /* dark until told otherwise */
 	dev->shown = dev->pending = PROJWIRE_NO_BUFFER;
-	dev->rev0 = sim_rotor_revolution(rotor, now_ns());
+	int64_t now = sim_rotor_now(rotor);
+	dev->rev0 = sim_rotor_revolution(rotor, now);
+	dev->last_ctrl = now;
 	dev->fd = -1;
 	for (uint32_t i = 0; i < buffers; i++)
 		if (!(dev->buf[i].vol = volume_create(geom)))
 			goto err_volumes;
 	dev->dec = projwire_decoder_create(geom, buffers, 0, &sink_impl, dev);
 	if (!dev->dec)
+		goto err_volumes;
+	dev->meter = proj_meter_create(rotor, geom->images_per_rev, geom->rpm, now);
+	if (!dev->meter)
 		goto err_volumes;
 	dev->fd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
 	if (dev->fd < 0)
@@ -171,10 +180,42 @@ void proj_simdev_destroy(struct proj_simdev *dev)
 	if (dev->fd >= 0)
 		close(dev->fd);
 	projwire_decoder_destroy(dev->dec);
+	proj_meter_destroy(dev->meter);
 	for (uint32_t i = 0; i < dev->nbuf; i++)
 		volume_destroy(dev->buf[i].vol);
 	free(dev);
 	errno = saved;
+}
+
+/* The meter over the time since its last run, up to t, in the device's
+ * present state. */
+static void meter_to(struct proj_simdev *dev, int64_t t)
+{
+	bool lit = !dev->blanked && dev->shown != PROJWIRE_NO_BUFFER;
+	proj_meter_run(dev->meter, t, lit, dev->timing_set ? &dev->timing : NULL);
+}
+
+/* Brings the watchdog and the meter up to until. Called before anything
+ * changes what the device shows, so the meter sees each state over
+ * exactly the time it held. */
+static void advance(struct proj_simdev *dev, int64_t until)
+{
+	int64_t dog = dev->last_ctrl + WATCHDOG_NS;
+	if (!dev->blanked && dog <= until) {
+		meter_to(dev, dog);
+		dev->blanked = true; /* the host is gone or hung: dark (section 7) */
+		dev->watchdog_blanks++;
+	}
+	meter_to(dev, until);
+}
+
+static void run_pending(struct proj_simdev *dev, int64_t now);
+
+/* Swaps due and watchdog and meter, up to now. */
+static void catch_up(struct proj_simdev *dev, int64_t now)
+{
+	run_pending(dev, now);
+	advance(dev, now);
 }
 
 static void fill_status(const struct proj_simdev *dev, struct projwire_status *st)
@@ -184,7 +225,7 @@ static void fill_status(const struct proj_simdev *dev, struct projwire_status *s
 		    (dev->pending != PROJWIRE_NO_BUFFER ? PROJWIRE_STATUS_PENDING : 0);
 	st->shown = dev->shown;
 	st->pending = dev->pending;
-	st->revolutions = (uint64_t)(sim_rotor_revolution(dev->rotor, now_ns()) - dev->rev0);
+	st->revolutions = (uint64_t)(sim_rotor_revolution(dev->rotor, sim_rotor_now(dev->rotor)) - dev->rev0);
 	st->swaps = dev->swaps;
 	st->underruns = dev->underruns;
 	st->bytes = dev->bytes;
@@ -207,7 +248,7 @@ static int do_swap(struct proj_simdev *dev, uint32_t buffer)
 	if (s != PROJWIRE_BUF_READY && s != PROJWIRE_BUF_WRITING)
 		return -ENODATA;
 	dev->pending = buffer;
-	dev->pending_from = now_ns();
+	dev->pending_from = sim_rotor_now(dev->rotor);
 	dev->pending_missed = false;
 	return rearm(dev);
 }
@@ -234,7 +275,8 @@ static int handle_request(struct proj_simdev *dev, const struct projwire_ctrl *c
 		dev->blanked = c->blank;
 		return 0;
 	case PROJWIRE_REQ_SET_TIMING:
-		/* Kept for the angle-error model; the sim shows at true starts. */
+		/* Slices are placed by it (the meter); swaps still happen at
+		 * the rotor's true revolution starts. */
 		dev->timing = c->timing;
 		dev->timing_set = true;
 		return 0;
@@ -251,6 +293,9 @@ int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SE
 			const uint8_t *out, size_t out_len, uint8_t *in, size_t in_cap)
 {
 	struct projwire_ctrl c;
+	int64_t now = sim_rotor_now(dev->rotor);
+	catch_up(dev, now);
+	dev->last_ctrl = now; /* even a bad request shows the host is alive */
 	int r = projwire_ctrl_decode(setup, out, out_len, &c);
 	if (r >= 0)
 		r = handle_request(dev, &c, in, in_cap);
@@ -265,7 +310,7 @@ int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SE
 
 void proj_simdev_bulk_out(struct proj_simdev *dev, const uint8_t *buf, size_t len)
 {
-	int64_t now = now_ns();
+	int64_t now = sim_rotor_now(dev->rotor);
 	if (dev->link_free < now)
 		dev->link_free = now;
 	if (dev->link_rate)
@@ -318,6 +363,7 @@ static void run_pending(struct proj_simdev *dev, int64_t now)
 		if (start > now)
 			return;
 		if (b->state == PROJWIRE_BUF_READY && b->ready_ns <= start) {
+			advance(dev, start);
 			show(dev, dev->pending, start);
 			return;
 		}
@@ -337,13 +383,21 @@ int proj_simdev_dispatch(struct proj_simdev *dev)
 	uint64_t expirations;
 	if (read(dev->fd, &expirations, sizeof(expirations)) < 0 && errno != EAGAIN)
 		return -errno;
-	run_pending(dev, now_ns());
+	catch_up(dev, sim_rotor_now(dev->rotor));
 	return rearm(dev);
 }
 
 const struct volume *proj_simdev_shown(struct proj_simdev *dev)
 {
+	catch_up(dev, sim_rotor_now(dev->rotor));
 	if (dev->blanked || dev->shown == PROJWIRE_NO_BUFFER)
 		return NULL;
 	return dev->buf[dev->shown].vol;
+}
+
+void proj_simdev_get_stats(struct proj_simdev *dev, struct proj_simdev_stats *out)
+{
+	catch_up(dev, sim_rotor_now(dev->rotor));
+	out->watchdog_blanks = dev->watchdog_blanks;
+	proj_meter_get(dev->meter, out);
 }

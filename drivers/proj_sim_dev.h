@@ -2,7 +2,12 @@
  * does, modelled in process. It speaks only the wire protocol of
  * proto/projector.md (control transfers, bulk OUT bytes, bulk IN events),
  * so the host half (proj_sim.c) and the tests drive it exactly as the USB
- * driver would drive a real device. Private to drivers/ and its tests. */
+ * driver would drive a real device. Private to drivers/ and its tests.
+ *
+ * It places slice k of each revolution at index + period * k / N from the
+ * latest SET_TIMING and measures where that really was on the rotor
+ * (proj_sim_meter.h). It goes dark when no control request came for 2 s.
+ * Time is the rotor's clock (sim_rotor_now). */
 #ifndef SPINDLE_PROJ_SIM_DEV_H
 #define SPINDLE_PROJ_SIM_DEV_H
 
@@ -10,6 +15,7 @@
 #include <stdint.h>
 
 #include "geometry.h"
+#include "proj_sim_meter.h"
 #include "projwire.h"
 #include "volume.h"
 
@@ -44,5 +50,9 @@ int proj_simdev_dispatch(struct proj_simdev *dev);
 /* The volume lit now as the device decoded it; NULL while blanked or before
  * the first swap. Valid until the next call into dev. */
 const struct volume *proj_simdev_shown(struct proj_simdev *dev);
+
+/* Brings the device up to now and fills out: slice angle error against
+ * the true rotor, the safety record, watchdog blanks. */
+void proj_simdev_get_stats(struct proj_simdev *dev, struct proj_simdev_stats *out);
 
 #endif

@@ -129,6 +129,15 @@ struct proj_sim_stats {
 	uint64_t swaps;
 	uint64_t underruns;   /* swaps that missed a revolution start for want of data */
 	uint64_t bytes;       /* wire bytes received */
+	/* Measured by the device model against the true rotor (see
+	 * drivers/proj_sim_meter.h): slice angle error in slices (-1 until
+	 * measured), and the safety record. */
+	double angle_err_p50, angle_err_p99, angle_err_max;
+	uint64_t stalls;           /* stretches stopped or out of band */
+	int64_t max_dark_delay_ns; /* last true index before a stall -> dark */
+	int64_t lit_stopped_ns;    /* lit during stalls, detection included */
+	int64_t lit_untimed_ns;    /* lit before any SET_TIMING */
+	uint64_t watchdog_blanks;  /* darkened for want of control requests */
 };
 void proj_sim_get_stats(struct projector *p, struct proj_sim_stats *out);
 

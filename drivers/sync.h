@@ -44,11 +44,31 @@ static inline void sync_destroy(struct sync_source *s)
 }
 
 struct sim_rotor;
+struct sim_faults;
 
 /* An index pulse source for the simulated rotor: one edge at each time the
- * rotor's true angle passes 0. NULL + errno on failure. The rotor must
- * outlive the source. */
+ * rotor's true angle passes 0. Same as sync_sim_create_faults(rotor, NULL). */
 struct sync_source *sync_sim_create(struct sim_rotor *rotor);
+
+/* The same with the pulse faults of faults (NULL: none): each edge moved
+ * from the true index time by Gaussian noise of sigma jitter * period /
+ * sqrt(2), so that measured periods deviate by jitter * period RMS; a
+ * revolution's pulse lost with probability missed; a glitch edge at a
+ * random time within a revolution with probability extra. Deterministic
+ * for a given seed. The motion faults are the rotor's
+ * (sim_rotor_apply_faults), applied before this is created. NULL + errno
+ * on failure. The rotor must outlive the source; faults is copied. */
+struct sync_source *sync_sim_create_faults(struct sim_rotor *rotor, const struct sim_faults *faults);
+
+/* What a sim source actually sent (tests compare the estimator with it). */
+struct sync_sim_stats {
+	uint64_t true_edges; /* revolution starts passed */
+	uint64_t sent;       /* edges reported, glitches included */
+	uint64_t missed;     /* revolution starts not reported */
+	uint64_t extra;      /* glitch edges reported */
+};
+/* Zeroes out when s is not a sim source. */
+void sync_sim_get_stats(struct sync_source *s, struct sync_sim_stats *out);
 
 struct sync_gpiod_config {
 	char chip[64]; /* name "gpiochip0", path "/dev/gpiochip0", label, or number */

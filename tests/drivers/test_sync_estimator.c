@@ -206,6 +206,24 @@ static void test_spin_up(void)
 	sync_estimator_destroy(est);
 }
 
+/* Reseeded on a slow revolution while spinning up, the next edges come
+ * at under 0.75 of that period: edges, not glitches, or the estimator
+ * settles on every other one and never locks. */
+static void test_reseed_while_spinning_up(void)
+{
+	struct sync_estimator *est = make();
+	const struct sync_state *s = sync_estimator_state(est);
+	int64_t t = T0;
+	sync_estimator_feed(est, t);
+	t += 2 * P; /* the first period after a restart: slow */
+	sync_estimator_feed(est, t);
+	feed_regular(est, &t, 8, P);
+	CHECK_EQ(s->glitches, 0);
+	CHECK(s->locked);
+	CHECK(llabs(s->period_ns - P) < 2);
+	sync_estimator_destroy(est);
+}
+
 static void test_bad_config(void)
 {
 	struct sync_estimator_config cfg;
@@ -225,6 +243,7 @@ int main(void)
 	test_unlock_on_timeout();
 	test_unlock_out_of_band();
 	test_spin_up();
+	test_reseed_while_spinning_up();
 	test_bad_config();
 	return 0;
 }
