@@ -7,6 +7,7 @@
 #include <string.h>
 
 #include "log.h"
+#include "sim_rotor.h"
 
 void config_defaults(struct config *cfg)
 {
@@ -112,8 +113,12 @@ int config_set(struct config *cfg, const char *key, const char *value)
 		return set_u32(&cfg->projector_buffers, value, 2, 3);
 	if (!strcmp(key, "sim-link-rate"))
 		return set_u64(&cfg->sim_link_bytes_per_sec, value, 0, UINT64_MAX);
-	if (!strcmp(key, "sim-faults"))
+	if (!strcmp(key, "sim-faults")) {
+		struct sim_faults f;
+		if (sim_faults_parse(value, &f) < 0)
+			return -EINVAL;
 		return set_optional(cfg->sim_faults, sizeof(cfg->sim_faults), value);
+	}
 	return config_set_hw(cfg, key, value);
 }
 

@@ -1,6 +1,7 @@
 #include "devices.h"
 
 #include <errno.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,6 +23,7 @@ struct devices {
 	struct projector *proj;
 	sd_event_source *sync_source, *proj_source, *check_timer, *rate_timer;
 	bool blanked;
+	int64_t max_err_ns; /* the estimator's fit error the projector is lit at */
 	uint64_t rate_bytes, upload_rate; /* bytes_sent at the last sample; bytes/s */
 };
 
@@ -39,16 +41,26 @@ static void set_blank(struct devices *dev, bool blank)
 	log_info("projector %s", blank ? "blanked" : "lit");
 }
 
-/* Lit only while locked: a stopped screen under a projector is a hazard.
- * time_ns: the edge or check that changed the lock. */
-static void lock_changed(struct devices *dev, int64_t time_ns)
+static void log_lock(const struct sync_state *st)
 {
-	const struct sync_state *st = sync_estimator_state(dev->est);
+	static const char *const why[] = { "never locked", "no index pulse in time", "speed out of band",
+					   "pulse train makes no sense" };
 	if (st->locked)
 		log_info("sync locked: %.1f rpm, jitter %.1f us", st->rpm, st->jitter_ns / 1e3);
 	else
-		log_warn("sync lost (reason %d)", (int)st->unlock_reason);
-	set_blank(dev, !st->locked);
+		log_warn("sync lost: %s", why[st->unlock_reason]);
+}
+
+/* Lit only while locked (a stopped screen under a projector is a hazard),
+ * and once the estimator places revolution starts to a sixteenth of a
+ * slice. time_ns: the edge or check that decided it. */
+static void update_light(struct devices *dev, int64_t time_ns)
+{
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	bool lit = st->locked && sync_estimator_settled(dev->est, dev->max_err_ns);
+	if (lit != dev->blanked)
+		return;
+	set_blank(dev, !lit);
 	if (!dev->blanked)
 		server_projector_lit(dev->srv, time_ns);
 }
@@ -68,8 +80,10 @@ static int on_check(sd_event_source *s, uint64_t usec, void *data)
 {
 	struct devices *dev = data;
 	int64_t now = now_ns();
-	if (sync_estimator_check(dev->est, now))
-		lock_changed(dev, now);
+	if (sync_estimator_check(dev->est, now)) {
+		log_lock(sync_estimator_state(dev->est));
+		update_light(dev, now);
+	}
 	arm_check(dev);
 	return 0;
 }
@@ -92,15 +106,20 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	}
 	const struct sync_state *st = sync_estimator_state(dev->est);
 	for (int i = 0; i < n; i++) {
-		if (sync_estimator_feed(dev->est, ts[i]))
-			lock_changed(dev, ts[i]);
+		if (sync_estimator_feed(dev->est, ts[i])) {
+			log_lock(st);
+			update_light(dev, ts[i]);
+		}
 		/* An accepted edge starts a revolution; a glitch does not. */
-		if (!dev->blanked && st->phase_ns == ts[i])
+		if (!dev->blanked && st->edge_ns == ts[i])
 			server_revolution(dev->srv, ts[i]);
 	}
 	if (n > 0) {
+		/* The timing first: a device lit without it places slices
+		 * at an unknown phase. */
 		if (st->period_ns > 0)
 			dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
+		update_light(dev, ts[n - 1]);
 		/* A capture takes the volume on display at a revolution start. */
 		if (!dev->blanked)
 			server_serve_captures(dev->srv, server_shown(dev->srv));
@@ -140,8 +159,7 @@ static void on_arrived(void *data)
 	if (st->period_ns > 0)
 		dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
 	pipeline_projector_arrived(dev->srv->pipe);
-	if (st->locked)
-		lock_changed(dev, now_ns());
+	update_light(dev, now_ns());
 }
 
 static const struct projector_listener proj_listener = {
@@ -163,10 +181,18 @@ static int on_projector(sd_event_source *s, int fd, uint32_t revents, void *data
 static int open_sim(struct devices *dev)
 {
 	const struct config *cfg = &dev->srv->cfg;
+	struct sim_faults faults;
+	int r = sim_faults_parse(cfg->sim_faults, &faults);
+	if (r < 0)
+		return r; /* config_set checked it already */
 	dev->rotor = sim_rotor_create(dev->srv->geom.rpm);
 	if (!dev->rotor)
 		return -errno;
-	dev->sync = sync_sim_create(dev->rotor);
+	if ((r = sim_rotor_apply_faults(dev->rotor, &faults)) < 0)
+		return r;
+	if (*cfg->sim_faults)
+		log_info("simulated faults: %s", cfg->sim_faults);
+	dev->sync = sync_sim_create_faults(dev->rotor, &faults);
 	if (!dev->sync)
 		return -errno;
 	struct proj_sim_config pc = {
@@ -284,6 +310,8 @@ struct devices *devices_create(struct server *srv)
 		return NULL;
 	dev->srv = srv;
 	dev->blanked = true; /* the projector starts dark */
+	int64_t period = llround(60e9 / srv->geom.rpm);
+	dev->max_err_ns = sync_light_max_err(period, srv->geom.images_per_rev);
 	struct sync_estimator_config ec;
 	sync_estimator_config_default(&ec, srv->geom.rpm);
 	int r = -ENOMEM;
@@ -349,6 +377,7 @@ void devices_get_status(struct devices *dev, struct devices_status *out)
 		.underruns = ps.underruns,
 		.jitter_us = (float)(st->jitter_ns / 1e3),
 		.missed_pulses = st->missed + st->glitches,
+		.index_error_us = (float)(st->phase_err_ns / 1e3),
 		.upload_rate = dev->upload_rate,
 		.angle_error_p99 = (float)ps.angle_err_p99,
 		.angle_error_max = (float)ps.angle_err_max,

@@ -302,6 +302,13 @@ bool sync_estimator_check(struct sync_estimator *est, int64_t now)
 	return unlock(est, SYNC_UNLOCK_TIMEOUT);
 }
 
+bool sync_estimator_settled(const struct sync_estimator *est, int64_t max_err_ns)
+{
+	const struct sync_state *st = &est->state;
+	return st->fit_edges >= SYNC_ESTIMATOR_FIT ||
+	       (st->fit_edges >= SYNC_ESTIMATOR_SETTLE_EDGES && st->fit_err_ns <= max_err_ns);
+}
+
 int64_t sync_estimator_next_index(const struct sync_estimator *est)
 {
 	if (!est->state.period_ns)

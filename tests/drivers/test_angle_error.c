@@ -115,23 +115,24 @@ static void run_until(struct rig *r, int64_t t)
 		step(r);
 }
 
-/* Locks (and with settle, waits until the fit window is full and
- * predicts the index to a tenth of a slice), uploads one volume and swaps it in. Returns the
- * revolutions from lock to light. */
+/* Locks (and with settle, waits until the fit is settled as the daemon
+ * requires before lighting: sync_light_max_err()), uploads one volume and
+ * swaps it in. Returns the revolutions from lock to light. */
 static int rig_light(struct rig *r, bool settle)
 {
 	const struct sync_state *st = sync_estimator_state(r->est);
-	int64_t give_up = r->now + 10 * SEC, slice = sim_rotor_period_ns(r->rotor) / geom.images_per_rev;
+	int64_t give_up = r->now + 10 * SEC;
 	while (r->blanked) {
 		CHECK(r->now < give_up);
 		step(r);
 	}
 	uint32_t at_lock = st->fit_edges;
-	while (settle && (st->fit_edges < SYNC_ESTIMATOR_FIT || st->fit_err_ns > slice / 10)) {
+	int64_t max_err = sync_light_max_err(sim_rotor_period_ns(r->rotor), geom.images_per_rev);
+	while (settle && !sync_estimator_settled(r->est, max_err)) {
 		CHECK(r->now < give_up);
 		step(r);
 	}
-	CHECK_EQ(r->p->impl->upload(r->p, 0, r->vol, NULL), 0);
+	CHECK(r->p->impl->upload(r->p, 0, r->vol, NULL) > 0);
 	CHECK_EQ(r->p->impl->swap(r->p, 0), 0);
 	while (!r->swaps)
 		step(r);
@@ -251,7 +252,7 @@ static void test_watchdog(void)
 int main(void)
 {
 	int fds = count_fds();
-	for (uint64_t seed = 1; seed <= 5; seed++)
+	for (uint64_t seed = 1; seed <= 20; seed++)
 		test_angle_error(seed, true);
 	for (uint64_t seed = 1; seed <= 3; seed++)
 		test_angle_error(seed, false);
