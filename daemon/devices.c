@@ -331,10 +331,27 @@ err:
 	return NULL;
 }
 
+/* The simulated projector's safety record, measured against the true
+ * rotor: for the log, and for the tests that read it there. */
+static void log_sim_safety(struct devices *dev)
+{
+	struct proj_sim_stats ss;
+	proj_sim_get_stats(dev->proj, &ss);
+	double period = 60e9 / dev->srv->geom.rpm;
+	log_info("simulated projector: %llu stalls, dark at most %.2f periods after the last true index "
+		 "pulse, lit %.1f ms while stopped and %.1f ms without timing, %llu watchdog blanks; slice "
+		 "angle error p50 %.3f p99 %.3f max %.3f",
+		 (unsigned long long)ss.stalls, (double)ss.max_dark_delay_ns / period, ss.lit_stopped_ns / 1e6,
+		 ss.lit_untimed_ns / 1e6, (unsigned long long)ss.watchdog_blanks, ss.angle_err_p50,
+		 ss.angle_err_p99, ss.angle_err_max);
+}
+
 void devices_destroy(struct devices *dev)
 {
 	if (!dev)
 		return;
+	if (dev->proj && dev->rotor)
+		log_sim_safety(dev);
 	if (dev->proj) {
 		dev->proj->impl->blank(dev->proj, true);
 		dev->proj->impl->destroy(dev->proj);

@@ -133,6 +133,12 @@ static void print_log(struct daemon *d)
 
 void daemon_stop(struct daemon *d)
 {
+	daemon_stop_keep_log(d);
+	daemon_remove_files(d);
+}
+
+void daemon_stop_keep_log(struct daemon *d)
+{
 	int status = 0;
 	kill(d->pid, SIGTERM);
 	for (int i = 0; i < 500 && waitpid(d->pid, &status, WNOHANG) == 0; i++)
@@ -151,6 +157,10 @@ void daemon_stop(struct daemon *d)
 		print_log(d);
 		CHECK(false);
 	}
+}
+
+void daemon_remove_files(struct daemon *d)
+{
 	unlink(d->log);
 	char conf[128];
 	snprintf(conf, sizeof(conf), "%s/spindled.conf", d->dir);

@@ -46,6 +46,9 @@ void daemon_start_config(struct daemon *d, const char *config);
 void daemon_require_renderer(struct daemon *d, const char *name);
 /* SIGTERM, then checks it exited 0; removes its files. */
 void daemon_stop(struct daemon *d);
+/* The same, keeping its log to read (daemon_remove_files() after). */
+void daemon_stop_keep_log(struct daemon *d);
+void daemon_remove_files(struct daemon *d);
 /* Whether the daemon's log (its stderr) holds text, so far. */
 bool daemon_log_contains(struct daemon *d, const char *text);
 /* True while the daemon process runs. */

@@ -866,6 +866,93 @@ static void test_underrun(void)
 	volume_destroy(late);
 }
 
+/* Polls status for ms milliseconds: never lit while unlocked. Returns
+ * whether it saw the projector dark, and (if lit_again) lit again. */
+static void watch_light(struct spindle *sp, int ms, bool *dark, bool *relit)
+{
+	uint64_t end = mono_ns() + (uint64_t)ms * 1000000u;
+	while (mono_ns() < end) {
+		struct spindle_status st = status_of(sp);
+		CHECK_MSG(st.blanked || st.locked, "lit while unlocked");
+		if (st.blanked)
+			*dark = true;
+		else if (*dark)
+			*relit = true;
+		struct timespec ts = { 0, 2000000 };
+		nanosleep(&ts, NULL);
+	}
+}
+
+/* The number after key in the daemon's log, or -1. */
+static double log_number(struct daemon *d, const char *key)
+{
+	FILE *f = fopen(d->log, "r");
+	char line[1024];
+	double v = -1;
+	while (f && fgets(line, sizeof(line), f)) {
+		const char *p = strstr(line, key);
+		if (p)
+			v = atof(p + strlen(key));
+	}
+	if (f)
+		fclose(f);
+	return v;
+}
+
+/* The rotor stops dead 1.5 s after start and turns again 1 s later: the
+ * projector goes dark within 2 revolution periods of the last true index
+ * pulse (the simulated projector measures it against the true rotor), is
+ * never lit while unlocked, is lit again after the restart, and what is
+ * committed meanwhile is shown once it is. */
+static void test_stall(void)
+{
+	struct daemon d;
+	daemon_start_config(&d, "sim-faults = stall=1.5+1.0/0.2\n");
+	struct spindle *sp = client_connect(&d);
+	static float axis[6];
+	show_vertices(sp, 1, axis, axis_line(axis), 255, 255, 255); /* lit */
+	bool dark = false, relit = false;
+	watch_light(sp, 2800, &dark, &relit);
+	CHECK(dark && relit);
+	struct spindle_frame f;
+	CHECK(spindle_commit_and_wait(sp, &f) == 0);
+	spindle_disconnect(sp);
+	daemon_stop_keep_log(&d);
+	double stalls = log_number(&d, "simulated projector: ");
+	double delay = log_number(&d, "dark at most ");
+	printf("stalls %.0f, dark %.2f periods after the last true index pulse\n", stalls, delay);
+	CHECK(stalls == 1 && delay > 0 && delay < 2.0);
+	CHECK_EQ(log_number(&d, "ms while stopped and "), 0);
+	daemon_remove_files(&d);
+}
+
+/* 0.1 % period jitter on the index pulse: the daemon lights once its fit
+ * has settled, and the simulated projector's slice angle error stays
+ * under a quarter of a slice (status reports it, with the jitter). */
+static void test_jitter(void)
+{
+	struct daemon d;
+	daemon_start_config(&d, "sim-faults = jitter=0.001,seed=7\n");
+	struct spindle *sp = client_connect(&d);
+	static float axis[6];
+	show_vertices(sp, 1, axis, axis_line(axis), 255, 255, 255);
+	struct timespec ts = { 3, 0 };
+	nanosleep(&ts, NULL);
+	struct spindle_status st = status_of(sp);
+	struct geometry g = small();
+	double period_us = 60e6 / g.rpm;
+	printf("jitter %.1f us (%.3f%% of a period), index error %.1f us, slice angle error p99 %.3f max %.3f\n",
+	       st.jitter_us, 100 * st.jitter_us / period_us, st.index_error_us, st.angle_error_p99,
+	       st.angle_error_max);
+	CHECK(st.locked && !st.blanked);
+	/* RMS over the last 16 periods: a small sample of a 0.1 % spread. */
+	CHECK(st.jitter_us > 0.0002 * period_us && st.jitter_us < 0.003 * period_us);
+	CHECK(st.index_error_us > 0);
+	CHECK(st.angle_error_p99 >= 0 && st.angle_error_p99 < 0.25);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 /* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
 
 /* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
@@ -979,6 +1066,8 @@ static const struct {
 	{ "back-and-forth", test_back_and_forth },
 	{ "delta", test_delta },
 	{ "underrun", test_underrun },
+	{ "stall", test_stall },
+	{ "jitter", test_jitter },
 	{ "gl-lost-egl", test_gl_lost_egl },
 	{ "gl-lost-osmesa", test_gl_lost_osmesa },
 	{ "gl-no-display", test_gl_no_display },
