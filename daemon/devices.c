@@ -199,6 +199,7 @@ static int open_sim(struct devices *dev)
 		.geom = dev->srv->geom,
 		.buffers = cfg->projector_buffers,
 		.link_bytes_per_sec = cfg->sim_link_bytes_per_sec,
+		.faults = &faults,
 	};
 	dev->proj = proj_sim_create(dev->rotor, &pc, &proj_listener, dev);
 	if (!dev->proj)

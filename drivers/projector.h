@@ -97,10 +97,13 @@ struct projector {
 
 struct sim_rotor;
 
+struct sim_faults;
+
 struct proj_sim_config {
 	struct geometry geom;
 	uint32_t buffers;            /* 2 or 3 */
 	uint64_t link_bytes_per_sec; /* modelled link rate, 0 = unlimited */
+	const struct sim_faults *faults; /* its unplug events; NULL = none */
 };
 
 /* A simulated projector on the simulated rotor. Starts blanked. NULL + errno

@@ -57,6 +57,17 @@ static int parse_speed(const char *s, struct sim_fault_event *ev)
 	return parse_whole(s, 0.0, 1e6, &ev->dur);
 }
 
+/* T[+R] */
+static int parse_unplug(const char *s, struct sim_fault_event *ev)
+{
+	*ev = (struct sim_fault_event){ .kind = SIM_FAULT_UNPLUG, .restart = -1.0 };
+	if (parse_num(&s, &ev->at) < 0 || ev->at < 0)
+		return -EINVAL;
+	if (*s == '+' && parse_opt(&s, '+', 0.0, 1e6, &ev->restart) < 0)
+		return -EINVAL;
+	return *s ? -EINVAL : 0;
+}
+
 /* T[/D][+R[/S]] */
 static int parse_stall(const char *s, struct sim_fault_event *ev)
 {
@@ -114,11 +125,15 @@ static int parse_item(char *item, struct sim_faults *f, unsigned *seen)
 		return parse_drift(val, &f->drift_ppm_s);
 	if (!strcmp(item, "seed"))
 		return parse_seed(val, &f->seed);
-	bool speed = !strcmp(item, "speed");
-	if ((!speed && strcmp(item, "stall")) || f->nevents == SIM_FAULTS_MAX_EVENTS)
+	if (f->nevents == SIM_FAULTS_MAX_EVENTS)
 		return -EINVAL;
-	struct sim_fault_event *ev = &f->events[f->nevents++];
-	return speed ? parse_speed(val, ev) : parse_stall(val, ev);
+	struct sim_fault_event *ev = &f->events[f->nevents];
+	int r = !strcmp(item, "speed")    ? parse_speed(val, ev)
+		: !strcmp(item, "stall")  ? parse_stall(val, ev)
+		: !strcmp(item, "unplug") ? parse_unplug(val, ev)
+					  : -EINVAL;
+	f->nevents += r == 0;
+	return r;
 }
 
 int sim_faults_parse(const char *spec, struct sim_faults *out)
@@ -159,6 +174,8 @@ static size_t speed_steps(const struct sim_faults *f, double nominal, struct spe
 	size_t n = 0;
 	for (uint32_t i = 0; i < f->nevents && i < SIM_FAULTS_MAX_EVENTS; i++) {
 		const struct sim_fault_event *ev = &f->events[i];
+		if (ev->kind == SIM_FAULT_UNPLUG)
+			continue; /* the projector's, not the rotor's */
 		if (ev->kind == SIM_FAULT_SPEED) {
 			st[n++] = (struct speed_step){ ev->at, ev->rpm, ev->dur };
 			continue;

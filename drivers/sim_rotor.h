@@ -73,14 +73,15 @@ int64_t sim_rotor_index_time(const struct sim_rotor *r, int64_t n);
  * Event times are seconds after the rotor's creation. */
 #define SIM_FAULTS_MAX_EVENTS 8
 
-enum sim_fault_kind { SIM_FAULT_SPEED, SIM_FAULT_STALL };
+enum sim_fault_kind { SIM_FAULT_SPEED, SIM_FAULT_STALL, SIM_FAULT_UNPLUG };
 
 struct sim_fault_event {
 	enum sim_fault_kind kind;
 	double at;      /* s after creation */
 	double rpm;     /* SPEED: target speed */
 	double dur;     /* SPEED: ramp time; STALL: deceleration time (0: dead stop) */
-	double restart; /* STALL: s after at until spin-up starts, < 0 never */
+	double restart; /* STALL: s after at until spin-up starts; UNPLUG: until
+			 * re-plugged; < 0 never */
 	double spinup;  /* STALL: spin-up time back to nominal */
 };
 
@@ -95,7 +96,7 @@ struct sim_faults {
 };
 
 /* Parses a spec: comma-separated key=value items, each key at most once
- * except speed and stall (up to SIM_FAULTS_MAX_EVENTS in all), "" or
+ * except speed, stall and unplug (up to SIM_FAULTS_MAX_EVENTS in all), "" or
  * "none" for no faults:
  *   jitter=F            F in [0, 0.1]: measured period RMS / period
  *   missed=P, extra=P   P in [0, 1]: probability per revolution
@@ -105,12 +106,16 @@ struct sim_faults {
  *   stall=T[/D][+R[/S]] at T s decelerate to 0 over D s (default 0: dead
  *                       stop); R s after T spin up to nominal over S s
  *                       (default 1); without +R it never restarts
+ *   unplug=T[+R]        at T s the simulated projector is unplugged (its
+ *                       buffers lost), and plugged in again R s later
+ *                       (proj_sim.c); without +R it stays away
  * Numbers are plain decimals (strtod, no inf/nan), times >= 0. Fills out
  * (zeroed first) and returns 0, or -EINVAL for anything else. */
 int sim_faults_parse(const char *spec, struct sim_faults *out);
 
 /* Schedules the motion faults (drift, speed, stall) of f on r, events in
- * time order. 0 or negative errno. Pulse faults are for sync_sim. */
+ * time order. 0 or negative errno. Pulse faults are for sync_sim, unplug
+ * events for proj_sim. */
 int sim_rotor_apply_faults(struct sim_rotor *r, const struct sim_faults *f);
 
 #endif

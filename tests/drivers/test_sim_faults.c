@@ -37,6 +37,9 @@ static void test_parse_good(void)
 	CHECK(f.seed == UINT64_MAX);
 	CHECK_EQ(sim_faults_parse("drift=1e2ppm/s,jitter=.01", &f), 0);
 	CHECK(f.drift_ppm_s == 100.0 && f.jitter == 0.01);
+	CHECK_EQ(sim_faults_parse("unplug=1.5+0.5,unplug=4", &f), 0);
+	CHECK(f.nevents == 2 && f.events[0].kind == SIM_FAULT_UNPLUG && f.events[0].at == 1.5);
+	CHECK(f.events[0].restart == 0.5 && f.events[1].at == 4.0 && f.events[1].restart < 0);
 }
 
 static void test_parse_bad(void)
@@ -48,7 +51,7 @@ static void test_parse_bad(void)
 		"drift=1e9ppm/s", "seed=-1", "seed=1.5", "seed=99999999999999999999", "speed=5.0:800",
 		"speed=5.0@1.0", "speed=-1:800@1", "speed=5:0@1", "speed=5:800@1:2", "stall=", "stall=3+",
 		"stall=3/", "stall=3+2/", "stall=3+2+1", "stall=-3", "stall=3x", "JITTER=0.001", "wobble=1",
-		"none,jitter=0.001",
+		"none,jitter=0.001", "unplug=", "unplug=1+", "unplug=1/2", "unplug=-1", "unplug=1+2+3",
 		"stall=1,stall=2,stall=3,stall=4,stall=5,stall=6,stall=7,stall=8,stall=9",
 	};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {

@@ -953,6 +953,53 @@ static void test_jitter(void)
 	daemon_stop(&d);
 }
 
+/* The simulated projector is unplugged four times for 0.3 s: status
+ * answers throughout and says it is gone (and dark), the daemon sets the
+ * new one up and lights it within 2 s of each re-plug, and a commit made
+ * while it is away is shown, whole, once it is back. */
+static void test_unplug(void)
+{
+	struct daemon d;
+	daemon_start_config(&d, "sim-faults = unplug=1.0+0.3,unplug=1.8+0.3,unplug=2.6+0.3,unplug=3.4+0.3\n");
+	struct spindle *sp = client_connect(&d);
+	static float v[6];
+	show_vertices(sp, 1, v, axis_line(v), 255, 255, 255);
+	int gone = 0, back = 0;
+	uint64_t gone_at = 0, end = mono_ns() + 4200000000u, worst = 0;
+	bool present = true;
+	while (mono_ns() < end) {
+		struct spindle_status st = status_of(sp);
+		CHECK_MSG(st.blanked || (st.locked && st.projector_present), "lit while unlocked or absent");
+		if (present && !st.projector_present) {
+			gone++, gone_at = mono_ns();
+			CHECK(spindle_commit(sp) == 0); /* shown once it is back */
+		} else if (!present && st.projector_present) {
+			back++;
+		}
+		present = st.projector_present;
+		if (gone_at && present && !st.blanked) {
+			uint64_t t = mono_ns() - gone_at;
+			worst = t > worst ? t : worst;
+			gone_at = 0;
+		}
+		struct timespec ts = { 0, 2000000 };
+		nanosleep(&ts, NULL);
+	}
+	printf("unplugged %d times, back %d; lit again at most %.0f ms after the unplug (0.3 s away)\n", gone, back,
+	       worst / 1e6);
+	CHECK(gone == 4 && back == 4 && present);
+	CHECK(worst > 300000000u && worst < 2300000000u);
+	struct spindle_frame f;
+	CHECK(spindle_commit_and_wait(sp, &f) == 0);
+	struct volume *vol = capture_volume(sp);
+	for (int c = 0; c < 3; c++)
+		check_axis_line(vol, c);
+	volume_destroy(vol);
+	CHECK(daemon_alive(&d));
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 /* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
 
 /* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
@@ -1068,6 +1115,7 @@ static const struct {
 	{ "underrun", test_underrun },
 	{ "stall", test_stall },
 	{ "jitter", test_jitter },
+	{ "unplug", test_unplug },
 	{ "gl-lost-egl", test_gl_lost_egl },
 	{ "gl-lost-osmesa", test_gl_lost_osmesa },
 	{ "gl-no-display", test_gl_no_display },
