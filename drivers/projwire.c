@@ -523,10 +523,11 @@ static size_t delta_encode(const struct volume *vol, const struct volume *base, 
 	uint32_t images = 0;
 	projwire_delta_begin_encode(out, buffer, vol->image_count, vol->seq, base->seq);
 	for (uint32_t k = 0; k < vol->image_count; k++) {
+		/* Counted first: out has room only for the images that changed. */
+		if (!delta_tiles(vol, base, k, NULL, NULL))
+			continue;
 		uint8_t *rec = out + n, *mask = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
 		uint32_t t = delta_tiles(vol, base, k, mask, mask + vol->mask_bytes);
-		if (!t)
-			continue;
 		size_t size = delta_image_size(vol, t);
 		header_encode(rec, PROJWIRE_IMAGE_DELTA, (uint32_t)(size - PROJWIRE_HEADER_SIZE));
 		le_put32(rec + 8, k);
