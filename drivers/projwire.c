@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <string.h>
+#include <zlib.h>
 
 #include "wire_le.h"
 
@@ -44,21 +45,9 @@ int projwire_error_to_errno(uint32_t code)
 
 uint32_t projwire_crc32(uint32_t crc, const void *buf, size_t len)
 {
-	/* Nibble-at-a-time: a table small enough to write out, so there is no
-	 * lazy initialisation to race on. */
-	static const uint32_t table[16] = {
-		0x00000000u, 0x1db71064u, 0x3b6e20c8u, 0x26d930acu, 0x76dc4190u, 0x6b6b51f4u,
-		0x4db26158u, 0x5005713cu, 0xedb88320u, 0xf00f9344u, 0xd6d6a3e8u, 0xcb61b38cu,
-		0x9b64c2b0u, 0x86d3d2d4u, 0xa00ae278u, 0xbdbdf21cu,
-	};
-	const uint8_t *p = buf;
-	crc = ~crc;
-	for (size_t i = 0; i < len; i++) {
-		crc ^= p[i];
-		crc = table[crc & 0x0f] ^ (crc >> 4);
-		crc = table[crc & 0x0f] ^ (crc >> 4);
-	}
-	return ~crc;
+	/* zlib's: the same CRC, some ten times faster than a table made here
+	 * (it is computed over every byte uploaded, on the event loop). */
+	return (uint32_t)crc32_z(crc, buf, len);
 }
 
 /* ---- Control requests ---- */
