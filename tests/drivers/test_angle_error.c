@@ -9,6 +9,7 @@
 #include <math.h>
 
 #include "check.h"
+#include "sim_rig.h"
 #include "projector.h"
 #include "sim_rotor.h"
 #include "sync.h"
@@ -44,20 +45,8 @@ static const struct projector_listener listener = { .swapped = on_swapped };
 
 static void rig_init(struct rig *r, const char *spec)
 {
-	struct sim_faults f;
 	*r = (struct rig){ .blanked = true };
-	CHECK_EQ(sim_faults_parse(spec, &f), 0);
-	r->rotor = sim_rotor_create(RPM);
-	CHECK(r->rotor);
-	r->now = sim_rotor_start(r->rotor);
-	sim_rotor_set_now(r->rotor, r->now);
-	CHECK_EQ(sim_rotor_apply_faults(r->rotor, &f), 0);
-	r->src = sync_sim_create_faults(r->rotor, &f);
-	CHECK(r->src);
-	struct sync_estimator_config cfg;
-	sync_estimator_config_default(&cfg, RPM);
-	r->est = sync_estimator_create(&cfg);
-	CHECK(r->est);
+	pulse_rig_open(spec, RPM, &r->rotor, &r->src, &r->est, &r->now);
 	struct proj_sim_config pc = { .geom = geom, .buffers = 3 };
 	r->p = proj_sim_create(r->rotor, &pc, &listener, r);
 	CHECK(r->p);
@@ -70,9 +59,7 @@ static void rig_finish(struct rig *r)
 {
 	volume_destroy(r->vol);
 	r->p->impl->destroy(r->p);
-	sync_estimator_destroy(r->est);
-	sync_destroy(r->src);
-	sim_rotor_destroy(r->rotor);
+	pulse_rig_close(r->rotor, r->src, r->est);
 }
 
 static void lock_changed(struct rig *r)

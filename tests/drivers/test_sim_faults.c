@@ -6,6 +6,7 @@
 #include <stdlib.h>
 
 #include "check.h"
+#include "sim_rig.h"
 #include "sim_rotor.h"
 #include "sync.h"
 #include "sync_estimator.h"
@@ -73,26 +74,12 @@ struct run {
 
 static void run_init(struct run *r, const char *spec)
 {
-	struct sim_faults f;
-	CHECK_EQ(sim_faults_parse(spec, &f), 0);
-	r->rotor = sim_rotor_create(RPM);
-	CHECK(r->rotor);
-	r->now = sim_rotor_start(r->rotor);
-	sim_rotor_set_now(r->rotor, r->now);
-	CHECK_EQ(sim_rotor_apply_faults(r->rotor, &f), 0);
-	r->src = sync_sim_create_faults(r->rotor, &f);
-	CHECK(r->src);
-	struct sync_estimator_config cfg;
-	sync_estimator_config_default(&cfg, RPM);
-	r->est = sync_estimator_create(&cfg);
-	CHECK(r->est);
+	pulse_rig_open(spec, RPM, &r->rotor, &r->src, &r->est, &r->now);
 }
 
 static void run_finish(struct run *r)
 {
-	sync_estimator_destroy(r->est);
-	sync_destroy(r->src);
-	sim_rotor_destroy(r->rotor);
+	pulse_rig_close(r->rotor, r->src, r->est);
 }
 
 /* Advances the clock by 10 ms and reads the edges due into ts. */
