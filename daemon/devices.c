@@ -23,6 +23,7 @@ struct devices {
 	struct projector *proj;
 	sd_event_source *sync_source, *proj_source, *check_timer, *rate_timer;
 	bool blanked;
+	bool present; /* a projector is attached: gone() and arrived() say */
 	int64_t max_err_ns; /* the estimator's fit error the projector is lit at */
 	uint64_t rate_bytes, upload_rate; /* bytes_sent at the last sample; bytes/s */
 };
@@ -57,7 +58,7 @@ static void log_lock(const struct sync_state *st)
 static void update_light(struct devices *dev, int64_t time_ns)
 {
 	const struct sync_state *st = sync_estimator_state(dev->est);
-	bool lit = st->locked && sync_estimator_settled(dev->est, dev->max_err_ns);
+	bool lit = dev->present && st->locked && sync_estimator_settled(dev->est, dev->max_err_ns);
 	if (lit != dev->blanked)
 		return;
 	set_blank(dev, !lit);
@@ -144,6 +145,7 @@ static void on_gone(void *data, int err)
 {
 	struct devices *dev = data;
 	log_error("projector gone: %s", strerror(-err));
+	dev->present = false;
 	dev->blanked = true; /* a missing projector emits no light */
 	pipeline_projector_gone(dev->srv->pipe);
 }
@@ -155,6 +157,7 @@ static void on_arrived(void *data)
 	struct devices *dev = data;
 	const struct sync_state *st = sync_estimator_state(dev->est);
 	log_info("projector attached");
+	dev->present = true;
 	dev->blanked = true;
 	if (st->period_ns > 0)
 		dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
@@ -325,6 +328,9 @@ struct devices *devices_create(struct server *srv)
 	r = add_sources(dev);
 	if (r < 0)
 		goto err;
+	struct projector_stats ps;
+	dev->proj->impl->get_stats(dev->proj, &ps);
+	dev->present = ps.present;
 	return dev;
 err:
 	devices_destroy(dev);

@@ -294,9 +294,21 @@ void pipeline_projector_gone(struct pipeline *p)
 		p->known[b] = false;
 }
 
+/* How many buffers to use: as many as the device has, up to three. */
+static uint32_t buffers_of(struct projector *proj)
+{
+	struct projector_info info;
+	if (proj->impl->get_info(proj, &info) < 0 || info.buffers < 2)
+		return 2; /* none attached yet: any projector has two */
+	return info.buffers > MAX_BUFFERS ? MAX_BUFFERS : info.buffers;
+}
+
 void pipeline_projector_arrived(struct pipeline *p)
 {
 	pipeline_projector_gone(p); /* a new device holds nothing */
+	p->buffers = buffers_of(p->proj);
+	if (p->latest >= (int)p->buffers)
+		p->latest = -1; /* that buffer does not exist on this device */
 	p->failures = 0;
 	p->resend = p->latest;
 	pipeline_kick(p);
@@ -322,7 +334,7 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 	p->work = volume_create(g);
 	if (!p->work)
 		return -ENOMEM;
-	for (uint32_t b = 0; b < p->buffers; b++) {
+	for (uint32_t b = 0; b < MAX_BUFFERS; b++) {
 		p->content[b] = volume_create(g);
 		if (!p->content[b])
 			return -ENOMEM;
@@ -332,13 +344,7 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 
 struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj)
 {
-	struct projector_info info;
-	int r = proj->impl->get_info(proj, &info);
-	if (r < 0) {
-		render_destroy(renderer);
-		errno = -r;
-		return NULL;
-	}
+	int r;
 	struct pipeline *p = calloc(1, sizeof(*p));
 	if (!p) {
 		render_destroy(renderer);
@@ -347,8 +353,8 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 	p->srv = srv;
 	p->renderer = renderer;
 	p->proj = proj;
-	/* A device with more buffers than we use is fine: we use three. */
-	p->buffers = info.buffers > MAX_BUFFERS ? MAX_BUFFERS : info.buffers;
+	/* With no projector attached yet, arrived() says how many. */
+	p->buffers = buffers_of(proj);
 	p->shown = p->pending = p->uploaded = p->latest = p->resend = -1;
 	p->next_seq = 1;
 	p->building = &p->snaps[0];
@@ -356,7 +362,7 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 	p->done_fd = -1;
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->cond, NULL);
-	r = info.buffers < 2 ? -ENODEV : create_volumes(p, &renderer->geom);
+	r = create_volumes(p, &renderer->geom);
 	if (r < 0)
 		goto err;
 	p->done_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);

@@ -362,7 +362,13 @@ static int sim_setup(struct proj_sim *s)
 		return -errno;
 	plan_plugs(s, s->cfg.faults);
 	int r = attach(s);
-	return r < 0 ? r : arm_plug(s);
+	if (r < 0)
+		return r;
+	/* "unplug=0...": no projector at start, and nobody to tell. */
+	for (; s->next_plug < s->nplugs && s->plugs[s->next_plug].at <= sim_rotor_start(s->rotor); s->next_plug++)
+		if (!s->plugs[s->next_plug].in && s->dev)
+			detach(s);
+	return arm_plug(s);
 }
 
 struct projector *proj_sim_create(struct sim_rotor *rotor, const struct proj_sim_config *cfg,

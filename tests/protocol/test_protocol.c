@@ -1001,6 +1001,30 @@ static void test_unplug(void)
 	daemon_stop(&d);
 }
 
+/* No projector when the daemon starts ("unplug=0+0.5"): it starts and
+ * serves anyway, says the projector is missing, and shows what was
+ * committed once one is plugged in. */
+static void test_late_projector(void)
+{
+	struct daemon d;
+	daemon_start_config(&d, "sim-faults = unplug=0+0.5\n");
+	struct spindle *sp = client_connect(&d);
+	struct spindle_status st = status_of(sp);
+	CHECK(!st.projector_present && st.blanked);
+	static float v[6];
+	uint64_t t0 = mono_ns();
+	show_vertices(sp, 1, v, axis_line(v), 255, 255, 255);
+	printf("shown %.0f ms after the commit, the projector arriving 500 ms after start\n", (mono_ns() - t0) / 1e6);
+	st = status_of(sp);
+	CHECK(st.projector_present && !st.blanked);
+	struct volume *vol = capture_volume(sp);
+	for (int c = 0; c < 3; c++)
+		check_axis_line(vol, c);
+	volume_destroy(vol);
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 /* ---- GL renderer failures (SPINDLE_GL_FAULT, see gl_context.h) ---- */
 
 /* A green disk (r 0.7 at y 0.3) on its own layer, committed and shown. */
@@ -1117,6 +1141,7 @@ static const struct {
 	{ "stall", test_stall },
 	{ "jitter", test_jitter },
 	{ "unplug", test_unplug },
+	{ "late-projector", test_late_projector },
 	{ "gl-lost-egl", test_gl_lost_egl },
 	{ "gl-lost-osmesa", test_gl_lost_osmesa },
 	{ "gl-no-display", test_gl_no_display },
