@@ -8,99 +8,38 @@
  * so those callbacks only record what happened; dispatch() acts on it and
  * is the only place listener callbacks run from.
  *
- * Lifetime of a device: scan() finds and sets it up (present); a fault
+ * Lifetime of a device: usbp_scan() finds and sets it up (present); a fault
  * (unplug, transfer error, malformed event) starts fail(), which cancels
  * every transfer; once each transfer's callback has been seen, finish()
  * releases and closes it and reports gone(). While nothing is open the
- * periodic rescan and hot-plug arrivals look for it again. */
+ * periodic rescan and hot-plug arrivals look for it again.
+ *
+ * Finding and opening a device (usbp_scan), and fitting libusb's fds and
+ * hot-plug into our epoll set (usbp_start), are in proj_usb_dev.c. */
 #include <errno.h>
 #include <libusb.h>
-#include <poll.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/epoll.h>
-#include <sys/timerfd.h>
 #include <unistd.h>
 
 #include "log.h"
-#include "proj_usb_priv.h"
-#include "projector.h"
-#include "projwire.h"
+#include "proj_usb_int.h"
 #include "wire_le.h"
 
-#define OUT_XFERS 4
 #define OUT_CHUNK (256 * 1024)
 #define OUT_TIMEOUT_MS 5000 /* a bulk OUT stuck this long: the device is broken */
-#define IN_XFERS 2
 #define IN_SIZE 512
 /* Control transfers are synchronous on the daemon's event loop. A device
  * answers EP0 within a few 1 ms frames; one that takes 100 ms is broken or
  * gone, so that bounds how long the loop can stall. */
 #define CTRL_TIMEOUT_MS 100
-#define TICK_NS 250000000LL
 #define KEEPALIVE_NS 500000000LL /* the device darkens after 2 s of silence */
-#define STATUS_DARK_NS 1000000000LL
 #define RESCAN_NS 500000000LL
 #define DRAIN_NS 1000000000LL
-#define EVQ_SIZE 4096
-
-struct usb_out {
-	struct libusb_transfer *xfer;
-	bool busy;
-	uint64_t start; /* stream position of its first byte */
-};
-
-struct usb_in {
-	struct libusb_transfer *xfer;
-	bool busy;
-};
-
-struct proj_usb {
-	struct projector base;
-	struct proj_usb_config cfg;
-	libusb_context *ctx;
-	int epfd, timerfd;
-	bool hotplug;
-	libusb_hotplug_callback_handle hotplug_handle;
-	int64_t next_scan;
-	uint8_t refused_bus, refused_addr; /* a device refused; 0 = none */
-
-	/* The device, while open (handle != NULL). */
-	libusb_device_handle *handle;
-	uint8_t iface, ep_out, ep_in, in_type;
-	bool present; /* set up and usable */
-	bool failing; /* torn down: waiting for every transfer's callback */
-	struct projwire_info info;
-	struct projwire_status status; /* latest GET_STATUS */
-	bool lit;
-	int64_t next_status;
-
-	/* Buffers as far as our requests and the device's events tell. */
-	uint32_t shown, pending;
-	bool swap_deferred;
-	uint64_t begin_end[PROJWIRE_MAX_BUFFERS]; /* stream position after its latest VOLUME_BEGIN */
-
-	/* Bulk OUT: encoded uploads waiting (q), then chunks in flight. */
-	uint8_t *q;
-	size_t q_head, q_len, q_cap;
-	uint64_t pos_queued, pos_submitted;
-	struct usb_out out[OUT_XFERS];
-	struct usb_in in[IN_XFERS];
-	uint8_t evq[EVQ_SIZE]; /* event bytes received, not yet handled */
-	size_t evq_len;
-
-	/* Noticed inside libusb callbacks, acted on by dispatch. */
-	bool hp_arrived, hp_left;
-	int fault; /* negative errno: the device must be dropped */
-
-	uint64_t bytes_sent, device_errors, arrivals;
-	struct proj_usb_debug dbg;
-};
 
 static const struct projector_impl usb_impl;
 
-static int usb_errno(int r)
+int usbp_errno(int r)
 {
 	switch (r) {
 	case LIBUSB_ERROR_NO_DEVICE:
@@ -141,13 +80,13 @@ static int ctrl_raw(struct proj_usb *u, const struct projwire_ctrl *c, uint8_t *
 	int r = libusb_control_transfer(u->handle, s.request_type, s.request, s.value, s.index, in ? reply : data,
 					s.length, CTRL_TIMEOUT_MS);
 	if (r < 0)
-		return usb_errno(r);
+		return usbp_errno(r);
 	return in ? r : 0; /* the reply length, or 0 as for requests without one */
 }
 
 /* One control request; a stall is turned into the errno the device gives
  * in GET_STATUS.last_error. Any other failure is a device fault. */
-static int ctrl(struct proj_usb *u, const struct projwire_ctrl *c, uint8_t *reply)
+int usbp_ctrl(struct proj_usb *u, const struct projwire_ctrl *c, uint8_t *reply)
 {
 	uint8_t in[PROJWIRE_CTRL_DATA_MAX];
 	if (!u->present && !u->handle)
@@ -174,7 +113,7 @@ static int get_status(struct proj_usb *u)
 	uint8_t in[PROJWIRE_CTRL_DATA_MAX];
 	struct projwire_ctrl c = { .request = PROJWIRE_REQ_GET_STATUS };
 	struct projwire_status st;
-	int r = ctrl(u, &c, in);
+	int r = usbp_ctrl(u, &c, in);
 	if (r < 0)
 		return r;
 	r = projwire_status_decode(in, (size_t)r, &st);
@@ -218,7 +157,7 @@ static void pump(struct proj_usb *u)
 		o->xfer->length = (int)n;
 		int r = libusb_submit_transfer(o->xfer);
 		if (r < 0) {
-			set_fault(u, usb_errno(r));
+			set_fault(u, usbp_errno(r));
 			return;
 		}
 		o->busy = true;
@@ -281,7 +220,7 @@ static void LIBUSB_CALL in_done(struct libusb_transfer *xfer)
 		return;
 	int r = libusb_submit_transfer(xfer);
 	if (r < 0) {
-		set_fault(u, usb_errno(r));
+		set_fault(u, usbp_errno(r));
 		return;
 	}
 	in->busy = true;
@@ -319,7 +258,7 @@ static struct libusb_transfer *alloc_transfer(struct proj_usb *u, size_t size)
 	return x;
 }
 
-static int alloc_transfers(struct proj_usb *u)
+int usbp_alloc_transfers(struct proj_usb *u)
 {
 	for (int i = 0; i < OUT_XFERS; i++) {
 		struct libusb_transfer *x = alloc_transfer(u, OUT_CHUNK);
@@ -337,7 +276,7 @@ static int alloc_transfers(struct proj_usb *u)
 	return 0;
 }
 
-static void cancel_all(struct proj_usb *u)
+void usbp_cancel_all(struct proj_usb *u)
 {
 	for (int i = 0; i < OUT_XFERS; i++)
 		if (u->out[i].busy)
@@ -349,7 +288,7 @@ static void cancel_all(struct proj_usb *u)
 
 /* Runs libusb until every transfer's callback has been seen, for at most
  * DRAIN_NS: callbacks that never come mean transfers we must not free. */
-static bool drain(struct proj_usb *u)
+bool usbp_drain(struct proj_usb *u)
 {
 	int64_t deadline = now_ns() + DRAIN_NS;
 	while (u->dbg.live_transfers > 0 && now_ns() < deadline) {
@@ -359,9 +298,9 @@ static bool drain(struct proj_usb *u)
 	return u->dbg.live_transfers == 0;
 }
 
-/* ---- Device lifetime ---- */
+/* ---- Dropping the device ---- */
 
-static void close_device(struct proj_usb *u)
+void usbp_close_device(struct proj_usb *u)
 {
 	if (u->dbg.live_transfers)
 		log_error("usb projector: %d transfers never completed; leaking them", u->dbg.live_transfers);
@@ -385,7 +324,7 @@ static void fail(struct proj_usb *u, int err)
 	log_warn("usb projector: device lost (%s)", strerror(-err));
 	u->failing = true;
 	u->present = false;
-	cancel_all(u);
+	usbp_cancel_all(u);
 }
 
 /* Once every callback has been seen: closes and reports gone(). */
@@ -393,209 +332,12 @@ static void finish(struct proj_usb *u)
 {
 	if (u->dbg.live_transfers > 0)
 		return;
-	close_device(u);
+	usbp_close_device(u);
 	u->dbg.gone++;
 	u->next_scan = now_ns() + RESCAN_NS;
 	const struct projector_listener *l = u->base.listener;
 	if (l && l->gone)
 		l->gone(u->base.listener_data, -ENODEV);
-}
-
-/* Spindle's interface on dev, with its bulk OUT and IN endpoints. */
-static int find_interface(struct proj_usb *u, libusb_device *dev)
-{
-	struct libusb_config_descriptor *cfg;
-	if (libusb_get_active_config_descriptor(dev, &cfg) < 0)
-		return -ENOENT;
-	int r = -ENOENT;
-	for (uint8_t i = 0; i < cfg->bNumInterfaces && r < 0; i++) {
-		if (!cfg->interface[i].num_altsetting)
-			continue;
-		const struct libusb_interface_descriptor *d = &cfg->interface[i].altsetting[0];
-		if (d->bInterfaceClass != PROJWIRE_USB_CLASS || d->bInterfaceSubClass != PROJWIRE_USB_SUBCLASS ||
-		    d->bInterfaceProtocol != PROJWIRE_USB_PROTOCOL)
-			continue;
-		u->ep_out = u->ep_in = 0;
-		for (uint8_t e = 0; e < d->bNumEndpoints; e++) {
-			const struct libusb_endpoint_descriptor *ep = &d->endpoint[e];
-			uint8_t type = ep->bmAttributes & LIBUSB_TRANSFER_TYPE_MASK;
-			bool in = ep->bEndpointAddress & LIBUSB_ENDPOINT_IN;
-			if (!in && type == LIBUSB_TRANSFER_TYPE_BULK && !u->ep_out)
-				u->ep_out = ep->bEndpointAddress;
-			if (in && (type == LIBUSB_TRANSFER_TYPE_BULK || type == LIBUSB_TRANSFER_TYPE_INTERRUPT) &&
-			    !u->ep_in) {
-				u->ep_in = ep->bEndpointAddress;
-				u->in_type = type;
-			}
-		}
-		if (u->ep_out && u->ep_in) {
-			u->iface = d->bInterfaceNumber;
-			r = 0;
-		}
-	}
-	libusb_free_config_descriptor(cfg);
-	return r;
-}
-
-/* "BUS-PORT.PORT...", as sysfs names a device. */
-static void bus_path(libusb_device *dev, char *out, size_t cap)
-{
-	uint8_t ports[8];
-	int n = libusb_get_port_numbers(dev, ports, (int)sizeof(ports));
-	int len = snprintf(out, cap, "%u", (unsigned)libusb_get_bus_number(dev));
-	for (int i = 0; i < n && len > 0 && (size_t)len < cap; i++)
-		len += snprintf(out + len, cap - (size_t)len, "%c%u", i ? '.' : '-', (unsigned)ports[i]);
-}
-
-static bool device_matches(struct proj_usb *u, libusb_device *dev)
-{
-	struct libusb_device_descriptor desc;
-	char path[64];
-	if (libusb_get_device_descriptor(dev, &desc) < 0)
-		return false;
-	if ((u->cfg.vid && desc.idVendor != u->cfg.vid) || (u->cfg.pid && desc.idProduct != u->cfg.pid))
-		return false;
-	if (u->cfg.bus_path[0]) {
-		bus_path(dev, path, sizeof(path));
-		if (strcmp(path, u->cfg.bus_path))
-			return false;
-	}
-	return find_interface(u, dev) == 0;
-}
-
-static bool geometry_same(const struct geometry *a, const struct geometry *b)
-{
-	return a->width == b->width && a->height == b->height && a->images_per_rev == b->images_per_rev &&
-	       a->mirrored == b->mirrored;
-}
-
-/* RESET_STREAM, GET_INFO and its checks, SET_BLANK 1. */
-static int setup_device(struct proj_usb *u, const char *path)
-{
-	uint8_t in[PROJWIRE_CTRL_DATA_MAX];
-	struct projwire_ctrl c = { .request = PROJWIRE_REQ_RESET_STREAM };
-	int r = ctrl(u, &c, NULL);
-	if (r < 0)
-		return r;
-	c.request = PROJWIRE_REQ_GET_INFO;
-	if ((r = ctrl(u, &c, in)) < 0)
-		return r;
-	if ((r = projwire_info_decode(in, (size_t)r, &u->info)) < 0) {
-		log_error("usb projector %s: bad GET_INFO reply (version %u.%u): %s", path, in[0], in[1],
-			  strerror(-r));
-		return r;
-	}
-	struct geometry g;
-	projwire_info_to_geometry(&u->info, &g);
-	if (!geometry_same(&g, &u->cfg.geom)) {
-		log_error("usb projector %s: refused: device is %ux%u, %u images/rev%s; configured %ux%u, %u%s",
-			  path, g.width, g.height, g.images_per_rev, g.mirrored ? " mirrored" : "",
-			  u->cfg.geom.width, u->cfg.geom.height, u->cfg.geom.images_per_rev,
-			  u->cfg.geom.mirrored ? " mirrored" : "");
-		return -EMEDIUMTYPE;
-	}
-	c = (struct projwire_ctrl){ .request = PROJWIRE_REQ_SET_BLANK, .blank = true };
-	return ctrl(u, &c, NULL);
-}
-
-static int submit_in(struct proj_usb *u)
-{
-	for (int i = 0; i < IN_XFERS; i++) {
-		int r = libusb_submit_transfer(u->in[i].xfer);
-		if (r < 0)
-			return usb_errno(r);
-		u->in[i].busy = true;
-		u->dbg.live_transfers++;
-	}
-	return 0;
-}
-
-static void reset_state(struct proj_usb *u)
-{
-	u->shown = u->pending = PROJWIRE_NO_BUFFER;
-	u->swap_deferred = false;
-	memset(u->begin_end, 0, sizeof(u->begin_end));
-	memset(&u->status, 0, sizeof(u->status));
-	u->q_head = u->q_len = u->evq_len = 0;
-	u->pos_queued = u->pos_submitted = 0;
-	u->lit = false;
-	u->fault = 0;
-	u->next_status = now_ns() + STATUS_DARK_NS;
-}
-
-/* Opens, claims and sets up dev (already matched). 0, or negative errno
- * with everything undone. */
-static int open_device(struct proj_usb *u, libusb_device *dev)
-{
-	char path[64];
-	bus_path(dev, path, sizeof(path));
-	int r = libusb_open(dev, &u->handle);
-	if (r < 0) {
-		log_warn("usb projector %s: cannot open: %s", path, libusb_strerror(r));
-		u->handle = NULL;
-		return usb_errno(r);
-	}
-	libusb_set_auto_detach_kernel_driver(u->handle, 1); /* not supported: nothing to detach */
-	r = libusb_claim_interface(u->handle, u->iface);
-	if (r < 0) {
-		log_warn("usb projector %s: cannot claim interface %u: %s", path, u->iface, libusb_strerror(r));
-		libusb_close(u->handle);
-		u->handle = NULL;
-		return usb_errno(r);
-	}
-	reset_state(u);
-	r = alloc_transfers(u);
-	if (r >= 0)
-		r = setup_device(u, path);
-	if (r >= 0 && (r = submit_in(u)) < 0) {
-		cancel_all(u);
-		drain(u);
-	}
-	if (r < 0 || u->fault) {
-		close_device(u);
-		return r < 0 ? r : -EIO;
-	}
-	u->present = true;
-	log_info("usb projector %s: version %u.%u, %ux%u, %u images/rev, %u buffers", path,
-		 u->info.version_major, u->info.version_minor, u->info.width, u->info.height,
-		 u->info.images_per_rev, u->info.buffers);
-	return 0;
-}
-
-static bool is_refused(const struct proj_usb *u, libusb_device *dev)
-{
-	return u->refused_bus && libusb_get_bus_number(dev) == u->refused_bus &&
-	       libusb_get_device_address(dev) == u->refused_addr;
-}
-
-/* Looks for a matching device and sets up the first that works. A device
- * once refused is skipped (and not logged again) while it stays. */
-static int scan(struct proj_usb *u)
-{
-	libusb_device **list;
-	ssize_t n = libusb_get_device_list(u->ctx, &list);
-	if (n < 0)
-		return usb_errno((int)n);
-	bool refused_seen = false;
-	int r = -ENODEV;
-	for (ssize_t i = 0; i < n && r < 0; i++) {
-		if (is_refused(u, list[i])) {
-			refused_seen = true;
-			continue;
-		}
-		if (!device_matches(u, list[i]))
-			continue;
-		r = open_device(u, list[i]);
-		if (r == -EMEDIUMTYPE || r == -EPROTO || r == -EINVAL) {
-			u->refused_bus = libusb_get_bus_number(list[i]);
-			u->refused_addr = libusb_get_device_address(list[i]);
-			refused_seen = true;
-		}
-	}
-	if (!refused_seen)
-		u->refused_bus = u->refused_addr = 0;
-	libusb_free_device_list(list, 1);
-	return r;
 }
 
 /* ---- The projector interface ---- */
@@ -619,7 +361,7 @@ static int usb_blank(struct projector *p, bool blank)
 	struct projwire_ctrl c = { .request = PROJWIRE_REQ_SET_BLANK, .blank = blank };
 	if (!u->present)
 		return -ENODEV;
-	int r = ctrl(u, &c, NULL);
+	int r = usbp_ctrl(u, &c, NULL);
 	if (r < 0)
 		return r;
 	u->lit = !blank;
@@ -637,7 +379,7 @@ static int usb_set_timing(struct projector *p, int64_t period_ns, int64_t index_
 		return -EINVAL;
 	struct projwire_ctrl c = { .request = PROJWIRE_REQ_SET_TIMING };
 	c.timing = (struct projwire_timing){ (uint64_t)period_ns, index_ns, now_ns() };
-	return ctrl(u, &c, NULL);
+	return usbp_ctrl(u, &c, NULL);
 }
 
 static bool volume_fits(const struct proj_usb *u, const struct volume *vol)
@@ -696,7 +438,7 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 static int send_swap(struct proj_usb *u)
 {
 	struct projwire_ctrl c = { .request = PROJWIRE_REQ_SWAP, .buffer = u->pending };
-	int r = ctrl(u, &c, NULL);
+	int r = usbp_ctrl(u, &c, NULL);
 	if (r < 0)
 		u->pending = PROJWIRE_NO_BUFFER;
 	return r;
@@ -814,7 +556,7 @@ static void look_for_device(struct proj_usb *u)
 	bool by_hotplug = u->hp_arrived;
 	u->hp_arrived = false;
 	u->next_scan = now + RESCAN_NS;
-	if (scan(u) < 0)
+	if (usbp_scan(u) < 0)
 		return;
 	if (!by_hotplug)
 		u->dbg.rescan_opens++;
@@ -873,9 +615,9 @@ static void usb_destroy(struct projector *p)
 	if (u->handle) {
 		u->failing = true;
 		u->present = false;
-		cancel_all(u);
-		drain(u);
-		close_device(u);
+		usbp_cancel_all(u);
+		usbp_drain(u);
+		usbp_close_device(u);
 	}
 	if (u->hotplug)
 		libusb_hotplug_deregister_callback(u->ctx, u->hotplug_handle);
@@ -901,96 +643,6 @@ static const struct projector_impl usb_impl = {
 	.destroy = usb_destroy,
 };
 
-/* ---- libusb's fds in our epoll set; hot-plug ---- */
-
-static void LIBUSB_CALL pollfd_added(int fd, short events, void *data)
-{
-	struct proj_usb *u = data;
-	struct epoll_event ev = { .data.fd = fd };
-	ev.events = (events & POLLIN ? EPOLLIN : 0) | (events & POLLOUT ? EPOLLOUT : 0);
-	if (epoll_ctl(u->epfd, EPOLL_CTL_ADD, fd, &ev) < 0 && errno == EEXIST)
-		epoll_ctl(u->epfd, EPOLL_CTL_MOD, fd, &ev);
-}
-
-static void LIBUSB_CALL pollfd_removed(int fd, void *data)
-{
-	struct proj_usb *u = data;
-	epoll_ctl(u->epfd, EPOLL_CTL_DEL, fd, NULL);
-}
-
-static int add_pollfds(struct proj_usb *u)
-{
-	const struct libusb_pollfd **fds = libusb_get_pollfds(u->ctx);
-	if (!fds)
-		return -EIO;
-	for (int i = 0; fds[i]; i++)
-		pollfd_added(fds[i]->fd, fds[i]->events, u);
-	libusb_free_pollfds(fds);
-	libusb_set_pollfd_notifiers(u->ctx, pollfd_added, pollfd_removed, u);
-	return 0;
-}
-
-/* Runs inside libusb's event handling: only notes what happened. */
-static int LIBUSB_CALL hotplug_event(libusb_context *ctx, libusb_device *dev, libusb_hotplug_event event,
-				     void *data)
-{
-	struct proj_usb *u = data;
-	if (event == LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED) {
-		u->dbg.hotplug_arrivals++;
-		u->hp_arrived = true;
-		return 0;
-	}
-	u->dbg.hotplug_removals++;
-	if (u->handle && libusb_get_device(u->handle) == dev)
-		u->hp_left = true;
-	if (is_refused(u, dev))
-		u->refused_bus = u->refused_addr = 0; /* its address may come back as another device */
-	return 0;
-}
-
-static int register_hotplug(struct proj_usb *u)
-{
-	if (!libusb_has_capability(LIBUSB_CAP_HAS_HOTPLUG))
-		return 0; /* the periodic rescan finds devices alone */
-	int r = libusb_hotplug_register_callback(
-		u->ctx, LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED | LIBUSB_HOTPLUG_EVENT_DEVICE_LEFT, 0,
-		u->cfg.vid ? u->cfg.vid : LIBUSB_HOTPLUG_MATCH_ANY, u->cfg.pid ? u->cfg.pid : LIBUSB_HOTPLUG_MATCH_ANY,
-		LIBUSB_HOTPLUG_MATCH_ANY, hotplug_event, u, &u->hotplug_handle);
-	if (r < 0)
-		return usb_errno(r);
-	u->hotplug = u->dbg.hotplug = true;
-	return 0;
-}
-
-static int start_timer(struct proj_usb *u)
-{
-	struct itimerspec its = {
-		.it_interval = { .tv_nsec = TICK_NS },
-		.it_value = { .tv_nsec = TICK_NS },
-	};
-	u->timerfd = timerfd_create(CLOCK_MONOTONIC, TFD_NONBLOCK | TFD_CLOEXEC);
-	if (u->timerfd < 0 || timerfd_settime(u->timerfd, 0, &its, NULL) < 0)
-		return -errno;
-	struct epoll_event ev = { .events = EPOLLIN, .data.fd = u->timerfd };
-	return epoll_ctl(u->epfd, EPOLL_CTL_ADD, u->timerfd, &ev) < 0 ? -errno : 0;
-}
-
-static int start(struct proj_usb *u)
-{
-	int r = libusb_init(&u->ctx);
-	if (r < 0) {
-		log_error("usb projector: libusb: %s", libusb_strerror(r));
-		u->ctx = NULL;
-		return usb_errno(r);
-	}
-	u->epfd = epoll_create1(EPOLL_CLOEXEC);
-	if (u->epfd < 0)
-		return -errno;
-	if ((r = start_timer(u)) < 0 || (r = add_pollfds(u)) < 0)
-		return r;
-	return register_hotplug(u);
-}
-
 struct projector *proj_usb_create(const struct proj_usb_config *cfg, const struct projector_listener *listener,
 				  void *data)
 {
@@ -1003,7 +655,7 @@ struct projector *proj_usb_create(const struct proj_usb_config *cfg, const struc
 	u->cfg = *cfg;
 	u->cfg.bus_path[sizeof(u->cfg.bus_path) - 1] = '\0';
 	u->epfd = u->timerfd = -1;
-	int r = start(u);
+	int r = usbp_start(u);
 	if (r < 0) {
 		if (u->hotplug)
 			libusb_hotplug_deregister_callback(u->ctx, u->hotplug_handle);
@@ -1018,7 +670,7 @@ struct projector *proj_usb_create(const struct proj_usb_config *cfg, const struc
 		return NULL;
 	}
 	/* A device present now is set up here and not reported by arrived(). */
-	if (scan(u) == 0)
+	if (usbp_scan(u) == 0)
 		u->arrivals++;
 	u->next_scan = now_ns() + RESCAN_NS;
 	return &u->base;
