@@ -400,6 +400,34 @@ static void test_hotplug(struct volume *large)
 	rig_finish(&r);
 }
 
+/* A duplicate arrival for the device already held changes nothing: no
+ * arrived(), no gone(), the device keeps working. */
+static void test_duplicate_arrival(void)
+{
+	struct rig r;
+	rig_init(&r, &geom, &geom, 0);
+	struct proj_usb_debug before, after;
+	proj_usb_get_debug(r.p, &before);
+	for (int i = 0; i < 3; i++) {
+		usb_emul_announce_again(r.emul);
+		run_for(r.p, 100);
+	}
+	proj_usb_get_debug(r.p, &after);
+	printf("duplicate arrivals: %llu hot-plug events reached the driver\n",
+	       (unsigned long long)(after.hotplug_arrivals - before.hotplug_arrivals));
+	CHECK_EQ(r.ev.arrived, 0);
+	CHECK_EQ(r.ev.gone, 0);
+	struct projector_stats st;
+	r.p->impl->get_stats(r.p, &st);
+	CHECK(st.present && st.arrivals == 1);
+	struct volume *vol = volume_create(&geom);
+	CHECK(vol);
+	random_volume(vol, 3, 61);
+	upload_and_show(&r, 0, vol);
+	volume_destroy(vol);
+	rig_finish(&r);
+}
+
 static void test_cycles(struct volume *large)
 {
 	struct rig r;
@@ -438,6 +466,7 @@ int main(void)
 	test_delta();
 	test_error_events();
 	test_keepalive();
+	test_duplicate_arrival();
 	test_hotplug(large);
 	test_cycles(large);
 	volume_destroy(large);

@@ -318,6 +318,11 @@ void usb_emul_unplug(struct usb_emul *e)
 	umockdev_testbed_remove_device(e->testbed, SYS_PATH);
 }
 
+void usb_emul_announce_again(struct usb_emul *e)
+{
+	umockdev_testbed_uevent(e->testbed, SYS_PATH, "add");
+}
+
 bool usb_emul_shows(struct usb_emul *e, const struct volume *vol)
 {
 	pthread_mutex_lock(&e->lock);

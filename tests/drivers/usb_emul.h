@@ -43,6 +43,10 @@ int usb_emul_plug(struct usb_emul *e, const struct geometry *geom, uint32_t buff
  * with ENODEV, and a remove uevent goes out. */
 void usb_emul_unplug(struct usb_emul *e);
 
+/* Announces the device again ("add") without touching it: a duplicate
+ * hot-plug arrival. */
+void usb_emul_announce_again(struct usb_emul *e);
+
 /* Whether the device shows (lit) exactly vol. */
 bool usb_emul_shows(struct usb_emul *e, const struct volume *vol);
 /* Whether the device is lit at all. */
