@@ -127,7 +127,8 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		return r;
 	if (buffer == st.shown || buffer == st.pending)
 		return -EBUSY;
-	size_t size = projwire_upload_size(vol, base);
+	bool delta;
+	size_t size = projwire_upload_size(vol, base, &delta);
 	if (size > s->wire_cap) {
 		uint8_t *w = realloc(s->wire, size);
 		if (!w)
@@ -135,7 +136,7 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		s->wire = w;
 		s->wire_cap = size;
 	}
-	size_t len = projwire_upload_encode(vol, base, buffer, s->wire);
+	size_t len = projwire_upload_encode(vol, delta ? base : NULL, buffer, s->wire);
 	for (size_t off = 0; off < len; off += BULK_CHUNK)
 		proj_simdev_bulk_out(s->dev, s->wire + off, len - off < BULK_CHUNK ? len - off : BULK_CHUNK);
 	s->bytes_sent += len;

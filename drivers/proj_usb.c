@@ -420,12 +420,13 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 		return -EBUSY;
 	if (u->info.version_minor < 1)
 		base = NULL; /* a 1.0 device rejects delta records */
-	size_t size = projwire_upload_size(vol, base);
+	bool delta;
+	size_t size = projwire_upload_size(vol, base, &delta);
 	int r = queue_reserve(u, size);
 	if (r < 0)
 		return r;
 	uint8_t *rec = u->q + u->q_head + u->q_len;
-	size_t len = projwire_upload_encode(vol, base, buffer, rec);
+	size_t len = projwire_upload_encode(vol, delta ? base : NULL, buffer, rec);
 	/* Where its first record (VOLUME_BEGIN) ends: from then on the device
 	 * holds the buffer as being written and accepts a swap to it. */
 	u->begin_end[buffer] = u->pos_queued + PROJWIRE_HEADER_SIZE + le_get32(rec + 4);

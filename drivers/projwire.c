@@ -430,15 +430,15 @@ void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_
 }
 
 /* The tiles of image k that differ between vol and base: counts them and,
- * when mask is given, writes the change mask and the new tiles (all zero
- * for a tile that vol no longer has). */
+ * when tiles is given, writes the new tiles there (all zero for a tile
+ * that vol no longer has) and the change mask into mask. */
 static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask,
 			    uint8_t *tiles)
 {
 	const struct volume_image *a = &vol->images[k], *b = &base->images[k];
 	const uint8_t *pa = a->tiles, *pb = b->tiles;
 	uint32_t n = 0, end = a->next_tile > b->next_tile ? a->next_tile : b->next_tile;
-	if (mask)
+	if (tiles)
 		memset(mask, 0, vol->mask_bytes);
 	for (uint32_t t = 0; t < end; t++) {
 		if (!(t % 8) && !(a->mask[t / 8] | b->mask[t / 8])) {
@@ -447,7 +447,7 @@ static uint32_t delta_tiles(const struct volume *vol, const struct volume *base,
 		}
 		int ia = volume_tile_present(a, t), ib = volume_tile_present(b, t);
 		if ((ia || ib) && (ia != ib || memcmp(pa, pb, VOLUME_TILE_BYTES))) {
-			if (mask) {
+			if (tiles) {
 				mask[t / 8] |= (uint8_t)(1u << (t % 8));
 				if (ia)
 					memcpy(tiles + (size_t)n * VOLUME_TILE_BYTES, pa, VOLUME_TILE_BYTES);
@@ -485,23 +485,12 @@ static size_t delta_size(const struct volume *vol, const struct volume *base)
 
 /* A delta when there is a base and it is the smaller form: a delta sends
  * removed tiles as zeros, so a volume unlike its base is cheaper whole. */
-static bool use_delta(const struct volume *vol, const struct volume *base, size_t *size)
+size_t projwire_upload_size(const struct volume *vol, const struct volume *base, bool *delta)
 {
-	*size = projwire_volume_size(vol);
-	if (!delta_fits(vol, base))
-		return false;
-	size_t d = delta_size(vol, base);
-	if (d >= *size)
-		return false;
-	*size = d;
-	return true;
-}
-
-size_t projwire_upload_size(const struct volume *vol, const struct volume *base)
-{
-	size_t size;
-	use_delta(vol, base, &size);
-	return size;
+	size_t whole = projwire_volume_size(vol);
+	size_t d = delta_fits(vol, base) ? delta_size(vol, base) : SIZE_MAX;
+	*delta = d < whole;
+	return *delta ? d : whole;
 }
 
 /* A delta volume: an IMAGE_DELTA record for each image with a changed
@@ -510,13 +499,17 @@ static size_t delta_encode(const struct volume *vol, const struct volume *base, 
 {
 	size_t n = PROJWIRE_DELTA_BEGIN_SIZE;
 	uint32_t images = 0;
+	uint8_t mask[PROJWIRE_MAX_TILES / 8];
 	projwire_delta_begin_encode(out, buffer, vol->image_count, vol->seq, base->seq);
 	for (uint32_t k = 0; k < vol->image_count; k++) {
-		/* Counted first: out has room only for the images that changed. */
-		if (!delta_tiles(vol, base, k, NULL, NULL))
+		/* Tiles go straight to their place (an image with any has its
+		 * record there); the mask waits aside, since out has no room
+		 * for the mask of an image that turns out unchanged. */
+		uint8_t *rec = out + n, *head = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
+		uint32_t t = delta_tiles(vol, base, k, mask, head + vol->mask_bytes);
+		if (!t)
 			continue;
-		uint8_t *rec = out + n, *mask = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
-		uint32_t t = delta_tiles(vol, base, k, mask, mask + vol->mask_bytes);
+		memcpy(head, mask, vol->mask_bytes);
 		size_t size = delta_image_size(vol, t);
 		header_encode(rec, PROJWIRE_IMAGE_DELTA, (uint32_t)(size - PROJWIRE_HEADER_SIZE));
 		le_put32(rec + 8, k);
@@ -531,8 +524,7 @@ static size_t delta_encode(const struct volume *vol, const struct volume *base, 
 size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
 			      uint8_t *out)
 {
-	size_t size;
-	if (!use_delta(vol, base, &size))
+	if (!delta_fits(vol, base))
 		return projwire_volume_encode(vol, buffer, out);
 	return delta_encode(vol, base, buffer, out);
 }

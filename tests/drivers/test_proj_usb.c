@@ -266,7 +266,7 @@ static void check_delta(uint8_t minor)
 	if (minor >= 1)
 		CHECK_EQ(sent, PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE);
 	else
-		CHECK_EQ(sent, projwire_upload_size(a2, NULL)); /* a 1.0 device gets it whole */
+		CHECK_EQ(sent, projwire_volume_size(a2)); /* a 1.0 device gets it whole */
 	CHECK_EQ(r.p->impl->swap(r.p, 0), 0);
 	wait_for(r.p, &r.ev.swaps, 2, 2000);
 	CHECK_EQ(r.ev.seq, 23);

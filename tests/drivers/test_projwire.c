@@ -559,10 +559,11 @@ static void test_crc_and_errors(void)
 /* Encodes r->src as a delta against base for buffer. */
 static uint8_t *encode_delta(struct rig *r, const struct volume *base, uint32_t buffer, size_t *len)
 {
-	size_t size = projwire_upload_size(r->src, base);
+	bool delta;
+	size_t size = projwire_upload_size(r->src, base, &delta);
 	uint8_t *out = malloc(size);
 	CHECK(out);
-	*len = projwire_upload_encode(r->src, base, buffer, out);
+	*len = projwire_upload_encode(r->src, delta ? base : NULL, buffer, out);
 	CHECK_EQ(*len, size);
 	return out;
 }
