@@ -21,19 +21,22 @@ C_TYPES = {
     "new_id": "uint32_t",
     "fd": "int",
     "string": "const char *",
+    "array": "const void *",
 }
 WIRE_SIZE = {"uint": 4, "int": 4, "uint64": 8, "float": 4, "object": 4,
              "new_id": 4, "fd": 0, "matrix": 64}
 # The wire.h accessor of each type: proto_get_X / proto_put_X.
 ACCESSORS = {"uint": "u32", "int": "i32", "uint64": "u64", "float": "f32", "object": "u32",
-             "new_id": "u32", "fd": "fd", "string": "string", "matrix": "matrix"}
+             "new_id": "u32", "fd": "fd", "string": "string", "matrix": "matrix", "array": "array"}
+# Types of variable size: a uint length, then the bytes, padded to 4.
+VARIABLE = ("string", "array")
 
 
 class Arg:
     def __init__(self, el):
         self.name = el.get("name")
         self.type = el.get("type")
-        if self.type not in WIRE_SIZE and self.type != "string":
+        if self.type not in WIRE_SIZE and self.type not in VARIABLE:
             sys.exit(f"unknown type {self.type} for {self.name}")
         self.interface = el.get("interface")
         self.enum = el.get("enum")
@@ -92,6 +95,8 @@ def c_params(msg):
     for a in msg.args:
         if a.type == "matrix":
             out.append(f"const float {a.name}[16]")
+        elif a.type == "array":
+            out += [f"const void *{a.name}", f"uint32_t {a.name}_size"]
         else:
             out.append(f"{C_TYPES[a.type]}{a.name}" if a.type == "string" else f"{C_TYPES[a.type]} {a.name}")
     return out
@@ -131,6 +136,8 @@ def header(version, ifaces):
                 for a in m.args:
                     if a.type == "matrix":
                         o.append(f"\tfloat {a.name}[16];")
+                    elif a.type == "array":
+                        o += [f"\tconst void *{a.name};", f"\tuint32_t {a.name}_size;"]
                     else:
                         o.append(f"\t{C_TYPES[a.type]}{a.name};" if a.type == "string" else f"\t{C_TYPES[a.type]} {a.name};")
                 o += ["};", ""]
@@ -157,6 +164,8 @@ def read_arg(a):
         return f"\t\tproto_get_matrix(&r, a.{a.name});"
     if a.type == "string":
         return f"\t\ta.{a.name} = proto_get_string(&r, {'true' if a.allow_null else 'false'});"
+    if a.type == "array":
+        return f"\t\ta.{a.name} = proto_get_array(&r, &a.{a.name}_size);"
     return f"\t\ta.{a.name} = proto_get_{ACCESSORS[a.type]}(&r);"
 
 
@@ -198,7 +207,8 @@ def sender(iface, m, kind):
     params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + c_params(m))
     o = [f"int proto_{prefix}_{iface.name}_{m.name}({params})", "{", "\tstruct proto_writer w;", "",
          f"\tproto_writer_begin(&w, conn, target_id, {opcode_const(iface, m, kind)});"]
-    o += [f"\tproto_put_{ACCESSORS[a.type]}(&w, {a.name});" for a in m.args]
+    o += [f"\tproto_put_array(&w, {a.name}, {a.name}_size);" if a.type == "array"
+          else f"\tproto_put_{ACCESSORS[a.type]}(&w, {a.name});" for a in m.args]
     return o + ["\treturn proto_writer_end(&w);", "}", ""]
 
 
@@ -246,6 +256,7 @@ def doc(version, description, ifaces):
                       f"Opcode {m.opcode}, since version {m.since}{extra}, "
                       f"{sum(WIRE_SIZE.get(a.type, 4) for a in m.args) + 12} bytes"
                       f"{' plus string data' if any(a.type == 'string' for a in m.args) else ''}"
+                      f"{' plus array data' if any(a.type == 'array' for a in m.args) else ''}"
                       f"{', ' + str(m.fd_count) + ' fd' if m.fd_count else ''}.", ""]
                 if m.description:
                     o += [m.description, ""]

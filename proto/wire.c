@@ -375,6 +375,20 @@ void proto_put_string(struct proto_writer *w, const char *s)
 		memset(pad, 0, (4 - len % 4) % 4);
 }
 
+void proto_put_array(struct proto_writer *w, const void *data, uint32_t size)
+{
+	if (size > PROTO_MAX_MESSAGE) {
+		w->error = -EMSGSIZE;
+		return;
+	}
+	proto_put_u32(w, size);
+	if (size)
+		put(w, data, size);
+	uint8_t *pad = out_reserve(w, (4 - size % 4) % 4);
+	if (pad)
+		memset(pad, 0, (4 - size % 4) % 4);
+}
+
 void proto_put_fd(struct proto_writer *w, int fd)
 {
 	struct proto_conn *conn = w->conn;
@@ -503,6 +517,22 @@ const char *proto_get_string(struct proto_reader *r, bool allow_null)
 		return NULL;
 	}
 	return s;
+}
+
+const void *proto_get_array(struct proto_reader *r, uint32_t *size)
+{
+	uint32_t len = proto_get_u32(r);
+	*size = 0;
+	if (r->error)
+		return NULL;
+	if (len > PROTO_MAX_MESSAGE) {
+		r->error = "array longer than its message";
+		return NULL;
+	}
+	const void *p = get(r, (len + 3) & ~3u);
+	if (p)
+		*size = len;
+	return p;
 }
 
 int proto_get_fd(struct proto_reader *r)

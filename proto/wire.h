@@ -89,6 +89,8 @@ void proto_put_f32(struct proto_writer *w, float v);
 void proto_put_matrix(struct proto_writer *w, const float m[16]);
 /* NULL writes the null string. */
 void proto_put_string(struct proto_writer *w, const char *s);
+/* A uint byte count, the bytes, zero padding to a multiple of 4. */
+void proto_put_array(struct proto_writer *w, const void *data, uint32_t size);
 /* The fd is duplicated; the caller keeps its own. */
 void proto_put_fd(struct proto_writer *w, int fd);
 /* 0, or -ENOBUFS (over max_out), -EMSGSIZE, -EBADF, -ENOMEM. */
@@ -108,6 +110,9 @@ uint64_t proto_get_u64(struct proto_reader *r);
 float proto_get_f32(struct proto_reader *r);
 void proto_get_matrix(struct proto_reader *r, float m[16]);
 const char *proto_get_string(struct proto_reader *r, bool allow_null);
+/* The bytes of an array argument (NULL when empty or on error); *size
+ * gets their count. */
+const void *proto_get_array(struct proto_reader *r, uint32_t *size);
 int proto_get_fd(struct proto_reader *r);
 /* Checks that the message was read exactly, fds included; fills err and
  * returns -EPROTO if not. what names the message. */
