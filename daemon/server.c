@@ -109,14 +109,11 @@ static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
 			close(cfd);
 			continue;
 		}
-		struct client *c = client_create(srv, cfd);
-		if (!c) {
-			log_warn("cannot set up a client: %s", strerror(errno));
-			continue;
-		}
-		link_append(&srv->clients, &c->link);
-		srv->client_count++;
-		log_debug("client %d connected (pid %d, uid %d)", cfd, (int)c->pid, (int)c->uid);
+		int r = server_add_client(srv, cfd);
+		if (r < 0)
+			log_warn("cannot set up a client: %s", strerror(-r));
+		else
+			log_debug("client %d connected", cfd);
 	}
 }
 
@@ -377,7 +374,7 @@ static int setup_render(struct server *srv)
 	return srv->pipe ? 0 : -errno;
 }
 
-static void server_finish(struct server *srv)
+void server_finish(struct server *srv)
 {
 	struct client *c, *tmp;
 	link_for_each_safe(c, tmp, &srv->clients, link) {
@@ -396,34 +393,53 @@ static void server_finish(struct server *srv)
 		free(srv->socket_path);
 	}
 	sd_event_unref(srv->event);
+	*srv = (struct server){ .listen_fd = -1 };
+}
+
+int server_init(struct server *srv, const struct config *cfg, bool listen)
+{
+	*srv = (struct server){ .cfg = *cfg, .listen_fd = -1 };
+	link_init(&srv->clients);
+	int r = geometry_from_profile(cfg->profile, &srv->geom);
+	if (r < 0) {
+		log_error("unknown profile '%s'", cfg->profile);
+		return r;
+	}
+	if ((r = setup_loop(srv)) < 0) {
+		log_error("event loop: %s", strerror(-r));
+		return r;
+	}
+	srv->dev = devices_create(srv);
+	if (!srv->dev) {
+		r = -errno;
+		log_error("devices: %s", strerror(errno));
+		return r;
+	}
+	if ((r = setup_render(srv)) < 0) {
+		log_error("renderer: %s", strerror(-r));
+		return r;
+	}
+	if (!listen)
+		return 0;
+	if ((r = open_socket(srv)) < 0)
+		return r;
+	return sd_event_add_io(srv->event, &srv->listen_source, srv->listen_fd, EPOLLIN, on_accept, srv);
+}
+
+int server_add_client(struct server *srv, int fd)
+{
+	struct client *c = client_create(srv, fd);
+	if (!c)
+		return -errno;
+	link_append(&srv->clients, &c->link);
+	srv->client_count++;
+	return 0;
 }
 
 int server_run(const struct config *cfg)
 {
-	struct server srv = { .cfg = *cfg, .listen_fd = -1 };
-	link_init(&srv.clients);
-	int r = geometry_from_profile(cfg->profile, &srv.geom);
-	if (r < 0) {
-		log_error("unknown profile '%s'", cfg->profile);
-		return 1;
-	}
-	if ((r = setup_loop(&srv)) < 0) {
-		log_error("event loop: %s", strerror(-r));
-		goto out;
-	}
-	srv.dev = devices_create(&srv);
-	if (!srv.dev) {
-		r = -errno;
-		log_error("devices: %s", strerror(errno));
-		goto out;
-	}
-	if ((r = setup_render(&srv)) < 0) {
-		log_error("renderer: %s", strerror(-r));
-		goto out;
-	}
-	if ((r = open_socket(&srv)) < 0)
-		goto out;
-	r = sd_event_add_io(srv.event, &srv.listen_source, srv.listen_fd, EPOLLIN, on_accept, &srv);
+	struct server srv;
+	int r = server_init(&srv, cfg, true);
 	if (r < 0)
 		goto out;
 	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", srv.device_name, srv.geom.width,

@@ -58,6 +58,14 @@ struct server_status {
 /* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */
 int server_run(const struct config *cfg);
 
+/* The parts of server_run(), for tests and fuzzers that drive the loop
+ * themselves: sets up the loop, devices and renderer, and the listening
+ * socket when listen. On failure the caller still calls server_finish(). */
+int server_init(struct server *srv, const struct config *cfg, bool listen);
+void server_finish(struct server *srv);
+/* Serves a connected socket (owned from now on) as a new client. */
+int server_add_client(struct server *srv, int fd);
+
 /* For clients and objects. */
 void server_reap_later(struct server *srv);
 /* A commit changed what is visible, or waits for frame callbacks: a new
