@@ -18,6 +18,13 @@ struct scene_draw {
 	const float *xyz;      /* count * 3 floats, immutable while the scene lives */
 	float transform[16];   /* column-major 4x4, model -> volume space (affine) */
 	uint8_t rgb[3];        /* colour, alpha already applied (emissive) */
+	uint8_t point_size;    /* points: each lights a point_size x point_size
+				* pixel square around its voxel (columns
+				* u - (s-1)/2 .. u + s/2, rows likewise, clipped
+				* to the image); 0 counts as 1. At most 16. */
+	const uint8_t *prim_rgb; /* NULL, or one colour per primitive (3 bytes
+				  * each, alpha applied) used instead of rgb;
+				  * immutable while the scene lives */
 };
 
 struct scene {

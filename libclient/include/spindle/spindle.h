@@ -26,10 +26,13 @@ extern "C" {
 #endif
 
 /* The protocol version this library speaks at most. */
-#define SPINDLE_PROTOCOL_VERSION 1
+#define SPINDLE_PROTOCOL_VERSION 2
 
 /* Default socket path, used when neither a path nor SPINDLE_SOCKET is given. */
 #define SPINDLE_DEFAULT_SOCKET "/run/spindle/spindle.sock"
+
+/* The most bytes spindle_buffer_create_inline() takes. */
+#define SPINDLE_INLINE_MAX 65516
 
 struct spindle;
 struct spindle_buffer;
@@ -74,6 +77,31 @@ struct spindle_status {
 	float angle_error_max;     /* largest slice angle error, slices (< 0: unknown) */
 };
 
+/* The display's state, pushed by the daemon when it changes (protocol
+ * version 2): a flag changed, or the speed moved by 1% of nominal. */
+struct spindle_state {
+	bool locked;
+	bool blanked;
+	bool projector_present;
+	float rpm; /* measured, 0 when not turning */
+};
+
+/* Why the daemon refused a commit (protocol version 2). A refused commit
+ * shows nothing: every change stays pending, frame requests too. */
+enum spindle_refusal {
+	SPINDLE_REFUSED_QUOTA = 1,  /* more primitives than this client's quota */
+	SPINDLE_REFUSED_DENIED = 2, /* exclusive layer not allowed by policy */
+	SPINDLE_REFUSED_BUSY = 3,   /* another client's exclusive layer shows */
+};
+
+/* Asynchronous events, called from spindle_dispatch() (and from the
+ * blocking calls, which dispatch while they wait). Either may be NULL. */
+struct spindle_listener {
+	void (*state)(void *data, const struct spindle_state *state);
+	/* object: the layer at fault, or 1 for the display. */
+	void (*refused)(void *data, enum spindle_refusal code, uint32_t object, const char *message);
+};
+
 /* When a committed state was first shown. A commit that leaves the scene
  * as the last volume rendered shows it is not rendered again: its frame
  * names that volume, at the first revolution start after the commit. */
@@ -88,6 +116,9 @@ struct spindle_frame {
  * device info. Returns NULL with errno set on failure (EPROTO: the daemon
  * speaks no common version). The caller owns the result. */
 struct spindle *spindle_connect(const char *path);
+/* The same, offering at most protocol version max_version (1 ..
+ * SPINDLE_PROTOCOL_VERSION): for testing how older clients are served. */
+struct spindle *spindle_connect_version(const char *path, uint32_t max_version);
 
 /* Closes the connection and frees every object made with it. Accepts NULL. */
 void spindle_disconnect(struct spindle *sp);
@@ -98,6 +129,13 @@ void spindle_set_log_handler(struct spindle *sp, spindle_log_func func, void *da
 
 /* The negotiated protocol version. */
 uint32_t spindle_get_version(struct spindle *sp);
+
+/* Installs the listener for state and refused events (NULL: none). The
+ * structure must outlive the connection or the next call. */
+void spindle_set_listener(struct spindle *sp, const struct spindle_listener *listener, void *data);
+
+/* The last state the daemon pushed (version 2; -ENOTSUP at version 1). */
+int spindle_get_state(struct spindle *sp, struct spindle_state *out);
 
 /* Device info; the pointer stays valid until spindle_disconnect(). */
 const struct spindle_device_info *spindle_get_device_info(struct spindle *sp);
@@ -118,12 +156,22 @@ int spindle_roundtrip(struct spindle *sp);
 /* Why the connection failed: the daemon's error message, or a local one;
  * NULL while it is healthy. Owned by the library. */
 const char *spindle_get_error(struct spindle *sp);
+/* The code of the daemon's fatal error (docs/protocol.md, display.error),
+ * 0 while healthy or when the failure was local. */
+uint32_t spindle_get_error_code(struct spindle *sp);
 
-/* A buffer of vertex data: a copy of size bytes from data, in a sealed
- * memfd passed to the daemon. Vertices are 3 float32 (x, y, z). The caller
- * owns the result; destroy it when no list refers to it any more (lists
- * keep their own copy of what they drew from it). */
+/* A buffer of vertex or index data: a copy of size bytes from data, sent
+ * inline when it is small (at most SPINDLE_INLINE_MAX bytes, protocol
+ * version 2), else in a sealed memfd passed to the daemon. The caller owns
+ * the result; destroy it when it is no longer drawn from (lists keep their
+ * own copy of what they drew from it). */
 struct spindle_buffer *spindle_buffer_create(struct spindle *sp, const void *data, size_t size);
+/* Always inline (version 2; EINVAL over SPINDLE_INLINE_MAX). */
+struct spindle_buffer *spindle_buffer_create_inline(struct spindle *sp, const void *data, size_t size);
+/* Zero copy: the caller's memfd of at least size bytes, sealed at least
+ * against shrinking (F_SEAL_SHRINK), is passed as it is. The caller keeps
+ * fd; writes to it after a draw change nothing already drawn. */
+struct spindle_buffer *spindle_buffer_create_from_fd(struct spindle *sp, int fd, uint64_t size);
 void spindle_buffer_destroy(struct spindle_buffer *buf);
 
 /* A display list: a retained command stream. Commands append; clear
@@ -147,6 +195,49 @@ int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, si
 int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
 			   uint32_t count, uint32_t stride);
 
+/* Primitive modes of spindle_list_draw() and spindle_list_draw_indexed(). */
+enum spindle_mode {
+	SPINDLE_POINTS = 0,
+	SPINDLE_LINES = 1,
+	SPINDLE_TRIANGLES = 2,
+	SPINDLE_LINE_STRIP = 3, /* version 2: count - 1 segments */
+};
+
+/* Vertex layouts (version 2; spindle_list_set_vertex_format()). */
+enum spindle_vertex_format {
+	SPINDLE_XYZ = 0,            /* 3 float32, 12 bytes */
+	SPINDLE_XYZ_RGBA8 = 1,      /* 3 float32, then R, G, B, A bytes: 16 bytes */
+	SPINDLE_XYZ_RGBA_FLOAT = 2, /* 3 float32, then 4 float32 in 0..1: 28 bytes */
+};
+
+enum spindle_index_type {
+	SPINDLE_INDEX_U16 = 2,
+	SPINDLE_INDEX_U32 = 4,
+};
+
+/* Any mode; stride 0 = the vertex format's size. */
+int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf,
+		      size_t offset, uint32_t count, uint32_t stride);
+/* Version 2: index_count vertices picked by the indices (each below
+ * vertex_count) at index_offset of indices, from the vertices at offset
+ * of vertices, stride bytes apart. */
+int spindle_list_draw_indexed(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *vertices,
+			      size_t offset, uint32_t vertex_count, uint32_t stride,
+			      struct spindle_buffer *indices, size_t index_offset, uint32_t index_count,
+			      enum spindle_index_type index_type);
+/* Version 2: layout of the vertices of the draws that follow. With a
+ * colour per vertex, set_color does not apply; colours are interpolated
+ * along lines and across triangles (in steps of at most 16 of 255). */
+int spindle_list_set_vertex_format(struct spindle_list *list, enum spindle_vertex_format format);
+/* Version 2: size of the points that follow, 1 to 16 pixels square. */
+int spindle_list_set_point_size(struct spindle_list *list, uint32_t size);
+/* Version 2: saves / restores the transform, colour, point size and
+ * vertex format (16 deep); multiply_transform post-multiplies the current
+ * transform (m applies to the model first). */
+int spindle_list_push(struct spindle_list *list);
+int spindle_list_pop(struct spindle_list *list);
+int spindle_list_multiply_transform(struct spindle_list *list, const float m[16]);
+
 /* A layer: shows a list in the shared volume. New layers are visible, with
  * no list and the identity transform. */
 struct spindle_layer *spindle_layer_create(struct spindle *sp);
@@ -155,6 +246,14 @@ void spindle_layer_destroy(struct spindle_layer *layer);
 int spindle_layer_set_list(struct spindle_layer *layer, struct spindle_list *list);
 int spindle_layer_set_transform(struct spindle_layer *layer, const float m[16]);
 int spindle_layer_set_visible(struct spindle_layer *layer, bool visible);
+/* Version 2: -1000 .. 1000 (default 0). When the scene holds more than the
+ * daemon's max-scene-primitives, the lowest-priority layers are left out,
+ * whole. */
+int spindle_layer_set_priority(struct spindle_layer *layer, int32_t priority);
+/* Version 2: while visible, show this client's layers alone. Granted at
+ * commit by the daemon's policy; a refused commit is reported through the
+ * listener (or spindle_commit_and_wait()'s result). */
+int spindle_layer_set_exclusive(struct spindle_layer *layer, bool exclusive);
 
 /* Frame callback: func is called (from spindle_dispatch()) once the state
  * of the next commit is first shown. Call before spindle_commit(). */
@@ -166,7 +265,9 @@ int spindle_request_frame(struct spindle *sp, spindle_frame_func func, void *dat
 int spindle_commit(struct spindle *sp);
 
 /* Blocking helper: requests a frame, commits, and waits until it is shown.
- * frame (may be NULL) receives when. 0 or -errno. */
+ * frame (may be NULL) receives when. 0 or -errno; a refused commit
+ * returns -EDQUOT (quota), -EACCES (exclusive denied) or -EBUSY (another
+ * client's exclusive layer), with everything still pending. */
 int spindle_commit_and_wait(struct spindle *sp, struct spindle_frame *frame);
 
 /* Blocking: the daemon's current status. 0 or -errno. */
@@ -174,8 +275,8 @@ int spindle_get_status(struct spindle *sp, struct spindle_status *out);
 
 /* Blocking: the next volume shown, as an .svol file in a memfd. On success
  * *fd (owned by the caller, positioned at 0) holds *size bytes. Capture is
- * restricted by the daemon (root or the daemon's own user): -EACCES
- * otherwise. 0 or -errno. */
+ * restricted by the daemon (root, the daemon's own user, the admin group):
+ * -EACCES otherwise. 0 or -errno. */
 int spindle_capture(struct spindle *sp, int *fd, size_t *size);
 
 #ifdef __cplusplus
