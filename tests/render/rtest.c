@@ -164,6 +164,19 @@ void rtest_point_voxels(const struct geometry *g, const float p[3], struct rtest
 	}
 }
 
+void rtest_colour(uint32_t i, uint8_t out[3])
+{
+	out[0] = (uint8_t)(i * 73 + 11);
+	out[1] = (uint8_t)(i * 151 + 97);
+	out[2] = (uint8_t)(i * 29 + 200);
+}
+
+void rtest_saturated(uint32_t i, uint8_t out[3])
+{
+	for (int c = 0; c < 3; c++)
+		out[c] = ((i % 7 + 1) >> c) & 1 ? 255 : 0;
+}
+
 void rtest_identity(float t[16])
 {
 	memset(t, 0, 16 * sizeof(float));

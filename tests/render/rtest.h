@@ -52,6 +52,11 @@ struct rtest_voxel {
 };
 void rtest_point_voxels(const struct geometry *g, const float p[3], struct rtest_voxel out[2]);
 
+/* Colour i of a fixed spread of values, dark and bright; and the seven
+ * saturated colours (channels 0 or 255), one channel pattern each. */
+void rtest_colour(uint32_t i, uint8_t out[3]);
+void rtest_saturated(uint32_t i, uint8_t out[3]);
+
 /* A draw of m with the identity transform. */
 struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
 			     uint8_t g, uint8_t b);

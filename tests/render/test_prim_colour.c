@@ -13,14 +13,6 @@
 
 static const uint8_t white[3] = { 255, 255, 255 };
 
-/* Colour i of a fixed spread of values, dark and bright. */
-static void colour_of(uint32_t i, uint8_t out[3])
-{
-	out[0] = (uint8_t)(i * 73 + 11);
-	out[1] = (uint8_t)(i * 151 + 97);
-	out[2] = (uint8_t)(i * 29 + 200);
-}
-
 static struct scene_draw colour_draw(enum scene_prim prim, const struct rtest_mesh *m, const uint8_t *rgb)
 {
 	struct scene_draw d = rtest_draw(prim, m, white[0], white[1], white[2]);
@@ -94,7 +86,7 @@ static void check_points(const struct geometry *g)
 	uint8_t *rgb = malloc(3 * (size_t)m.count);
 	CHECK(rgb);
 	for (uint32_t i = 0; i < m.count; i++)
-		colour_of(i, rgb + 3 * i);
+		rtest_colour(i, rgb + 3 * i);
 	struct scene_draw d[2] = { colour_draw(SCENE_POINTS, &m, rgb), colour_draw(SCENE_POINTS, &m, rgb + 3 * n) };
 	d[0].count = n;
 	d[1].xyz = m.xyz + 3 * n;
@@ -114,13 +106,6 @@ static void check_points(const struct geometry *g)
 	rtest_mesh_free(&m);
 }
 
-/* The seven saturated colours, one a channel pattern each. */
-static void saturated(uint32_t i, uint8_t out[3])
-{
-	for (int c = 0; c < 3; c++)
-		out[c] = ((i % 7 + 1) >> c) & 1 ? 255 : 0;
-}
-
 /* Horizontal segments in the plane z = 0 (image 0's, lobe s < 0), one row
  * apart from the next, each in its own saturated colour, with a NaN
  * segment among them: each row lit in its segment's channels only. */
@@ -134,7 +119,7 @@ static void check_segments(const struct geometry *g)
 		double y = rtest_row_mid(g, rows[i]);
 		rtest_mesh_add(&m, i == 3 ? NAN : -0.8, y, 0);
 		rtest_mesh_add(&m, -0.2, y, 0);
-		saturated(i, rgb + 3 * i);
+		rtest_saturated(i, rgb + 3 * i);
 	}
 	struct scene_draw d = colour_draw(SCENE_LINES, &m, rgb);
 	struct volume *vol = rtest_render(g, &d, 1, 1);
@@ -179,7 +164,7 @@ static void check_same_as_draws(const struct geometry *g, enum scene_prim prim, 
 	struct scene_draw *draws = calloc(n, sizeof(*draws));
 	CHECK(rgb && draws);
 	for (uint32_t i = 0; i < n; i++) {
-		colour_of(i, rgb + 3 * i);
+		rtest_colour(i, rgb + 3 * i);
 		draws[i] = rtest_draw(prim, m, rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]);
 		draws[i].xyz = m->xyz + (size_t)i * nv * 3;
 		draws[i].count = nv;
