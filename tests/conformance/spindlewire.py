@@ -497,7 +497,8 @@ class Conn:
         codes = code if isinstance(code, (tuple, set, list)) else (code,)
         if ev['code'] not in codes:
             raise AssertionError(f'expected error {[ERR_NAME.get(c, c) for c in codes]}, got {ev}')
-        if obj is not None and ev['object'] != obj:
+        objs = obj if isinstance(obj, (tuple, set, list)) else (obj,)
+        if obj is not None and ev['object'] not in objs:
             raise AssertionError(f'error names object {ev["object"]}, expected {obj}: {ev}')
         self.expect_eof(timeout)
         return ev
