@@ -150,6 +150,9 @@ bool objects_commit(struct client *c);
 uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size);
 /* The layer's committed state is exclusive and visible. */
 bool layer_exclusive(const struct layer *y);
+/* Removing the layer changes the scene: it shows a list, or hides the
+ * other clients (exclusive). */
+bool layer_affects_scene(const struct layer *y);
 /* The exclusive policy lets c have exclusive layers. */
 bool client_may_be_exclusive(const struct client *c);
 /* Sends c a state event if the state changed (version 2 clients). */

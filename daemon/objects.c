@@ -591,6 +591,11 @@ bool layer_exclusive(const struct layer *y)
 	return y->committed.exclusive && y->committed.visible;
 }
 
+bool layer_affects_scene(const struct layer *y)
+{
+	return y->committed.visible && (y->committed.list || y->committed.exclusive);
+}
+
 bool objects_commit(struct client *c)
 {
 	bool changed = false;
@@ -632,7 +637,7 @@ void object_destroy(struct object *obj)
 		struct layer *y = (struct layer *)obj;
 		/* A departing client's layers are accounted for by the reaper. */
 		if (!c->dead)
-			server_scene_changed(c->server, y->committed.visible && y->committed.list);
+			server_scene_changed(c->server, layer_affects_scene(y));
 		layer_free(y);
 		break;
 	}

@@ -143,7 +143,7 @@ static int reap(sd_event_source *s, void *data)
 		if (!c->dead)
 			continue;
 		struct layer *y;
-		link_for_each(y, &c->layers, link) visible |= y->committed.visible && y->committed.list;
+		link_for_each(y, &c->layers, link) visible |= layer_affects_scene(y);
 		link_remove(&c->link);
 		srv->client_count--;
 		log_debug("client %d disconnected", proto_conn_get_fd(c->conn));

@@ -78,7 +78,8 @@ static int gather_layers(struct snapshot *snap, struct server *srv)
 			snap->layers[snap->layer_count++] = y;
 		}
 	}
-	qsort(snap->layers, snap->layer_count, sizeof(*snap->layers), layer_order);
+	if (snap->layer_count > 1)
+		qsort(snap->layers, snap->layer_count, sizeof(*snap->layers), layer_order);
 	return 0;
 }
 
