@@ -8,7 +8,7 @@ import select
 import socket
 import time
 
-from harness import Abuse, Daemon, ERR, Witness, case, check, run, settle_fds, w, with_daemon
+from harness import Abuse, ERR, Witness, check, run, settle_fds, w, with_daemon
 
 
 def flood(d, wit, name):

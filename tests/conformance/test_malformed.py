@@ -4,10 +4,9 @@ overflow, values out of range, requests before hello and hello twice. Each
 case: the offending client alone gets display.error with the documented code
 naming the object the request was sent to, then EOF; the witness is served
 and its scene shows; the daemon holds no more fds than before."""
-import math
 import struct
 
-from harness import Abuse, ERR, MODE, IDENTITY, P, case, check, run, shared, w
+from harness import Abuse, ERR, MODE, P, case, check, run, shared, w
 
 HDR = w.HEADER
 INV_MSG, INV_OBJ, INV_METHOD, INV_VALUE, VERSION = (
