@@ -39,30 +39,32 @@ def fatal(raw, code, obj=1, version=1, fds=()):
 
 
 # -- sizes --------------------------------------------------------------------
+# A bad size in the header is a framing error: it names object 0 (the
+# reference, "Errors").
 
 @case
 def size_below_header():
-    fatal(HDR.pack(1, 1, 0, 8), INV_MSG)
+    fatal(HDR.pack(1, 1, 0, 8), INV_MSG, obj=0)
 
 
 @case
 def size_zero():
-    fatal(HDR.pack(1, 1, 0, 0), INV_MSG)
+    fatal(HDR.pack(1, 1, 0, 0), INV_MSG, obj=0)
 
 
 @case
 def size_above_maximum():
-    fatal(HDR.pack(1, 1, 0, 65540) + bytes(4), INV_MSG)
+    fatal(HDR.pack(1, 1, 0, 65540) + bytes(4), INV_MSG, obj=0)
 
 
 @case
 def size_huge():
-    fatal(HDR.pack(1, 1, 0, 0xfffffff0) + bytes(4), INV_MSG)
+    fatal(HDR.pack(1, 1, 0, 0xfffffff0) + bytes(4), INV_MSG, obj=0)
 
 
 @case
 def size_not_multiple_of_4():
-    fatal(HDR.pack(1, 1, 0, 18) + bytes(8), INV_MSG)
+    fatal(HDR.pack(1, 1, 0, 18) + bytes(8), INV_MSG, obj=0)
 
 
 @case
@@ -254,7 +256,7 @@ def array_shorter_than_message():
 def array_unpadded():
     """count 5, 5 bytes: size not a multiple of 4."""
     fatal(lambda c: inline(c, 5, bytes(5))[:8] + struct.pack('<I', 25) + inline(c, 5, bytes(5))[12:], INV_MSG,
-          version=2)
+          obj=0, version=2)
 
 
 @case
