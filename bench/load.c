@@ -66,7 +66,7 @@ struct record {
 
 /* What went wrong, over all clients. */
 struct faults {
-	uint64_t duplicated, out_of_order, seq_back, time_back, early;
+	uint64_t duplicated, out_of_order, seq_back, time_back, early, refused;
 };
 
 struct load_client {
@@ -112,6 +112,18 @@ static void client_die(struct load_client *c, const char *what, int err)
 }
 
 /* ---- one client ---- */
+
+/* A refused commit keeps its frame request for the next one: that shows as
+ * a frame lost, and is said here. */
+static void on_refused(void *data, enum spindle_refusal code, uint32_t object, const char *message)
+{
+	struct load_client *c = data;
+	c->faults->refused++;
+	fprintf(stderr, "%s: client %d: commit refused (%d, object %u): %s\n", prog, c->id, (int)code, object,
+		message);
+}
+
+static const struct spindle_listener listener = { .refused = on_refused };
 
 static void on_frame(void *data, const struct spindle_frame *frame)
 {
@@ -170,6 +182,7 @@ static void client_init(struct load *ld, struct load_client *c, int id)
 	c->sp = bench_daemon_connect(&ld->daemon);
 	if (!c->sp)
 		die("connect", errno);
+	spindle_set_listener(c->sp, &listener, c);
 	square(v);
 	c->buf = spindle_buffer_create(c->sp, v, sizeof(v));
 	c->list = spindle_list_create(c->sp);
@@ -433,13 +446,13 @@ static void print_details(struct load *ld, const struct latency *lat)
 	fprintf(stderr,
 		"%s: revolution %.2f ms, a commit every %.2f ms per client; %llu frames measured\n"
 		"%s: reordered: %llu out of commit order, %llu volume_seq back, %llu time_ns back, "
-		"%llu time_ns before the commit\n"
+		"%llu time_ns before the commit; %llu commits refused\n"
 		"%s: volumes shown %llu, skipped %llu during the commit phase\n"
 		"%s: the clients (this process, one thread): %.1f%% of one core; commits sent late by "
 		"p50 %.3f, p99 %.3f, max %.3f ms\n",
 		prog, (double)ld->period_ns / 1e6, (double)ld->interval_ns / 1e6, (unsigned long long)lat->n, prog,
 		(unsigned long long)f->out_of_order, (unsigned long long)f->seq_back, (unsigned long long)f->time_back,
-		(unsigned long long)f->early, prog,
+		(unsigned long long)f->early, (unsigned long long)f->refused, prog,
 		(unsigned long long)(ld->after.volumes_shown - ld->before.volumes_shown),
 		(unsigned long long)(ld->after.volumes_skipped - ld->before.volumes_skipped), prog, ld->client_cpu,
 		(double)lag.p50 / 1e6, (double)lag.p99 / 1e6, (double)lag.max / 1e6);
