@@ -1,0 +1,212 @@
+#!/usr/bin/env python3
+"""Writes the fuzz targets' seed corpora: small, valid sessions made from the
+protocol as proto/spindle.xml describes it (docs/protocol.md).
+
+    fuzz/gen_corpus.py [OUTDIR]    (default: fuzz/corpus next to this script)
+
+Each seed is one file in OUTDIR/<target>/, named after what it does. The
+input formats are the ones the targets' header comments describe; opcodes
+and argument layouts come from the XML through proto/gen.py's parser, so
+the seeds follow the protocol when it changes (run again, commit the
+difference). Python 3 standard library only; the output is reproducible.
+"""
+
+import os
+import shutil
+import struct
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, os.path.join(HERE, "..", "proto"))
+import gen  # noqa: E402
+
+VERSION, _, IFACES = gen.load(os.path.join(HERE, "..", "proto", "spindle.xml"))
+BY_NAME = {i.name: i for i in IFACES}
+IDENTITY = [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]
+
+# enum fuzz_fd_kind (fuzz/harness.h)
+MEMFD_SEALED, MEMFD_ALL_SEALS, MEMFD_UNSEALED, PIPE, SOCKET, DEV_NULL = range(6)
+
+
+# ---- the wire format ----
+
+def find(iface, name, kind="request"):
+    msgs = BY_NAME[iface].requests if kind == "request" else BY_NAME[iface].events
+    for m in msgs:
+        if m.name == name:
+            return m
+    raise KeyError(f"{iface}.{name}")
+
+
+def pad4(b):
+    return b + b"\0" * (-len(b) % 4)
+
+
+def encode_arg(a, v):
+    t = a.type
+    if t in ("uint", "object", "new_id"):
+        return struct.pack("<I", v)
+    if t == "int":
+        return struct.pack("<i", v)
+    if t == "uint64":
+        return struct.pack("<Q", v)
+    if t == "float":
+        return struct.pack("<f", v)
+    if t == "matrix":
+        return struct.pack("<16f", *v)
+    if t == "string":
+        if v is None:
+            return struct.pack("<I", 0)
+        s = v.encode() + b"\0"
+        return struct.pack("<I", len(s)) + pad4(s)
+    if t == "array":
+        return struct.pack("<I", len(v)) + pad4(v)
+    if t == "fd":
+        return b""
+    raise ValueError(t)
+
+
+def msg(obj, iface, name, *args, kind="request"):
+    """One message to object obj: header and arguments (fd arguments: any
+    placeholder, they take no bytes)."""
+    m = find(iface, name, kind)
+    if len(args) != len(m.args):
+        raise TypeError(f"{iface}.{name} takes {len(m.args)} arguments")
+    body = b"".join(encode_arg(a, v) for a, v in zip(m.args, args))
+    return struct.pack("<IHHI", obj, m.opcode, m.fd_count, 12 + len(body)) + body
+
+
+def vertices(*xyz):
+    return struct.pack(f"<{len(xyz)}f", *xyz)
+
+
+def translate(x, y, z):
+    m = list(IDENTITY)
+    m[12:15] = [x, y, z]
+    return m
+
+
+def scale(s):
+    return [s, 0, 0, 0, 0, s, 0, 0, 0, 0, s, 0, 0, 0, 0, 1]
+
+
+# ---- session: chunks of raw bytes with fds (fuzz/fuzz_session.c) ----
+
+def fd_desc(kind, size, pattern=b""):
+    return struct.pack("<BHB", kind, size, len(pattern)) + pattern
+
+
+def chunk(data, fds=(), client=0, close=False, no_run=False):
+    ctl = len(fds) | (client << 3) | (0x10 if close else 0) | (0x20 if no_run else 0)
+    return struct.pack("<BH", ctl, len(data)) + b"".join(fds) + data
+
+
+AXIS = vertices(0, -0.5, 0, 0, 0.5, 0)
+TRIANGLE = vertices(-0.5, -0.5, 0, 0.5, -0.5, 0, 0, 0.5, 0)
+SQUARE = vertices(-0.5, -0.5, 0, 0.5, -0.5, 0, 0.5, 0.5, 0, -0.5, 0.5, 0)
+
+
+def hello(version=VERSION):
+    return msg(1, "display", "hello", version)
+
+
+def scene_v1(mode, data, count, color=0xff8000ff, transform=None, base=2):
+    """hello, a sealed memfd buffer, a list drawing it, a layer, commit,
+    frame: as one chunk, the memfd with it."""
+    buf, lst, lay, cb = base, base + 1, base + 2, base + 3
+    reqs = [msg(1, "display", "create_buffer", buf, len(data), 0),
+            msg(1, "display", "create_list", lst),
+            msg(lst, "list", "set_color", color)]
+    if transform:
+        reqs.append(msg(lst, "list", "set_transform", transform))
+    reqs += [msg(lst, "list", "draw", mode, buf, 0, count, 0),
+             msg(1, "display", "create_layer", lay),
+             msg(lay, "layer", "set_list", lst),
+             msg(1, "display", "frame", cb),
+             msg(1, "display", "commit")]
+    return b"".join(reqs), fd_desc(MEMFD_SEALED, len(data), data)
+
+
+def session_seeds():
+    s = {}
+    s["hello-v1"] = chunk(hello(1))
+    s["hello-v2"] = chunk(hello(2))
+    s["status-sync"] = chunk(hello() + msg(1, "display", "get_status") + msg(1, "display", "sync", 2))
+    for name, mode, data, count, t in (("points", 0, AXIS, 2, None),
+                                       ("lines", 1, AXIS, 2, translate(0.25, 0, 0)),
+                                       ("triangles", 2, TRIANGLE, 3, scale(0.5))):
+        reqs, fd = scene_v1(mode, data, count, transform=t)
+        s["scene-" + name] = chunk(hello(1)) + chunk(reqs, [fd])
+    reqs, fd = scene_v1(1, AXIS, 2)
+    s["scene-split"] = (chunk(hello()) + chunk(reqs[:30], [fd], no_run=True) + chunk(reqs[30:70])
+                        + chunk(reqs[70:]))
+    s["two-clients"] = (chunk(hello()) + chunk(hello(1), client=1)
+                        + chunk(scene_v1(0, AXIS, 2)[0], [scene_v1(0, AXIS, 2)[1]])
+                        + chunk(scene_v1(2, TRIANGLE, 3, base=10)[0], [scene_v1(2, TRIANGLE, 3)[1]],
+                                client=1, close=True)
+                        + chunk(msg(1, "display", "get_status")))
+    reqs, fd = scene_v1(0, AXIS, 2)
+    s["destroy-shown"] = chunk(hello()) + chunk(reqs, [fd]) + chunk(
+        msg(3, "list", "destroy") + msg(2, "buffer", "destroy") + msg(1, "display", "commit")
+        + msg(4, "layer", "set_visible", 0) + msg(1, "display", "commit") + msg(4, "layer", "destroy")
+        + msg(1, "display", "commit"))
+    s["capture"] = chunk(hello()) + chunk(reqs, [fd]) + chunk(msg(1, "display", "capture", 9))
+    s["layer-transform"] = chunk(hello()) + chunk(reqs + msg(4, "layer", "set_transform", translate(0, 0.2, 0))
+                                                  + msg(1, "display", "commit"), [fd])
+    # Version 2: an inline buffer, indices, per-vertex colour, point size,
+    # nested transforms, a line strip, priority and exclusive.
+    idx = struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    rgba = b"".join(SQUARE[12 * i:12 * i + 12] + bytes([255, 64 * i, 0, 255]) for i in range(4))
+    v2 = b"".join([
+        hello(2),
+        msg(1, "display", "create_buffer_inline", 2, SQUARE),
+        msg(1, "display", "create_buffer_inline", 3, idx),
+        msg(1, "display", "create_buffer_inline", 4, rgba),
+        msg(1, "display", "create_list", 5),
+        msg(5, "list", "draw_indexed", 2, 2, 0, 4, 0, 3, 0, 6, 2),
+        msg(5, "list", "push"),
+        msg(5, "list", "multiply_transform", scale(0.5)),
+        msg(5, "list", "set_vertex_format", 1),
+        msg(5, "list", "draw", 3, 4, 0, 4, 16),
+        msg(5, "list", "pop"),
+        msg(5, "list", "set_point_size", 3),
+        msg(5, "list", "draw", 0, 2, 0, 4, 0),
+        msg(1, "display", "create_layer", 6),
+        msg(6, "layer", "set_list", 5),
+        msg(6, "layer", "set_priority", 5),
+        msg(6, "layer", "set_exclusive", 1),
+        msg(1, "display", "frame", 7),
+        msg(1, "display", "commit"),
+    ])
+    s["v2-features"] = chunk(v2)
+    # Errors the daemon must answer and survive.
+    s["error-no-hello"] = chunk(msg(1, "display", "get_status"))
+    s["error-unsealed"] = chunk(hello()) + chunk(msg(1, "display", "create_buffer", 2, 36, 0),
+                                                 [fd_desc(MEMFD_UNSEALED, 36, AXIS)])
+    s["error-not-memfd"] = chunk(hello()) + chunk(msg(1, "display", "create_buffer", 2, 36, 0),
+                                                  [fd_desc(PIPE, 0)])
+    s["error-draw-range"] = chunk(hello()) + chunk(
+        msg(1, "display", "create_buffer", 2, 24, 0) + msg(1, "display", "create_list", 3)
+        + msg(3, "list", "draw", 1, 2, 12, 2, 0), [fd_desc(MEMFD_SEALED, 24, AXIS)])
+    s["error-bad-size"] = chunk(hello() + struct.pack("<IHHI", 1, 7, 0, 13))
+    s["error-fd-missing"] = chunk(hello() + msg(1, "display", "create_buffer", 2, 36, 0))
+    s["error-too-many-fds"] = chunk(hello()) + chunk(b"\0" * 4, [fd_desc(DEV_NULL, 0)] * 7, no_run=True) * 5
+    s["error-transform"] = chunk(hello() + msg(1, "display", "create_list", 2)
+                                 + msg(2, "list", "set_transform", [float("nan")] * 16))
+    s["error-mid-message"] = chunk(hello() + msg(1, "display", "create_list", 2)[:10], close=True)
+    return s
+
+
+def main():
+    out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, "corpus")
+    for target, seeds in (("session", session_seeds()),):
+        d = os.path.join(out, target)
+        shutil.rmtree(d, ignore_errors=True)
+        os.makedirs(d)
+        for name, data in sorted(seeds.items()):
+            with open(os.path.join(d, name), "wb") as f:
+                f.write(data)
+
+
+if __name__ == "__main__":
+    main()
