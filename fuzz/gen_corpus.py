@@ -197,6 +197,87 @@ def session_seeds():
     return s
 
 
+# ---- lists: requests as ops (fuzz/fuzz_lists.c) ----
+
+(OP_BUFFER, OP_BUFFER_INLINE, OP_LIST, OP_DESTROY, OP_CLEAR, OP_COLOR, OP_TRANSFORM, OP_DRAW,
+ OP_DRAW_INDEXED, OP_FORMAT, OP_POINT_SIZE, OP_PUSH, OP_POP, OP_MULTIPLY, OP_LAYER, OP_COMMIT,
+ OP_RAW) = range(17)
+
+
+def num(v):
+    """fuzz_num()."""
+    return bytes([v]) if v < 0x80 else b"\x80" + struct.pack("<I", v)
+
+
+def num64(v):
+    return bytes([v]) if v < 0x80 else b"\x80" + struct.pack("<Q", v)
+
+
+def oid(i):
+    return bytes([i - 2])
+
+
+def op_buffer(i, data, kind=MEMFD_SEALED):
+    return bytes([OP_BUFFER]) + oid(i) + struct.pack("<BH", kind, len(data)) + num64(0) + bytes([len(data)]) + data
+
+
+def op_inline(i, data):
+    return bytes([OP_BUFFER_INLINE]) + oid(i) + struct.pack("<HB", len(data), len(data)) + data
+
+
+def op_draw(lst, mode, buf, offset, count, stride=0):
+    return bytes([OP_DRAW]) + oid(lst) + num(mode) + oid(buf) + num64(offset) + num(count) + num(stride)
+
+
+def op_draw_indexed(lst, mode, vb, offset, vcount, stride, ib, ioff, icount, itype):
+    return (bytes([OP_DRAW_INDEXED]) + oid(lst) + num(mode) + oid(vb) + num64(offset) + num(vcount) + num(stride)
+            + oid(ib) + num64(ioff) + num(icount) + num(itype))
+
+
+def op_matrix(op, lst, kind, floats=()):
+    """Floats in read_float()'s one-byte form: (b - 124) / 16."""
+    return bytes([op]) + oid(lst) + bytes([kind]) + bytes(int(f * 16) + 124 for f in floats)
+
+
+def lists_seeds():
+    s = {}
+    v2 = bytes([VERSION - 1])
+    v1 = bytes([0])
+    def show(lst):
+        """Layer 15 showing list lst, and commit."""
+        return bytes([OP_LAYER]) + oid(15) + bytes([lst - 2]) + bytes([OP_COMMIT])
+    s["points"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2) + show(3)
+    s["lines-color"] = (v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + bytes([OP_COLOR]) + oid(3)
+                        + struct.pack("<I", 0x00ff00ff) + op_draw(3, 1, 2, 0, 2) + show(3))
+    s["triangles-transform"] = (v1 + op_buffer(2, TRIANGLE) + bytes([OP_LIST]) + oid(3)
+                                + op_matrix(OP_TRANSFORM, 3, 1, (0.25, 0, 0))
+                                + op_draw(3, 2, 2, 0, 3) + show(3))
+    s["stride-offset"] = (v1 + op_buffer(2, b"\0" * 4 + SQUARE) + bytes([OP_LIST]) + oid(3)
+                          + op_draw(3, 0, 2, 4, 2, 24) + bytes([OP_CLEAR]) + oid(3) + op_draw(3, 1, 2, 4, 4, 12)
+                          + show(3))
+    s["destroy"] = (v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 1, 2, 0, 2) + show(3)
+                    + bytes([OP_DESTROY]) + oid(3) + bytes([OP_DESTROY]) + oid(2) + bytes([OP_COMMIT])
+                    + bytes([OP_DESTROY]) + oid(15) + bytes([OP_COMMIT]))
+    idx16 = struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    idx32 = struct.pack("<4I", 0, 1, 2, 3)
+    s["v2-indexed"] = (v2 + op_inline(2, SQUARE) + op_inline(3, idx16) + op_buffer(4, idx32)
+                       + bytes([OP_LIST]) + oid(5) + op_draw_indexed(5, 2, 2, 0, 4, 0, 3, 0, 6, 2)
+                       + op_draw_indexed(5, 3, 2, 0, 4, 12, 4, 0, 4, 4) + show(5))
+    rgba = b"".join(SQUARE[12 * i:12 * i + 12] + bytes([255, 64 * i, 0, 255]) for i in range(4))
+    rgbaf = b"".join(SQUARE[12 * i:12 * i + 12] + struct.pack("<4f", 1, i / 4, 0, 1) for i in range(4))
+    s["v2-formats"] = (v2 + op_inline(2, rgba) + op_inline(3, rgbaf) + bytes([OP_LIST]) + oid(4)
+                       + bytes([OP_FORMAT]) + oid(4) + num(1) + op_draw(4, 1, 2, 0, 4)
+                       + bytes([OP_FORMAT]) + oid(4) + num(2) + op_draw(4, 3, 3, 0, 4)
+                       + bytes([OP_FORMAT]) + oid(4) + num(0) + op_draw(4, 0, 2, 0, 4, 16))
+    s["v2-stack"] = (v2 + op_inline(2, AXIS) + bytes([OP_LIST]) + oid(3) + bytes([OP_PUSH]) + oid(3)
+                     + op_matrix(OP_MULTIPLY, 3, 2, (0.5, 0.5, 0.5)) + bytes([OP_POINT_SIZE]) + oid(3) + num(4)
+                     + op_draw(3, 0, 2, 0, 2) + bytes([OP_POP]) + oid(3) + op_draw(3, 1, 2, 0, 2)
+                     + bytes([OP_POP]) + oid(3))
+    s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
+    s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
+    return s
+
+
 # ---- framing: chunks of bytes and fds (fuzz/fuzz_framing.c) ----
 
 def routes():
@@ -248,7 +329,7 @@ def framing_seeds():
 
 def main():
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(HERE, "corpus")
-    for target, seeds in (("framing", framing_seeds()), ("session", session_seeds())):
+    for target, seeds in (("framing", framing_seeds()), ("lists", lists_seeds()), ("session", session_seeds())):
         d = os.path.join(out, target)
         shutil.rmtree(d, ignore_errors=True)
         os.makedirs(d)
