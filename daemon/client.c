@@ -1,6 +1,7 @@
 /* Client connections: reading, dispatching to objects, the display
  * object's requests, and disconnecting a client that misbehaves. */
 #include <errno.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -86,7 +87,35 @@ static int display_hello(void *target, const struct proto_display_hello_args *a)
 					g->mirrored ? PROTO_DISPLAY_DEVICE_FLAGS_MIRRORED : 0, g->half_height, g->rpm,
 					srv->device_name);
 	client_sent(c, r);
+	if (c->version >= 2) {
+		struct server_status st;
+		server_get_status(srv, &st);
+		client_send_state(c, st.flags, st.rpm, true);
+	}
 	return 0;
+}
+
+void client_send_state(struct client *c, uint32_t flags, float rpm, bool force)
+{
+	if (c->dead || c->version < 2)
+		return;
+	float step = c->server->geom.rpm * 0.01f;
+	if (!force && flags == c->state_flags && fabsf(rpm - c->state_rpm) < step)
+		return;
+	c->state_flags = flags;
+	c->state_rpm = rpm;
+	client_sent(c, proto_ev_display_state(c->conn, 1, flags, rpm));
+	client_flush(c);
+}
+
+bool client_may_be_exclusive(const struct client *c)
+{
+	switch (c->server->cfg.exclusive) {
+	case POLICY_NONE: return false;
+	case POLICY_ADMIN: return c->admin;
+	case POLICY_ANY: return true;
+	}
+	return false;
 }
 
 static int new_waiter(struct client *c, uint32_t id, enum proto_interface type, struct link *queue)
@@ -118,6 +147,11 @@ static int display_create_buffer(void *target, const struct proto_display_create
 	return objects_create_buffer(target, a->id, a->size, a->fd);
 }
 
+static int display_create_buffer_inline(void *target, const struct proto_display_create_buffer_inline_args *a)
+{
+	return objects_create_buffer_inline(target, a->id, a->data, a->data_size);
+}
+
 static int display_create_list(void *target, const struct proto_display_create_list_args *a)
 {
 	return objects_create_list(target, a->id);
@@ -134,10 +168,25 @@ static int display_frame(void *target, const struct proto_display_frame_args *a)
 	return new_waiter(c, a->callback, PROTO_IFACE_CALLBACK, &c->frames_pending);
 }
 
+/* A refused commit changes nothing: its changes and frames stay pending. */
+static bool commit_refused(struct client *c)
+{
+	char text[200];
+	uint32_t object = 1;
+	uint32_t code = objects_commit_check(c, &object, text, sizeof(text));
+	if (!code)
+		return false;
+	log_debug("client %d: commit refused: %s", proto_conn_get_fd(c->conn), text);
+	client_sent(c, proto_ev_display_refused(c->conn, 1, object, code, text));
+	return true;
+}
+
 static int display_commit(void *target)
 {
 	struct client *c = target;
 	struct waiter *w, *tmp;
+	if (commit_refused(c))
+		return 0;
 	int64_t now = now_ns();
 	c->commit_serial++;
 	link_for_each_safe(w, tmp, &c->frames_pending, link) {
@@ -171,10 +220,11 @@ static int display_capture(void *target, const struct proto_display_capture_args
 	int r = new_waiter(c, a->id, PROTO_IFACE_CAPTURE, &c->captures);
 	if (r < 0)
 		return r;
-	if (c->uid != 0 && c->uid != geteuid()) {
+	if (!c->admin) {
 		struct waiter *w = idmap_get(&c->objects, a->id);
-		client_sent(c, proto_ev_capture_failed(c->conn, a->id, PROTO_CAPTURE_FAILURE_DENIED, "capture is restricted to root and the "
-									"daemon's user"));
+		client_sent(c, proto_ev_capture_failed(c->conn, a->id, PROTO_CAPTURE_FAILURE_DENIED,
+						       "capture is restricted to root, the daemon's user and the admin "
+						       "group"));
 		object_destroy(&w->base);
 		return 0;
 	}
@@ -186,6 +236,7 @@ static const struct proto_display_requests display_requests = {
 	.hello = display_hello,
 	.sync = display_sync,
 	.create_buffer = display_create_buffer,
+	.create_buffer_inline = display_create_buffer_inline,
 	.create_list = display_create_list,
 	.create_layer = display_create_layer,
 	.frame = display_frame,
@@ -271,6 +322,26 @@ static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data
 	return 0;
 }
 
+/* Root, the daemon's own user, or a member of the admin group: by the
+ * peer's credentials at connect (SO_PEERCRED, SO_PEERGROUPS), never pid. */
+static bool peer_is_admin(const struct server *srv, int fd, const struct ucred *cred)
+{
+	if (cred->uid == 0 || cred->uid == geteuid())
+		return true;
+	if (srv->admin_gid == (gid_t)-1)
+		return false;
+	if (cred->gid == srv->admin_gid)
+		return true;
+	gid_t groups[256];
+	socklen_t len = sizeof(groups);
+	if (getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups, &len) < 0)
+		return false; /* too many groups, or an old kernel: not admin */
+	for (size_t i = 0; i < len / sizeof(gid_t); i++)
+		if (groups[i] == srv->admin_gid)
+			return true;
+	return false;
+}
+
 struct client *client_create(struct server *srv, int fd)
 {
 	struct client *c = calloc(1, sizeof(*c));
@@ -288,6 +359,7 @@ struct client *client_create(struct server *srv, int fd)
 	c->uid = cred.uid;
 	c->gid = cred.gid;
 	c->pid = cred.pid;
+	c->admin = peer_is_admin(srv, fd, &cred);
 	c->server = srv;
 	link_init(&c->lists);
 	link_init(&c->layers);

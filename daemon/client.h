@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <sys/types.h>
 
+#include "draw.h"
 #include "idmap.h"
 #include "link.h"
 #include "scene.h"
@@ -17,29 +18,29 @@
 struct server;
 struct sd_event_source;
 
-/* Vertex data copied out of a buffer by one draw; shared by the pending and
- * committed states and by scene snapshots, hence counted. Main thread only. */
-struct vdata {
-	unsigned refs;
-	uint32_t count;
-	float xyz[];
-};
-
-struct vdata *vdata_ref(struct vdata *v);
-void vdata_unref(struct vdata *v);
-
 struct list_draw {
-	enum scene_prim prim;
 	struct vdata *data;
 	float transform[16];
-	uint8_t rgba[4];
+	uint8_t rgba[4];     /* used when data has no colour per primitive */
+	uint8_t point_size;
 };
 
 struct draw_array {
 	struct list_draw *draws;
 	uint32_t count, cap;
 	uint64_t vertices;
+	uint64_t prims;
 };
+
+/* The state draws take, saved and restored by push and pop. */
+struct list_state {
+	float transform[16];
+	uint8_t color[4];
+	uint8_t point_size;
+	uint8_t format; /* enum draw_format */
+};
+
+#define LIST_STACK_DEPTH 16
 
 struct object {
 	uint32_t id;
@@ -49,8 +50,10 @@ struct object {
 
 struct buffer {
 	struct object base;
-	const uint8_t *map; /* read-only shared mapping of the sealed memfd */
+	const uint8_t *map; /* read-only shared mapping of the sealed memfd, or
+			     * the inline data (owned) */
 	uint64_t size;
+	bool inline_data;
 };
 
 /* Lists are counted: the client's id table holds one reference and each
@@ -60,8 +63,9 @@ struct list {
 	struct object base;
 	unsigned refs;
 	struct draw_array pending, committed;
-	uint8_t color[4];
-	float transform[16];
+	struct list_state state;
+	struct list_state stack[LIST_STACK_DEPTH];
+	unsigned depth;
 	bool changed;       /* pending differs from committed */
 	struct link link;   /* client.lists */
 };
@@ -70,10 +74,13 @@ struct layer_state {
 	struct list *list; /* holds a reference */
 	float transform[16];
 	bool visible;
+	bool exclusive;
+	int32_t priority;
 };
 
 struct layer {
 	struct object base;
+	uint64_t serial; /* creation order, server-wide: ties of priority */
 	struct layer_state pending, committed;
 	bool changed;
 	struct link link; /* client.layers */
@@ -104,6 +111,9 @@ struct client {
 	struct link captures;
 	uint64_t commit_serial;
 	uint64_t buffer_bytes, vertices;
+	bool admin;     /* root, the daemon's user, or in the admin group */
+	uint32_t state_flags; /* the last state event sent (version 2) */
+	float state_rpm;
 	bool dead;
 };
 
@@ -126,6 +136,7 @@ extern const struct proto_list_requests list_requests;
 extern const struct proto_layer_requests layer_requests;
 
 int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd);
+int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size);
 int objects_create_list(struct client *c, uint32_t id);
 int objects_create_layer(struct client *c, uint32_t id);
 /* Registers a new object under its client-chosen id (checked). */
@@ -134,6 +145,18 @@ void object_destroy(struct object *obj);
 /* Moves every pending list and layer state to committed. Returns true if
  * anything visible may have changed. */
 bool objects_commit(struct client *c);
+/* Whether a commit now may be made: 0, or the display.refused code, with
+ * the object at fault and a reason in text. */
+uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size);
+/* The layer's committed state is exclusive and visible. */
+bool layer_exclusive(const struct layer *y);
+/* Removing the layer changes the scene: it shows a list, or hides the
+ * other clients (exclusive). */
+bool layer_affects_scene(const struct layer *y);
+/* The exclusive policy lets c have exclusive layers. */
+bool client_may_be_exclusive(const struct client *c);
+/* Sends c a state event if the state changed (version 2 clients). */
+void client_send_state(struct client *c, uint32_t flags, float rpm, bool force);
 
 void list_unref(struct list *l);
 

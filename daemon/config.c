@@ -19,7 +19,11 @@ void config_defaults(struct config *cfg)
 		.max_objects = 4096,
 		.max_buffer_bytes = 1ull << 30,
 		.max_vertices = 32u << 20,
+		.max_primitives = 8u << 20,
+		.max_scene_primitives = 16u << 20,
+		.exclusive = POLICY_ADMIN,
 	};
+	strcpy(cfg->admin_group, "spindle-admin");
 	const char *env = getenv("SPINDLE_SOCKET");
 	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s",
 		 env && *env ? env : "/run/spindle/spindle.sock");
@@ -62,6 +66,21 @@ static int set_u32(uint32_t *dst, const char *value, uint32_t min, uint32_t max)
 static int set_optional(char *dst, size_t size, const char *value)
 {
 	return *value ? set_string(dst, size, value) : (*dst = '\0', 0);
+}
+
+static const char *const policy_names[] = { "none", "admin", "any" };
+
+const char *config_policy_name(enum policy p)
+{
+	return policy_names[p];
+}
+
+static int set_policy(enum policy *dst, const char *value)
+{
+	for (unsigned i = 0; i < sizeof(policy_names) / sizeof(policy_names[0]); i++)
+		if (!strcmp(value, policy_names[i]))
+			return *dst = (enum policy)i, 0;
+	return -EINVAL;
 }
 
 static int set_bool(bool *dst, const char *value)
@@ -150,6 +169,14 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u64(&cfg->max_buffer_bytes, value, 0, 1ull << 40);
 	if (!strcmp(key, "max-vertices"))
 		return set_u64(&cfg->max_vertices, value, 0, 1ull << 32);
+	if (!strcmp(key, "max-primitives"))
+		return set_u64(&cfg->max_primitives, value, 0, 1ull << 32);
+	if (!strcmp(key, "max-scene-primitives"))
+		return set_u64(&cfg->max_scene_primitives, value, 0, 1ull << 32);
+	if (!strcmp(key, "exclusive"))
+		return set_policy(&cfg->exclusive, value);
+	if (!strcmp(key, "admin-group"))
+		return set_optional(cfg->admin_group, sizeof(cfg->admin_group), value);
 	return -ENOENT;
 }
 

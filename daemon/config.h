@@ -8,6 +8,16 @@
 
 #define CONFIG_DEFAULT_PATH "/etc/spindle/spindled.conf"
 
+/* Who a privilege is granted to: nobody, root + the daemon's user + the
+ * admin group, or every client. */
+enum policy {
+	POLICY_NONE,
+	POLICY_ADMIN,
+	POLICY_ANY,
+};
+
+const char *config_policy_name(enum policy p);
+
 struct config {
 	char socket_path[108]; /* sun_path size */
 	char device[16];       /* "sim" or "hw" */
@@ -28,6 +38,10 @@ struct config {
 	uint32_t max_objects;       /* per client */
 	uint64_t max_buffer_bytes;  /* per client */
 	uint64_t max_vertices;      /* per client */
+	uint64_t max_primitives;    /* per client, per volume */
+	uint64_t max_scene_primitives; /* all clients, per volume: priority decides */
+	enum policy exclusive;      /* who may have exclusive layers */
+	char admin_group[32];       /* may capture, and be exclusive under "admin" */
 	bool verbose;
 };
 

@@ -2,6 +2,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/mman.h>
@@ -12,18 +13,6 @@
 #include "server.h"
 
 static const float identity[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
-
-struct vdata *vdata_ref(struct vdata *v)
-{
-	v->refs++;
-	return v;
-}
-
-void vdata_unref(struct vdata *v)
-{
-	if (v && --v->refs == 0)
-		free(v);
-}
 
 int object_register(struct client *c, struct object *obj, uint32_t id, enum proto_interface type)
 {
@@ -45,7 +34,9 @@ int object_register(struct client *c, struct object *obj, uint32_t id, enum prot
 
 static void buffer_free(struct buffer *b)
 {
-	if (b->map)
+	if (b->inline_data)
+		free((void *)b->map);
+	else if (b->map)
 		munmap((void *)b->map, b->size ? b->size : 1);
 	b->base.client->buffer_bytes -= b->size;
 	free(b);
@@ -101,6 +92,32 @@ out_close:
 	return r;
 }
 
+/* Inline data is copied: the message's bytes go with the message. */
+int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size)
+{
+	if (size > c->server->cfg.max_buffer_bytes - c->buffer_bytes)
+		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
+				   (unsigned long long)c->server->cfg.max_buffer_bytes);
+	struct buffer *b = calloc(1, sizeof(*b));
+	void *copy = malloc(size ? size : 1);
+	if (!b || !copy) {
+		free(b);
+		free(copy);
+		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+	}
+	if (size)
+		memcpy(copy, data, size);
+	b->map = copy;
+	b->inline_data = true;
+	b->size = size;
+	c->buffer_bytes += size;
+	b->base.client = c;
+	int r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
+	if (r < 0)
+		buffer_free(b);
+	return r;
+}
+
 /* The destroy request of buffers, lists and layers. */
 static int destroy_req(void *target)
 {
@@ -120,6 +137,7 @@ static void draws_clear(struct draw_array *a)
 		vdata_unref(a->draws[i].data);
 	a->count = 0;
 	a->vertices = 0;
+	a->prims = 0;
 }
 
 static void draws_finish(struct draw_array *a)
@@ -141,6 +159,7 @@ static int draws_append(struct draw_array *a, const struct list_draw *d)
 	}
 	a->draws[a->count++] = *d;
 	a->vertices += d->data->count;
+	a->prims += d->data->prims;
 	return 0;
 }
 
@@ -174,8 +193,11 @@ void list_unref(struct list *l)
 
 static void list_reset_state(struct list *l)
 {
-	memset(l->color, 255, 4);
-	memcpy(l->transform, identity, sizeof(identity));
+	memset(l->state.color, 255, 4);
+	memcpy(l->state.transform, identity, sizeof(identity));
+	l->state.point_size = 1;
+	l->state.format = DRAW_XYZ;
+	l->depth = 0;
 }
 
 int objects_create_list(struct client *c, uint32_t id)
@@ -195,6 +217,9 @@ int objects_create_list(struct client *c, uint32_t id)
 	return 0;
 }
 
+/* A fatal error of list l's client, on l. */
+#define list_fail(l, code, ...) client_fail((l)->base.client, (l)->base.id, code, __VA_ARGS__)
+
 static int list_clear(void *target)
 {
 	struct list *l = target;
@@ -208,10 +233,10 @@ static int list_clear(void *target)
 static int list_set_color(void *target, const struct proto_list_set_color_args *a)
 {
 	struct list *l = target;
-	l->color[0] = (uint8_t)(a->rgba >> 24);
-	l->color[1] = (uint8_t)(a->rgba >> 16);
-	l->color[2] = (uint8_t)(a->rgba >> 8);
-	l->color[3] = (uint8_t)a->rgba;
+	l->state.color[0] = (uint8_t)(a->rgba >> 24);
+	l->state.color[1] = (uint8_t)(a->rgba >> 16);
+	l->state.color[2] = (uint8_t)(a->rgba >> 8);
+	l->state.color[3] = (uint8_t)a->rgba;
 	return 0;
 }
 
@@ -233,73 +258,174 @@ static int list_set_transform(void *target, const struct proto_list_set_transfor
 	struct list *l = target;
 	if (check_transform(&l->base, a->matrix) < 0)
 		return -EPROTO;
-	memcpy(l->transform, a->matrix, sizeof(l->transform));
+	memcpy(l->state.transform, a->matrix, sizeof(l->state.transform));
 	return 0;
 }
 
-/* Checks a draw's vertex range against its buffer, overflow-safe. */
-static bool draw_range_valid(const struct buffer *b, uint64_t offset, uint32_t count, uint32_t stride)
+static int list_multiply_transform(void *target, const struct proto_list_multiply_transform_args *a)
 {
-	if (count == 0)
-		return offset <= b->size;
-	uint64_t last = (uint64_t)(count - 1) * stride; /* < 2^64: both < 2^32 */
-	return offset <= b->size && last <= b->size - offset && 12 <= b->size - offset - last;
+	struct list *l = target;
+	if (check_transform(&l->base, a->matrix) < 0)
+		return -EPROTO;
+	float m[16];
+	mat4_mul(m, l->state.transform, a->matrix);
+	for (int i = 0; i < 16; i++)
+		if (!isfinite(m[i]) || fabsf(m[i]) > 1e6f)
+			return list_fail(l, PROTO_ERR_VALUE, "multiply_transform: the product is out of range");
+	memcpy(l->state.transform, m, sizeof(m));
+	return 0;
 }
 
-static int draw_check(struct list *l, const struct proto_list_draw_args *a, struct buffer **out)
+static int list_push(void *target)
+{
+	struct list *l = target;
+	if (l->depth == LIST_STACK_DEPTH)
+		return list_fail(l, PROTO_ERR_VALUE, "push: more than %d states pushed", LIST_STACK_DEPTH);
+	l->stack[l->depth++] = l->state;
+	return 0;
+}
+
+static int list_pop(void *target)
+{
+	struct list *l = target;
+	if (l->depth == 0)
+		return list_fail(l, PROTO_ERR_VALUE, "pop: nothing pushed");
+	l->state = l->stack[--l->depth];
+	return 0;
+}
+
+static int list_set_point_size(void *target, const struct proto_list_set_point_size_args *a)
+{
+	struct list *l = target;
+	if (a->size < 1 || a->size > 16)
+		return list_fail(l, PROTO_ERR_VALUE, "point size %u is not 1 to 16", a->size);
+	l->state.point_size = (uint8_t)a->size;
+	return 0;
+}
+
+static int list_set_vertex_format(void *target, const struct proto_list_set_vertex_format_args *a)
+{
+	struct list *l = target;
+	if (!draw_format_size(a->format))
+		return list_fail(l, PROTO_ERR_VALUE, "vertex format %u unknown", a->format);
+	l->state.format = (uint8_t)a->format;
+	return 0;
+}
+
+/* Whether [offset, offset + (count - 1) * stride + size) lies in a buffer
+ * of buffer_size bytes, overflow-safe (count < 2^32, stride <= 65536). */
+static bool range_valid(uint64_t buffer_size, uint64_t offset, uint32_t count, uint32_t stride, uint32_t size)
+{
+	if (offset > buffer_size)
+		return false;
+	if (count == 0)
+		return true;
+	uint64_t last = (uint64_t)(count - 1) * stride; /* < 2^48 */
+	return last <= buffer_size - offset && size <= buffer_size - offset - last;
+}
+
+static struct buffer *draw_buffer(struct list *l, uint32_t id, const char *what)
+{
+	struct buffer *b = idmap_get(&l->base.client->objects, id);
+	if (!b || b->base.type != PROTO_IFACE_BUFFER) {
+		list_fail(l, PROTO_ERR_OBJECT, "%s: %u is not a buffer", what, id);
+		return NULL;
+	}
+	return b;
+}
+
+/* Checks mode, vertex buffer, stride and the vertex range; fills the
+ * vertex half of src. */
+static int vertex_source(struct list *l, uint32_t mode, uint32_t buffer, uint64_t offset, uint32_t count,
+			 uint32_t stride, struct draw_source *src)
 {
 	struct client *c = l->base.client;
-	static const uint32_t multiple[] = { 1, 2, 3 };
-	if (a->mode > PROTO_LIST_MODE_TRIANGLES)
-		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw mode %u unknown", a->mode);
-	struct buffer *b = idmap_get(&c->objects, a->buffer);
-	if (!b || b->base.type != PROTO_IFACE_BUFFER)
-		return client_fail(c, l->base.id, PROTO_ERR_OBJECT, "draw: %u is not a buffer", a->buffer);
-	uint32_t stride = a->stride ? a->stride : 12;
-	if (stride < 12 || stride > 65536)
-		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw: stride %u", a->stride);
-	if (a->count % multiple[a->mode] != 0)
-		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw: %u vertices do not make whole primitives",
-				   a->count);
-	if (!draw_range_valid(b, a->offset, a->count, stride))
-		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw: vertices past the end of buffer %u",
-				   a->buffer);
-	if (a->count > c->server->cfg.max_vertices - c->vertices)
-		return client_fail(c, l->base.id, PROTO_ERR_QUOTA, "more than %llu vertices",
-				   (unsigned long long)c->server->cfg.max_vertices);
-	*out = b;
+	uint32_t last_mode = c->version >= 2 ? PROTO_LIST_MODE_LINE_STRIP : PROTO_LIST_MODE_TRIANGLES;
+	if (mode > last_mode)
+		return list_fail(l, PROTO_ERR_VALUE, "draw mode %u unknown at version %u", mode, c->version);
+	struct buffer *b = draw_buffer(l, buffer, "draw");
+	if (!b)
+		return -EPROTO;
+	uint32_t size = draw_format_size(l->state.format);
+	stride = stride ? stride : size;
+	if (stride < size || stride > 65536)
+		return list_fail(l, PROTO_ERR_VALUE, "draw: stride %u (vertices of %u bytes)", stride, size);
+	if (!range_valid(b->size, offset, count, stride, size))
+		return list_fail(l, PROTO_ERR_VALUE, "draw: vertices past the end of buffer %u", buffer);
+	*src = (struct draw_source){
+		.mode = (enum draw_mode)mode,
+		.format = (enum draw_format)l->state.format,
+		.base = b->map + offset,
+		.stride = stride,
+		.vertex_count = count,
+	};
+	return 0;
+}
+
+/* Builds the draw's data and appends it with the current state. */
+static int list_append_draw(struct list *l, const struct draw_source *src)
+{
+	struct client *c = l->base.client;
+	struct vdata *v;
+	uint32_t bad = 0;
+	switch (draw_build(src, c->server->cfg.max_vertices - c->vertices, &v, &bad)) {
+	case DRAW_OK:
+		break;
+	case DRAW_BAD_COUNT:
+		return list_fail(l, PROTO_ERR_VALUE, "draw: %u vertices do not make whole primitives",
+				 src->index ? src->index_count : src->vertex_count);
+	case DRAW_BAD_INDEX:
+		return list_fail(l, PROTO_ERR_VALUE, "draw_indexed: index %u is not below vertex_count %u", bad,
+				 src->vertex_count);
+	case DRAW_TOO_MANY:
+		return list_fail(l, PROTO_ERR_QUOTA, "more than %llu vertices",
+				 (unsigned long long)c->server->cfg.max_vertices);
+	case DRAW_NO_MEMORY:
+		return list_fail(l, PROTO_ERR_NO_MEMORY, "out of memory");
+	}
+	if (!v)
+		return 0;
+	struct list_draw d = { .data = v, .point_size = l->state.point_size };
+	memcpy(d.transform, l->state.transform, sizeof(d.transform));
+	memcpy(d.rgba, l->state.color, 4);
+	if (draws_append(&l->pending, &d) < 0) {
+		vdata_unref(v);
+		return list_fail(l, PROTO_ERR_NO_MEMORY, "out of memory");
+	}
+	c->vertices += v->count;
+	l->changed = true;
 	return 0;
 }
 
 static int list_draw(void *target, const struct proto_list_draw_args *a)
 {
 	struct list *l = target;
-	struct buffer *b = NULL;
-	int r = draw_check(l, a, &b);
-	if (r < 0 || a->count == 0)
-		return r;
-	uint32_t stride = a->stride ? a->stride : 12;
-	struct vdata *v = malloc(sizeof(*v) + (size_t)a->count * 12);
-	if (!v)
-		return client_fail(l->base.client, l->base.id, PROTO_ERR_NO_MEMORY, "out of memory");
-	v->refs = 1;
-	v->count = a->count;
-	const uint8_t *src = b->map + a->offset;
-	if (stride == 12)
-		memcpy(v->xyz, src, (size_t)a->count * 12);
-	else
-		for (uint32_t i = 0; i < a->count; i++)
-			memcpy(v->xyz + 3 * (size_t)i, src + (size_t)i * stride, 12);
-	struct list_draw d = { .prim = (enum scene_prim)a->mode, .data = v };
-	memcpy(d.transform, l->transform, sizeof(d.transform));
-	memcpy(d.rgba, l->color, 4);
-	if (draws_append(&l->pending, &d) < 0) {
-		vdata_unref(v);
-		return client_fail(l->base.client, l->base.id, PROTO_ERR_NO_MEMORY, "out of memory");
-	}
-	l->base.client->vertices += a->count;
-	l->changed = true;
-	return 0;
+	struct draw_source src;
+	if (vertex_source(l, a->mode, a->buffer, a->offset, a->count, a->stride, &src) < 0)
+		return -EPROTO;
+	return list_append_draw(l, &src);
+}
+
+static int list_draw_indexed(void *target, const struct proto_list_draw_indexed_args *a)
+{
+	struct list *l = target;
+	struct draw_source src;
+	if (vertex_source(l, a->mode, a->vertices, a->offset, a->vertex_count, a->stride, &src) < 0)
+		return -EPROTO;
+	if (a->index_type != PROTO_LIST_INDEX_TYPE_U16 && a->index_type != PROTO_LIST_INDEX_TYPE_U32)
+		return list_fail(l, PROTO_ERR_VALUE, "index type %u unknown", a->index_type);
+	struct buffer *ib = draw_buffer(l, a->indices, "draw_indexed");
+	if (!ib)
+		return -EPROTO;
+	if (a->index_offset % a->index_type)
+		return list_fail(l, PROTO_ERR_VALUE, "draw_indexed: index offset %llu not a multiple of %u",
+				 (unsigned long long)a->index_offset, a->index_type);
+	if (!range_valid(ib->size, a->index_offset, a->index_count, a->index_type, a->index_type))
+		return list_fail(l, PROTO_ERR_VALUE, "draw_indexed: indices past the end of buffer %u", a->indices);
+	src.index = ib->map + a->index_offset;
+	src.index_count = a->index_count;
+	src.index_size = a->index_type;
+	return list_append_draw(l, &src);
 }
 
 const struct proto_list_requests list_requests = {
@@ -308,6 +434,12 @@ const struct proto_list_requests list_requests = {
 	.set_color = list_set_color,
 	.set_transform = list_set_transform,
 	.draw = list_draw,
+	.draw_indexed = list_draw_indexed,
+	.set_vertex_format = list_set_vertex_format,
+	.set_point_size = list_set_point_size,
+	.push = list_push,
+	.pop = list_pop,
+	.multiply_transform = list_multiply_transform,
 };
 
 /* ---- layers ---- */
@@ -321,6 +453,7 @@ int objects_create_layer(struct client *c, uint32_t id)
 	memcpy(y->pending.transform, identity, sizeof(identity));
 	y->pending.visible = true;
 	y->committed = y->pending;
+	y->serial = ++c->server->layer_serial;
 	int r = object_register(c, &y->base, id, PROTO_IFACE_LAYER);
 	if (r < 0) {
 		free(y);
@@ -374,14 +507,94 @@ static int layer_set_visible(void *target, const struct proto_layer_set_visible_
 	return 0;
 }
 
+static int layer_set_priority(void *target, const struct proto_layer_set_priority_args *a)
+{
+	struct layer *y = target;
+	if (a->priority < -1000 || a->priority > 1000)
+		return client_fail(y->base.client, y->base.id, PROTO_ERR_VALUE, "priority %d is not -1000 to 1000",
+				   a->priority);
+	y->pending.priority = a->priority;
+	y->changed = true;
+	return 0;
+}
+
+static int layer_set_exclusive(void *target, const struct proto_layer_set_exclusive_args *a)
+{
+	struct layer *y = target;
+	if (a->exclusive > 1)
+		return client_fail(y->base.client, y->base.id, PROTO_ERR_VALUE, "exclusive must be 0 or 1");
+	y->pending.exclusive = a->exclusive;
+	y->changed = true;
+	return 0;
+}
+
 const struct proto_layer_requests layer_requests = {
 	.destroy = destroy_req,
 	.set_list = layer_set_list,
 	.set_transform = layer_set_transform,
 	.set_visible = layer_set_visible,
+	.set_priority = layer_set_priority,
+	.set_exclusive = layer_set_exclusive,
 };
 
 /* ---- commit and destruction ---- */
+
+static const struct layer_state *layer_after_commit(const struct layer *y)
+{
+	return y->changed ? &y->pending : &y->committed;
+}
+
+static uint64_t list_prims_after_commit(const struct list *l)
+{
+	return l->changed ? l->pending.prims : l->committed.prims;
+}
+
+uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size)
+{
+	const struct config *cfg = &c->server->cfg;
+	uint64_t prims = 0;
+	const struct layer *exclusive = NULL;
+	struct layer *y;
+	link_for_each(y, &c->layers, link) {
+		const struct layer_state *s = layer_after_commit(y);
+		if (!s->visible)
+			continue;
+		if (s->list)
+			prims += list_prims_after_commit(s->list);
+		if (s->exclusive && !exclusive)
+			exclusive = y;
+	}
+	*object = 1;
+	if (prims > cfg->max_primitives) {
+		snprintf(text, size, "the commit would show %llu primitives, over the quota of %llu",
+			 (unsigned long long)prims, (unsigned long long)cfg->max_primitives);
+		return PROTO_DISPLAY_REFUSAL_QUOTA;
+	}
+	if (!exclusive)
+		return 0;
+	*object = exclusive->base.id;
+	if (!client_may_be_exclusive(c)) {
+		snprintf(text, size, "exclusive layers are not granted to this client (policy: %s)",
+			 config_policy_name(cfg->exclusive));
+		return PROTO_DISPLAY_REFUSAL_DENIED;
+	}
+	const struct client *holder = server_exclusive_client(c->server);
+	if (holder && holder != c) {
+		snprintf(text, size, "another client's exclusive layer is showing");
+		return PROTO_DISPLAY_REFUSAL_BUSY;
+	}
+	return 0;
+}
+
+bool layer_exclusive(const struct layer *y)
+{
+	return y->committed.exclusive && y->committed.visible;
+}
+
+bool layer_affects_scene(const struct layer *y)
+{
+	return y->committed.visible && (y->committed.list || y->committed.exclusive);
+}
 
 bool objects_commit(struct client *c)
 {
@@ -424,7 +637,7 @@ void object_destroy(struct object *obj)
 		struct layer *y = (struct layer *)obj;
 		/* A departing client's layers are accounted for by the reaper. */
 		if (!c->dead)
-			server_scene_changed(c->server, y->committed.visible && y->committed.list);
+			server_scene_changed(c->server, layer_affects_scene(y));
 		layer_free(y);
 		break;
 	}

@@ -41,6 +41,7 @@ struct pipeline {
 	 * recognised by pointer identity (snapshot_same()). */
 	struct snapshot snaps[2];
 	struct snapshot *building, *last;
+	uint32_t layers_left_out; /* by the last scene built, for the log */
 	bool have_last;
 	uint64_t last_seq;
 	struct pipeline_stats stats;
@@ -165,6 +166,11 @@ static void start_render(struct pipeline *p)
 		return;
 	}
 	p->dirty = false;
+	if (p->building->layers_left_out != p->layers_left_out) {
+		p->layers_left_out = p->building->layers_left_out;
+		log_info("%u layers left out of the scene: over max-scene-primitives (%llu)", p->layers_left_out,
+			 (unsigned long long)p->srv->cfg.max_scene_primitives);
+	}
 	if (p->have_last && snapshot_same(p->building, p->last)) {
 		skip_unchanged(p);
 		return;

@@ -2,6 +2,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <grp.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -94,6 +95,20 @@ static int open_socket(struct server *srv)
 	return r;
 }
 
+/* Tells a client over the limit why, as far as its socket takes it
+ * without waiting, and closes it. */
+static void refuse_client(int fd, uint32_t clients)
+{
+	struct proto_conn *conn = proto_conn_create(fd, 4096);
+	if (!conn)
+		return; /* fd closed */
+	char text[80];
+	snprintf(text, sizeof(text), "too many clients: %u connected", clients);
+	proto_ev_display_error(conn, 1, 1, PROTO_ERR_TOO_MANY_CLIENTS, text);
+	proto_conn_flush(conn);
+	proto_conn_destroy(conn);
+}
+
 static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
 {
 	struct server *srv = data;
@@ -106,7 +121,7 @@ static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
 		}
 		if (srv->client_count >= srv->cfg.max_clients) {
 			log_warn("refusing a client: %u clients already", srv->client_count);
-			close(cfd);
+			refuse_client(cfd, srv->client_count);
 			continue;
 		}
 		int r = server_add_client(srv, cfd);
@@ -128,7 +143,7 @@ static int reap(sd_event_source *s, void *data)
 		if (!c->dead)
 			continue;
 		struct layer *y;
-		link_for_each(y, &c->layers, link) visible |= y->committed.visible && y->committed.list;
+		link_for_each(y, &c->layers, link) visible |= layer_affects_scene(y);
 		link_remove(&c->link);
 		srv->client_count--;
 		log_debug("client %d disconnected", proto_conn_get_fd(c->conn));
@@ -229,6 +244,18 @@ void server_revolution(struct server *srv, int64_t time_ns)
 	srv->frames_waiting = frames_done(srv, srv->shown_seq, time_ns);
 }
 
+struct client *server_exclusive_client(struct server *srv)
+{
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		if (c->dead)
+			continue;
+		struct layer *y;
+		link_for_each(y, &c->layers, link) if (layer_exclusive(y)) return c;
+	}
+	return NULL;
+}
+
 /* Clients past the handshake and not being dropped. */
 static uint32_t server_active_clients(struct server *srv)
 {
@@ -263,6 +290,48 @@ void server_get_status(struct server *srv, struct server_status *out)
 		.angle_error_p99 = ds.angle_error_p99,
 		.angle_error_max = ds.angle_error_max,
 	};
+}
+
+/* ---- state events ---- */
+
+/* Checks the state 20 times a second and tells version 2 clients of a
+ * change (a flag, or rpm by 1% of nominal). */
+#define STATE_INTERVAL_US 50000
+
+static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
+{
+	struct server *srv = data;
+	struct server_status st;
+	server_get_status(srv, &st);
+	struct client *c;
+	link_for_each(c, &srv->clients, link) client_send_state(c, st.flags, st.rpm, false);
+	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
+	return 0;
+}
+
+static int setup_state_timer(struct server *srv)
+{
+	uint64_t now;
+	sd_event_now(srv->event, CLOCK_MONOTONIC, &now);
+	int r = sd_event_add_time(srv->event, &srv->state_timer, CLOCK_MONOTONIC, now + STATE_INTERVAL_US, 10000,
+				  on_state_timer, srv);
+	if (r >= 0)
+		r = sd_event_source_set_enabled(srv->state_timer, SD_EVENT_ON);
+	return r;
+}
+
+/* The admin group's gid, when it exists. */
+static gid_t admin_gid(const char *name)
+{
+	if (!*name)
+		return (gid_t)-1;
+	struct group *g = getgrnam(name);
+	if (!g) {
+		log_debug("admin group '%s' does not exist: capture and exclusive layers for root and the daemon's user only",
+			  name);
+		return (gid_t)-1;
+	}
+	return g->gr_gid;
 }
 
 /* ---- captures ---- */
@@ -386,6 +455,7 @@ void server_finish(struct server *srv)
 	devices_destroy(srv->dev); /* blanks the projector */
 	sd_event_source_disable_unref(srv->listen_source);
 	sd_event_source_disable_unref(srv->reap_source);
+	sd_event_source_disable_unref(srv->state_timer);
 	if (srv->listen_fd >= 0)
 		close(srv->listen_fd);
 	if (srv->socket_path) {
@@ -419,6 +489,9 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		log_error("renderer: %s", strerror(-r));
 		return r;
 	}
+	srv->admin_gid = admin_gid(cfg->admin_group);
+	if ((r = setup_state_timer(srv)) < 0)
+		return r;
 	if (!listen)
 		return 0;
 	if ((r = open_socket(srv)) < 0)

@@ -5,6 +5,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <sys/types.h>
 
 #include "config.h"
 #include "geometry.h"
@@ -36,6 +37,9 @@ struct server {
 	/* Frame callbacks may wait for a revolution start of shown_seq: of
 	 * commits made after it was swapped in, identical to it. */
 	bool frames_waiting;
+	uint64_t layer_serial; /* layers made so far */
+	gid_t admin_gid;       /* admin-group's gid, or (gid_t)-1 */
+	struct sd_event_source *state_timer; /* pushes state events */
 };
 
 struct server_status {
@@ -67,6 +71,8 @@ void server_finish(struct server *srv);
 int server_add_client(struct server *srv, int fd);
 
 /* For clients and objects. */
+/* The client whose exclusive layer shows, or NULL. */
+struct client *server_exclusive_client(struct server *srv);
 void server_reap_later(struct server *srv);
 /* A commit changed what is visible, or waits for frame callbacks: a new
  * volume is needed. */

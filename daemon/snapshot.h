@@ -11,15 +11,23 @@
 
 struct server;
 struct vdata;
+struct layer;
 
 struct snapshot {
 	struct scene scene;
 	struct scene_draw *draws;
 	struct vdata **data; /* one reference per draw */
 	uint32_t cap;
+	/* Work space: the layers shown, in priority order. */
+	struct layer **layers;
+	uint32_t layer_count, layer_cap;
+	uint32_t layers_left_out; /* over max-scene-primitives */
 };
 
-/* Fills snap from every visible layer of every client. 0 or -ENOMEM. */
+/* Fills snap from every visible layer of every client (of the client
+ * with an exclusive layer only, when one has), highest priority first,
+ * until max-scene-primitives: the layer that would go over and every
+ * later one are left out, whole. 0 or -ENOMEM. */
 int snapshot_build(struct snapshot *snap, struct server *srv);
 /* Ties the frame callbacks of every commit made so far, not yet tied, to
  * volume seq (the first volume showing their state). Returns how many. */

@@ -106,7 +106,7 @@ void lib_callback_remove(struct spindle *sp, struct lib_callback *cb)
 static int on_welcome(void *target, const struct proto_display_welcome_args *a)
 {
 	struct spindle *sp = target;
-	if (a->version == 0 || a->version > SPINDLE_PROTOCOL_VERSION)
+	if (a->version == 0 || a->version > SPINDLE_PROTOCOL_VERSION || a->version > sp->offered)
 		return lib_set_error(sp, EPROTO, "daemon chose protocol version %u", a->version);
 	sp->version = a->version;
 	return 0;
@@ -130,6 +130,7 @@ static int on_device(void *target, const struct proto_display_device_args *a)
 static int on_error(void *target, const struct proto_display_error_args *a)
 {
 	struct spindle *sp = target;
+	sp->error_code = a->code;
 	return lib_set_error(sp, EPROTO, "spindled: error %u on object %u: %s", a->code, a->object, a->message);
 }
 
@@ -159,11 +160,38 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 	return 0;
 }
 
+static int on_state(void *target, const struct proto_display_state_args *a)
+{
+	struct spindle *sp = target;
+	sp->state = (struct spindle_state){
+		.locked = a->flags & PROTO_DISPLAY_STATUS_FLAGS_LOCKED,
+		.blanked = a->flags & PROTO_DISPLAY_STATUS_FLAGS_BLANKED,
+		.projector_present = a->flags & PROTO_DISPLAY_STATUS_FLAGS_PROJECTOR_PRESENT,
+		.rpm = a->rpm,
+	};
+	if (sp->listener && sp->listener->state)
+		sp->listener->state(sp->listener_data, &sp->state);
+	return 0;
+}
+
+static int on_refused(void *target, const struct proto_display_refused_args *a)
+{
+	struct spindle *sp = target;
+	sp->refusals++;
+	sp->last_refusal = a->code;
+	lib_log(sp, "spindled refused a commit (object %u): %s", a->object, a->message);
+	if (sp->listener && sp->listener->refused)
+		sp->listener->refused(sp->listener_data, (enum spindle_refusal)a->code, a->object, a->message);
+	return 0;
+}
+
 static const struct proto_display_events display_events = {
 	.welcome = on_welcome,
 	.device = on_device,
 	.error = on_error,
 	.status = on_status,
+	.state = on_state,
+	.refused = on_refused,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)
@@ -361,6 +389,15 @@ static bool have_info(struct spindle *sp, void *data)
 
 struct spindle *spindle_connect(const char *path)
 {
+	return spindle_connect_version(path, SPINDLE_PROTOCOL_VERSION);
+}
+
+struct spindle *spindle_connect_version(const char *path, uint32_t max_version)
+{
+	if (max_version < 1 || max_version > SPINDLE_PROTOCOL_VERSION) {
+		errno = EINVAL;
+		return NULL;
+	}
 	if (!path) {
 		path = getenv("SPINDLE_SOCKET");
 		if (!path || !*path)
@@ -375,13 +412,14 @@ struct spindle *spindle_connect(const char *path)
 		return NULL;
 	}
 	sp->next_id = 2;
+	sp->offered = max_version;
 	link_init(&sp->objects);
 	sp->conn = proto_conn_create(fd, MAX_OUT);
 	if (!sp->conn) {
 		free(sp);
 		return NULL;
 	}
-	int r = proto_req_display_hello(sp->conn, 1, SPINDLE_PROTOCOL_VERSION);
+	int r = proto_req_display_hello(sp->conn, 1, max_version);
 	if (r == 0)
 		r = lib_wait(sp, have_info, NULL);
 	if (r < 0) {
@@ -428,4 +466,23 @@ int spindle_get_fd(struct spindle *sp)
 const char *spindle_get_error(struct spindle *sp)
 {
 	return sp->dead ? sp->error : NULL;
+}
+
+uint32_t spindle_get_error_code(struct spindle *sp)
+{
+	return sp->error_code;
+}
+
+void spindle_set_listener(struct spindle *sp, const struct spindle_listener *listener, void *data)
+{
+	sp->listener = listener;
+	sp->listener_data = data;
+}
+
+int spindle_get_state(struct spindle *sp, struct spindle_state *out)
+{
+	if (sp->version < 2)
+		return -ENOTSUP;
+	*out = sp->state;
+	return 0;
 }

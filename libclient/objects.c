@@ -89,24 +89,51 @@ static int sealed_memfd(const void *data, size_t size)
 	return fd;
 }
 
+/* Fails a constructor with errno e. */
+static void *fail_null(int e)
+{
+	errno = e;
+	return NULL;
+}
+
 struct spindle_buffer *spindle_buffer_create(struct spindle *sp, const void *data, size_t size)
 {
-	if (size && !data) {
-		errno = EINVAL;
-		return NULL;
-	}
+	if (size && !data)
+		return fail_null(EINVAL);
+	if (sp->version >= 2 && size <= SPINDLE_INLINE_MAX)
+		return spindle_buffer_create_inline(sp, data, size);
+	int fd = sealed_memfd(data, size);
+	if (fd < 0)
+		return fail_null(-fd);
+	struct spindle_buffer *b = spindle_buffer_create_from_fd(sp, fd, size);
+	int e = errno;
+	close(fd);
+	errno = e;
+	return b;
+}
+
+struct spindle_buffer *spindle_buffer_create_inline(struct spindle *sp, const void *data, size_t size)
+{
+	if ((size && !data) || size > SPINDLE_INLINE_MAX)
+		return fail_null(EINVAL);
+	if (sp->version < 2)
+		return fail_null(ENOTSUP);
 	struct spindle_buffer *b = object_new(sp, sizeof(*b));
 	if (!b)
 		return NULL;
-	int fd = sealed_memfd(data, size);
-	if (fd < 0) {
-		lib_object_free(&b->base);
-		errno = -fd;
+	return object_created(&b->base,
+			      proto_req_display_create_buffer_inline(sp->conn, 1, b->base.id, data, (uint32_t)size));
+}
+
+struct spindle_buffer *spindle_buffer_create_from_fd(struct spindle *sp, int fd, uint64_t size)
+{
+	if (fd < 0)
+		return fail_null(EBADF);
+	struct spindle_buffer *b = object_new(sp, sizeof(*b));
+	if (!b)
 		return NULL;
-	}
-	int r = proto_req_display_create_buffer(sp->conn, 1, b->base.id, size, fd);
-	close(fd);
-	return object_created(&b->base, r);
+	/* The writer duplicates fd into the queue: the caller keeps its own. */
+	return object_created(&b->base, proto_req_display_create_buffer(sp->conn, 1, b->base.id, size, fd));
 }
 
 void spindle_buffer_destroy(struct spindle_buffer *buf)
@@ -145,31 +172,74 @@ int spindle_list_set_transform(struct spindle_list *list, const float m[16])
 	return SEND(&list->base, proto_req_list_set_transform(list->base.sp->conn, list->base.id, m));
 }
 
-static int list_draw(struct spindle_list *list, uint32_t mode, struct spindle_buffer *buf, size_t offset,
-		     uint32_t count, uint32_t stride)
+/* Version 2 requests fail locally on a version 1 connection. */
+#define SEND_V2(obj, call) ((obj)->sp->version < 2 && !(obj)->sp->dead ? -ENOTSUP : SEND(obj, call))
+
+int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf,
+		      size_t offset, uint32_t count, uint32_t stride)
 {
 	if (!buf || buf->base.sp != list->base.sp)
 		return -EINVAL;
+	if (mode == SPINDLE_LINE_STRIP && list->base.sp->version < 2)
+		return -ENOTSUP;
 	return SEND(&list->base,
 		    proto_req_list_draw(list->base.sp->conn, list->base.id, mode, buf->base.id, offset, count, stride));
+}
+
+int spindle_list_draw_indexed(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *vertices,
+			      size_t offset, uint32_t vertex_count, uint32_t stride,
+			      struct spindle_buffer *indices, size_t index_offset, uint32_t index_count,
+			      enum spindle_index_type index_type)
+{
+	if (!vertices || !indices || vertices->base.sp != list->base.sp || indices->base.sp != list->base.sp)
+		return -EINVAL;
+	return SEND_V2(&list->base, proto_req_list_draw_indexed(list->base.sp->conn, list->base.id, mode,
+								 vertices->base.id, offset, vertex_count, stride,
+								 indices->base.id, index_offset, index_count,
+								 index_type));
+}
+
+int spindle_list_set_vertex_format(struct spindle_list *list, enum spindle_vertex_format format)
+{
+	return SEND_V2(&list->base, proto_req_list_set_vertex_format(list->base.sp->conn, list->base.id, format));
+}
+
+int spindle_list_set_point_size(struct spindle_list *list, uint32_t size)
+{
+	return SEND_V2(&list->base, proto_req_list_set_point_size(list->base.sp->conn, list->base.id, size));
+}
+
+int spindle_list_push(struct spindle_list *list)
+{
+	return SEND_V2(&list->base, proto_req_list_push(list->base.sp->conn, list->base.id));
+}
+
+int spindle_list_pop(struct spindle_list *list)
+{
+	return SEND_V2(&list->base, proto_req_list_pop(list->base.sp->conn, list->base.id));
+}
+
+int spindle_list_multiply_transform(struct spindle_list *list, const float m[16])
+{
+	return SEND_V2(&list->base, proto_req_list_multiply_transform(list->base.sp->conn, list->base.id, m));
 }
 
 int spindle_list_points(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
 			uint32_t stride)
 {
-	return list_draw(list, PROTO_LIST_MODE_POINTS, buf, offset, count, stride);
+	return spindle_list_draw(list, SPINDLE_POINTS, buf, offset, count, stride);
 }
 
 int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
 		       uint32_t stride)
 {
-	return list_draw(list, PROTO_LIST_MODE_LINES, buf, offset, count, stride);
+	return spindle_list_draw(list, SPINDLE_LINES, buf, offset, count, stride);
 }
 
 int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
 			   uint32_t count, uint32_t stride)
 {
-	return list_draw(list, PROTO_LIST_MODE_TRIANGLES, buf, offset, count, stride);
+	return spindle_list_draw(list, SPINDLE_TRIANGLES, buf, offset, count, stride);
 }
 
 struct spindle_layer *spindle_layer_create(struct spindle *sp)
@@ -203,17 +273,34 @@ int spindle_layer_set_visible(struct spindle_layer *layer, bool visible)
 	return SEND(&layer->base, proto_req_layer_set_visible(layer->base.sp->conn, layer->base.id, visible));
 }
 
-int spindle_request_frame(struct spindle *sp, spindle_frame_func func, void *data)
+int spindle_layer_set_priority(struct spindle_layer *layer, int32_t priority)
+{
+	return SEND_V2(&layer->base, proto_req_layer_set_priority(layer->base.sp->conn, layer->base.id, priority));
+}
+
+int spindle_layer_set_exclusive(struct spindle_layer *layer, bool exclusive)
+{
+	return SEND_V2(&layer->base, proto_req_layer_set_exclusive(layer->base.sp->conn, layer->base.id, exclusive));
+}
+
+struct lib_callback *lib_request_frame(struct spindle *sp, spindle_frame_func func, void *data)
 {
 	struct lib_callback *cb = lib_callback_add(sp, LIB_CALLBACK_FRAME);
 	if (!cb)
-		return -errno;
+		return NULL;
 	cb->func = func;
 	cb->data = data;
 	int r = lib_sent(sp, proto_req_display_frame(sp->conn, 1, cb->id));
-	if (r < 0)
+	if (r < 0) {
 		lib_callback_remove(sp, cb);
-	return r;
+		return fail_null(-r);
+	}
+	return cb;
+}
+
+int spindle_request_frame(struct spindle *sp, spindle_frame_func func, void *data)
+{
+	return lib_request_frame(sp, func, data) ? 0 : -errno;
 }
 
 int spindle_commit(struct spindle *sp)
@@ -237,12 +324,36 @@ static bool frame_arrived(struct spindle *sp, void *data)
 	return ((struct spindle_frame *)data)->time_ns != 0 || ((struct spindle_frame *)data)->volume_seq != 0;
 }
 
+static int refusal_errno(uint32_t code)
+{
+	switch (code) {
+	case SPINDLE_REFUSED_QUOTA: return -EDQUOT;
+	case SPINDLE_REFUSED_DENIED: return -EACCES;
+	case SPINDLE_REFUSED_BUSY: return -EBUSY;
+	}
+	return -EPERM;
+}
+
+/* Only refused commits get an answer, so whether this one was refused is
+ * known once a sync sent after it is answered; refusals of earlier
+ * commits are collected by a roundtrip first. */
 int spindle_commit_and_wait(struct spindle *sp, struct spindle_frame *frame)
 {
 	struct spindle_frame got = { 0 };
-	int r = spindle_request_frame(sp, store_frame, &got);
+	int r = sp->version >= 2 ? spindle_roundtrip(sp) : 0;
+	uint64_t refusals = sp->refusals;
+	struct lib_callback *cb = r == 0 ? lib_request_frame(sp, store_frame, &got) : NULL;
+	if (r == 0 && !cb)
+		r = -errno;
 	if (r == 0)
 		r = spindle_commit(sp);
+	if (r == 0 && sp->version >= 2)
+		r = spindle_roundtrip(sp);
+	if (r == 0 && sp->refusals != refusals) {
+		cb->data = NULL; /* still pending; it fires with a later commit */
+		cb->func = NULL;
+		return refusal_errno(sp->last_refusal);
+	}
 	if (r == 0)
 		r = lib_wait(sp, frame_arrived, &got);
 	if (r == 0 && frame)

@@ -39,12 +39,19 @@ struct lib_object {
 struct spindle {
 	struct proto_conn *conn;
 	uint32_t version;
+	uint32_t offered; /* the version sent in hello */
 	uint32_t next_id;
 	bool have_info;
 	bool dead;
 	struct spindle_device_info info;
 	struct spindle_status status;
 	uint64_t status_serial;
+	struct spindle_state state;  /* version 2: the last state event */
+	uint64_t refusals;           /* refused events received */
+	uint32_t last_refusal;       /* the code of the last one */
+	const struct spindle_listener *listener;
+	void *listener_data;
+	uint32_t error_code;         /* the daemon's fatal error code */
 	struct lib_callback *callbacks;
 	struct link objects;
 	spindle_log_func log;
@@ -58,6 +65,8 @@ int lib_set_error(struct spindle *sp, int err, const char *fmt, ...) __attribute
 /* Zeroed memory for a new object and a fresh id for it; NULL + errno
  * (EPIPE: connection broken, ENOSPC: ids ran out, ENOMEM). */
 void *lib_alloc(struct spindle *sp, size_t size, uint32_t *id);
+/* A frame request: its callback, or NULL + errno. */
+struct lib_callback *lib_request_frame(struct spindle *sp, spindle_frame_func func, void *data);
 /* After queueing a request: maps its result, flushes when much is queued. */
 int lib_sent(struct spindle *sp, int r);
 int lib_flush_blocking(struct spindle *sp);

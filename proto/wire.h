@@ -27,6 +27,7 @@ enum proto_err {
 	PROTO_ERR_QUOTA = 6,
 	PROTO_ERR_VERSION = 7,
 	PROTO_ERR_NO_MEMORY = 8,
+	PROTO_ERR_TOO_MANY_CLIENTS = 9,
 };
 
 /* Why a message was refused: the code and a readable reason. */

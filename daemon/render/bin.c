@@ -178,7 +178,7 @@ static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t fir
 
 /* Records (one or two) of one segment or triangle. */
 static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const float *xyz, int n,
-			 struct stage_prim *out)
+			 const uint8_t rgb[3], struct stage_prim *out)
 {
 	double t[3][3];
 	out[0].key = out[1].key = KEY_NONE;
@@ -190,7 +190,7 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 		for (int j = 0; j < 3; j++)
 			p->v[i][j] = (float)t[i][j];
 	p->nverts = (uint8_t)n;
-	memcpy(p->rgb, d->rgb, 3);
+	memcpy(p->rgb, rgb, 3);
 	uint32_t M = b->images, first, len, bf, bl;
 	if (!prim_arc(b, (const float (*)[3])p->v, n, false, &first, &len)) {
 		prim_key(b, &out[0], 0, M);
@@ -205,21 +205,32 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 	}
 }
 
-static void point_key(const struct bin_set *b, const double p[3], uint32_t k, const uint8_t rgb[3],
+/* The record of a point in volume image k: its voxel, colour and size. */
+static void point_key(const struct bin_set *b, const double p[3], uint32_t k, const struct bin_point *look,
 		      struct stage_point *s)
 {
 	const struct geometry *g = &b->geom;
+	s->rec = *look;
 	s->rec.u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
 	s->rec.v = (uint16_t)geometry_row(g, p[1]);
-	memcpy(s->rec.rgb, rgb, 3);
-	s->rec.pad = 0;
 	s->key = k;
 }
 
-/* A point lights one voxel in each lobe's image (DESIGN.md section 3); on a
- * mirrored device both usually fold onto one volume image. */
+/* scene.h: 0 counts as 1, and sizes are capped. */
+static uint8_t point_size(const struct scene_draw *d)
+{
+	if (d->point_size == 0)
+		return 1;
+	return d->point_size < BIN_POINT_MAX_SIZE ? d->point_size : BIN_POINT_MAX_SIZE;
+}
+
+/* A point lights one voxel (a square of them when larger) in each lobe's
+ * image (DESIGN.md section 3). On a mirrored device both lobes usually fold
+ * onto one volume image and then give one record: the square is placed in
+ * the volume image's own columns, which the mirrored half turn shows
+ * mirrored. */
 static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz,
-			  struct stage_point *out)
+			  const uint8_t rgb[3], struct stage_point *out)
 {
 	double p[3];
 	out[0].key = out[1].key = KEY_NONE;
@@ -237,9 +248,10 @@ static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, c
 	} else {
 		back = (front + N / 2) % N;
 	}
-	point_key(b, p, front % M, d->rgb, &out[0]);
+	struct bin_point look = { .rgb = { rgb[0], rgb[1], rgb[2] }, .size = point_size(d) };
+	point_key(b, p, front % M, &look, &out[0]);
 	if (back % M != front % M)
-		point_key(b, p, back % M, d->rgb, &out[1]);
+		point_key(b, p, back % M, &look, &out[1]);
 }
 
 /* ---- the parallel build ---- */
@@ -253,7 +265,9 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 	return (struct chunk){ items * w / threads, items * (w + 1) / threads };
 }
 
-/* Calls fn for every item of one kind (points or not) in [c.lo, c.hi). */
+/* Runs body for every item i of one kind (points or not) in [c.lo, c.hi),
+ * with d its draw, nv its vertex count, xyz_ its vertices and rgb_ its
+ * colour (the draw's, or the item's own from prim_rgb). */
 #define BASE_(db, points) ((points) ? (db).point : (db).prim)
 #define FOR_ITEMS(b, points, c, d, nv, i, body)                                                  \
 	do {                                                                                     \
@@ -268,7 +282,9 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;                   \
 			uint64_t hi_ = BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi;         \
 			for (uint64_t i = lo_; i < hi_; i++) {                                     \
-				const float *xyz_ = d->xyz + (i - BASE_(base_[di_], points)) * (uint64_t)nv * 3;   \
+				uint64_t j_ = i - BASE_(base_[di_], points);                               \
+				const float *xyz_ = d->xyz + j_ * (uint64_t)nv * 3;                        \
+				const uint8_t *rgb_ = d->prim_rgb ? d->prim_rgb + j_ * 3 : d->rgb;         \
 				body                                                               \
 			}                                                                          \
 		}                                                                                  \
@@ -292,13 +308,13 @@ static void count_job(void *arg, unsigned t)
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	FOR_ITEMS(b, false, c, d, nv, i, {
 		struct stage_prim *s = &w->stage_prims[2 * i];
-		bin_one_prim(b, d, xyz_, nv, s);
+		bin_one_prim(b, d, xyz_, nv, rgb_, s);
 		count_keys(hist, s[0].key, s[1].key);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
 	FOR_ITEMS(b, true, c, d, nv, i, {
 		struct stage_point *s = &w->stage_points[2 * i];
-		bin_one_point(b, d, xyz_, s);
+		bin_one_point(b, d, xyz_, rgb_, s);
 		count_keys(hist + pk, s[0].key, s[1].key);
 	});
 }

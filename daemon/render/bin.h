@@ -26,7 +26,8 @@
 struct pool;
 
 /* A segment (nverts 2) or triangle (3) in volume space, with the volume
- * images it may light: first, first + 1, ..., first + count - 1 (mod M). */
+ * images it may light: first, first + 1, ..., first + count - 1 (mod M).
+ * rgb is its own colour: the draw's, or its entry of the draw's prim_rgb. */
 struct bin_prim {
 	float v[3][3];
 	uint8_t nverts;
@@ -35,11 +36,16 @@ struct bin_prim {
 	uint16_t count;
 };
 
-/* A point, already reduced to the voxel (u, v) of its image. */
+#define BIN_POINT_MAX_SIZE 16
+
+/* A point, already reduced to the voxel (u, v) of its image. It lights the
+ * size x size square of columns u - (size-1)/2 .. u + size/2 and rows
+ * v - (size-1)/2 .. v + size/2 of that volume image, clipped to the image
+ * (bin_point_span()); size is 1..BIN_POINT_MAX_SIZE. */
 struct bin_point {
 	uint16_t u, v;
 	uint8_t rgb[3];
-	uint8_t pad;
+	uint8_t size;
 };
 
 /* A contiguous run of b->prims that image k must look at; entries whose
@@ -80,6 +86,15 @@ int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool);
 /* The runs of prims image k must look at; fills out (2 * BIN_MAX_CLASSES
  * entries at most) and returns how many. */
 unsigned bin_runs(const struct bin_set *b, uint32_t k, struct bin_run *out);
+
+/* The first and last of the n pixels a point of size `size` at pixel i
+ * covers along one axis, clipped to 0 .. n - 1. */
+static inline void bin_point_span(uint32_t i, uint32_t size, uint32_t n, uint32_t *lo, uint32_t *hi)
+{
+	uint32_t before = (size - 1) / 2, after = size / 2;
+	*lo = i > before ? i - before : 0;
+	*hi = i + after < n ? i + after : n - 1;
+}
 
 static inline int bin_prim_in_image(const struct bin_set *b, const struct bin_prim *p, uint32_t k)
 {

@@ -63,6 +63,7 @@
 				       const void *ptr))                                             \
 	X(void, EnableVertexAttribArray, (GLuint i))                                                 \
 	X(void, Viewport, (GLint x, GLint y, GLsizei w, GLsizei h))                                  \
+	X(void, Scissor, (GLint x, GLint y, GLsizei w, GLsizei h))                                   \
 	X(void, Enable, (GLenum cap))                                                                \
 	X(void, Disable, (GLenum cap))                                                               \
 	X(void, ClearColor, (GLfloat r, GLfloat g, GLfloat b, GLfloat a))                           \

@@ -186,7 +186,13 @@ static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"}\n";
 
 /* Points arrive reduced by the binning to the voxel (u, v) of this image:
- * attribute x = u | v << 16, y = rgb. */
+ * attribute x = u | v << 16, y = rgb | size << 24 (struct bin_point). A
+ * point lights the pixels whose centres its size x size square holds: the
+ * square is centred on the voxel's centre when the size is odd, a quarter
+ * pixel past it when even, so that it holds columns u - (size-1)/2 .. u +
+ * size/2 (rows likewise), no edge of it lies on a pixel centre (no
+ * rasterisation tie) and its centre, which decides whether GL keeps a
+ * point at all, stays inside the image. The scissor clips it to the image. */
 static const char gl_point_vs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
 	"precision highp int;\n"
@@ -194,10 +200,11 @@ static const char gl_point_vs[] = GL_SHADER_VERSION
 	"layout(location = 0) in uvec2 a_point;\n"
 	"flat out uint v_rgb;\n"
 	"void main() {\n"
-	"	vec2 uv = vec2(uvec2(a_point.x & 0xffffu, a_point.x >> 16)) + 0.5;\n"
+	"	uint size = a_point.y >> 24;\n"
+	"	vec2 uv = vec2(uvec2(a_point.x & 0xffffu, a_point.x >> 16)) + ((size & 1u) != 0u ? 0.5 : 0.75);\n"
 	"	gl_Position = vec4(uv * u_frame.yz - 1.0, 0.0, 1.0);\n"
-	"	gl_PointSize = 1.0;\n"
-	"	v_rgb = a_point.y;\n"
+	"	gl_PointSize = float(size);\n"
+	"	v_rgb = a_point.y & 0xffffffu;\n"
 	"}\n";
 
 static const char gl_flat_fs[] = GL_SHADER_VERSION

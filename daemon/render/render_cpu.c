@@ -65,12 +65,26 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 	return err;
 }
 
+/* Lights a binned point's square (bin.h), clipped to the image. */
+static void light_point(struct section_canvas *c, const struct bin_point *p)
+{
+	if (p->size == 1) { /* the common case, without the spans */
+		section_pixel(c, p->u, p->v, p->rgb);
+		return;
+	}
+	uint32_t u0, u1, v0, v1;
+	bin_point_span(p->u, p->size, c->geom.width, &u0, &u1);
+	bin_point_span(p->v, p->size, c->geom.height, &v0, &v1);
+	for (uint32_t v = v0; v <= v1; v++)
+		section_span(c, v, u0, u1, p->rgb);
+}
+
 static void raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
-		section_pixel(c, b->points[i].u, b->points[i].v, b->points[i].rgb);
+		light_point(c, &b->points[i]);
 	struct section_wedge wedge;
 	struct bin_run runs[2 * BIN_MAX_CLASSES];
 	unsigned n = bin_runs(b, k, runs);

@@ -10,11 +10,12 @@
  * jittered by a sub-pixel offset fixed per image. Per image, only the runs
  * of primitives binned to it are drawn: faces clipped to the bow tie in the
  * fragment shader; sections with the slice plane, triangle edges and
- * segments clipped to the lobes, as lines and points; the binned points.
- * Colours combine by MAX blending, and fragments mark the tile rows they
- * touch. gl_pack.c then halftones and packs the touched tiles of the batch
- * on the GPU and collects the non-empty ones while the GPU draws the next
- * batch. This file: set-up, upload, drawing, the render and its failures. */
+ * segments clipped to the lobes, as lines and points; the binned points,
+ * as squares of their size. Colours combine by MAX blending, and fragments
+ * mark the tile rows they touch. gl_pack.c then halftones and packs the
+ * touched tiles of the batch on the GPU and collects the non-empty ones
+ * while the GPU draws the next batch. This file: set-up, upload, drawing,
+ * the render and its failures. */
 #include <errno.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -98,6 +99,13 @@ static int check_limits(struct render_gl *r)
 		log_warn("GL renderer: fragment shaders cannot write storage buffers here");
 		return -ENOTSUP;
 	}
+	GLint sizes[2] = { 0, 0 };
+	bool desktop = r->ctx.backend == GL_BACKEND_OSMESA;
+	gl->GetIntegerv(desktop ? GL_POINT_SIZE_RANGE : GL_ALIASED_POINT_SIZE_RANGE, sizes);
+	if (sizes[1] < BIN_POINT_MAX_SIZE) {
+		log_warn("GL renderer: points reach %d pixels here, not %d", sizes[1], BIN_POINT_MAX_SIZE);
+		return -ENOTSUP;
+	}
 	uint32_t fit = (uint32_t)max_tex / g->height;
 	r->batch = r->opts.batch ? r->opts.batch : GL_MAX_BATCH;
 	if (r->batch > fit)
@@ -146,6 +154,8 @@ static int create_objects(struct render_gl *r)
 		return -ENOMEM;
 
 	gl->ClearColor(0, 0, 0, 0);
+	if (r->ctx.backend == GL_BACKEND_OSMESA)
+		gl->Enable(GL_PROGRAM_POINT_SIZE);
 	gl->Enable(GL_BLEND);
 	gl->BlendEquation(GL_MAX);
 	gl->PixelStorei(GL_PACK_ALIGNMENT, 1);
@@ -350,8 +360,15 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 	}
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
+		/* GL keeps a point whose centre is in the viewport whole, and
+		 * need not clip the rest of its square to the viewport
+		 * (llvmpipe does, GPUs often do not): the scissor keeps a
+		 * square at an image edge out of the neighbouring image. */
 		use_program(r, &r->point, &u);
+		gl->Enable(GL_SCISSOR_TEST);
+		gl->Scissor(0, (GLint)(slot * g->height), (GLsizei)g->width, (GLsizei)g->height);
 		gl->DrawArrays(GL_POINTS, (GLint)p0, (GLsizei)(p1 - p0));
+		gl->Disable(GL_SCISSOR_TEST);
 	}
 }
 

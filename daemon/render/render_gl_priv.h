@@ -14,6 +14,17 @@
 _Static_assert(sizeof(struct bin_prim) == 11 * 4, "bin_prim is 9 vertex words and 2 more");
 _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
 
+/* Desktop OpenGL only (OSMesa): there a vertex shader's gl_PointSize counts
+ * only while GL_PROGRAM_POINT_SIZE is enabled, and the point size range is
+ * GL_POINT_SIZE_RANGE; OpenGL ES always takes gl_PointSize and names the
+ * range GL_ALIASED_POINT_SIZE_RANGE. */
+#ifndef GL_PROGRAM_POINT_SIZE
+#define GL_PROGRAM_POINT_SIZE 0x8642
+#endif
+#ifndef GL_POINT_SIZE_RANGE
+#define GL_POINT_SIZE_RANGE 0x0B12
+#endif
+
 #define GL_MAX_BATCH 16
 #define GL_PRIM_TEXELS 3 /* RGBA32UI texels per primitive (gl_shaders.h) */
 /* u_frame.w of the section program: which of a primitive's 16 vertex

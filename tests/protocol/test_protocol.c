@@ -37,11 +37,20 @@ static void test_device_info(void)
 	const struct spindle_device_info *info = spindle_get_device_info(sp);
 	CHECK(info->width == W && info->height == H && info->images_per_rev == 128 && info->mirrored);
 	CHECK(info->half_height == 1.0f && info->rpm == 1800.0f);
-	CHECK(spindle_get_version(sp) == 1);
+	CHECK(spindle_get_version(sp) == SPINDLE_PROTOCOL_VERSION);
 	struct spindle_status st;
 	CHECK(spindle_get_status(sp, &st) == 0);
 	CHECK(st.clients == 1 && st.projector_present);
 	CHECK(spindle_roundtrip(sp) == 0);
+	/* Version 2 pushes the state at welcome. */
+	struct spindle_state state;
+	CHECK(spindle_get_state(sp, &state) == 0 && state.projector_present);
+	/* An older client gets the older version, and no state. */
+	struct spindle *old = spindle_connect_version(d.socket, 1);
+	CHECK(old && spindle_get_version(old) == 1);
+	CHECK(spindle_get_state(old, &state) == -ENOTSUP);
+	CHECK(spindle_roundtrip(old) == 0);
+	spindle_disconnect(old);
 	spindle_disconnect(sp);
 	daemon_stop(&d);
 }

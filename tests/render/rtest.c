@@ -92,6 +92,91 @@ void rtest_wall(struct rtest_mesh *m, double a, double b)
 	rtest_mesh_add(m, -a, b, 0);
 }
 
+/* Pixel targets of rtest_edge_points(): n >= 0 is pixel n from the low
+ * edge, -n pixel W - n (or H - n), OUT_LO and OUT_HI lie beyond the image,
+ * MID the middle pixel. */
+enum { OUT_LO = -1000, OUT_HI = 1000, MID = 2000 };
+
+static double target_s(const struct geometry *g, int u)
+{
+	uint32_t w = g->width;
+	if (u == OUT_LO || u == OUT_HI)
+		return u == OUT_LO ? -1.3 : 1.3;
+	uint32_t px = u == MID ? w / 2 : u < 0 ? w - (uint32_t)-u : (uint32_t)u;
+	return (px + 0.5) * 2.0 / w - 1.0;
+}
+
+static double target_y(const struct geometry *g, int v)
+{
+	uint32_t h = g->height;
+	double hh = g->half_height;
+	if (v == OUT_LO || v == OUT_HI)
+		return v == OUT_LO ? 1.3 * hh : -1.3 * hh;
+	uint32_t px = v == MID ? h / 2 : v < 0 ? h - (uint32_t)-v : (uint32_t)v;
+	return hh - (px + 0.5) * 2.0 * hh / h;
+}
+
+uint32_t rtest_edge_points(const struct geometry *g, struct rtest_mesh *m)
+{
+	static const int at[][2] = {
+		{ 0, 0 }, { -1, 0 }, { 0, -1 }, { -1, -1 }, /* the corners */
+		{ OUT_LO, OUT_LO }, { OUT_HI, OUT_HI }, { OUT_LO, OUT_HI }, { OUT_HI, OUT_LO },
+		{ 1, 1 }, { 2, -2 }, { -2, 2 }, { 3, -3 }, { -3, 3 }, { 6, 7 }, { 7, -8 }, { -7, 8 },
+		{ -8, -7 }, { 8, -9 }, { -9, 6 },
+		{ MID, MID }, { MID, 0 }, { 0, MID }, { -1, MID }, { MID, -1 },
+	};
+	uint32_t n = sizeof(at) / sizeof(at[0]);
+	if (n > g->images_per_rev / 2)
+		n = g->images_per_rev / 2;
+	for (uint32_t j = 0; j < n; j++) {
+		double th = geometry_image_angle(g, j), s = target_s(g, at[j][0]);
+		rtest_mesh_add(m, s * cos(th), target_y(g, at[j][1]), s * sin(th));
+	}
+	/* On the axis: azimuth 0 (image 0, and N/2 unmirrored), column W/2. */
+	rtest_mesh_add(m, 0, target_y(g, 5), 0);
+	return n + 1;
+}
+
+/* floor(f) clamped to 0 .. n - 1 (DESIGN.md: "both clamped"). */
+static uint32_t design_index(double f, uint32_t n)
+{
+	double i = floor(f);
+	return i < 0 ? 0 : i > n - 1 ? n - 1 : (uint32_t)i;
+}
+
+/* round(phi / D) mod N, rounding ties away from zero as geometry.c does. */
+static uint32_t design_image(const struct geometry *g, double phi)
+{
+	long n = (long)g->images_per_rev, k = lround(phi / (2 * M_PI / n)) % n;
+	return (uint32_t)(k < 0 ? k + n : k);
+}
+
+void rtest_point_voxels(const struct geometry *g, const float p[3], struct rtest_voxel out[2])
+{
+	double phi = atan2(p[2], p[0]), h = g->half_height;
+	uint32_t lobes[2] = { design_image(g, phi), design_image(g, phi - M_PI) };
+	for (int i = 0; i < 2; i++) {
+		uint32_t k = lobes[i] % geometry_images_per_volume(g);
+		double th = 2 * M_PI * k / g->images_per_rev;
+		double s = p[0] * cos(th) + p[2] * sin(th);
+		out[i] = (struct rtest_voxel){ k, design_index((s + 1) / 2 * g->width, g->width),
+					       design_index((h - p[1]) / (2 * h) * g->height, g->height) };
+	}
+}
+
+void rtest_colour(uint32_t i, uint8_t out[3])
+{
+	out[0] = (uint8_t)(i * 73 + 11);
+	out[1] = (uint8_t)(i * 151 + 97);
+	out[2] = (uint8_t)(i * 29 + 200);
+}
+
+void rtest_saturated(uint32_t i, uint8_t out[3])
+{
+	for (int c = 0; c < 3; c++)
+		out[c] = ((i % 7 + 1) >> c) & 1 ? 255 : 0;
+}
+
 void rtest_identity(float t[16])
 {
 	memset(t, 0, 16 * sizeof(float));

@@ -34,6 +34,29 @@ void rtest_disk(struct rtest_mesh *m, double r, double y, int segments);
 /* Two triangles of the rectangle |x| <= a, |y| <= b in the plane z = 0. */
 void rtest_wall(struct rtest_mesh *m, double a, double b);
 
+/* Points at, next to and beyond (clamped) the edges and corners of the
+ * image, and beside the axis: each on the plane of its own image angle
+ * 2 pi j / N (j < N/2), at the centre of the pixel it aims at, so that no
+ * two lie in one volume image and none lies on a column, row or image
+ * boundary; and one on the axis (image 0, column W/2, row 5). Returns how
+ * many were added. */
+uint32_t rtest_edge_points(const struct geometry *g, struct rtest_mesh *m);
+
+/* The voxels of point p in its two images, lobe s >= 0 then s < 0
+ * (DESIGN.md section 3: image round(phi / D) mod N, folded onto the volume's
+ * images when mirrored; column of s = p . d_k in volume image k, row of y),
+ * computed from the formulas, not with common/geometry.c. On a mirrored
+ * device the two are usually the same voxel. */
+struct rtest_voxel {
+	uint32_t k, u, v;
+};
+void rtest_point_voxels(const struct geometry *g, const float p[3], struct rtest_voxel out[2]);
+
+/* Colour i of a fixed spread of values, dark and bright; and the seven
+ * saturated colours (channels 0 or 255), one channel pattern each. */
+void rtest_colour(uint32_t i, uint8_t out[3]);
+void rtest_saturated(uint32_t i, uint8_t out[3]);
+
 /* A draw of m with the identity transform. */
 struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
 			     uint8_t g, uint8_t b);

@@ -1,0 +1,80 @@
+/* Building a draw's vertex data from a client's buffers: vertex formats,
+ * indices, line strips and per-vertex colour. The result is what the
+ * renderers take (scene.h): plain points, segments or triangles, with one
+ * colour per primitive when the vertices carry colours. Everything is
+ * copied out of the client's memory once, and checked on the copy, so
+ * nothing the client writes later can change it. */
+#ifndef SPINDLE_DRAW_H
+#define SPINDLE_DRAW_H
+
+#include <stdint.h>
+
+#include "scene.h"
+
+/* Vertex data of one draw; shared by the pending and committed states
+ * and by scene snapshots, hence counted. Main thread only. */
+struct vdata {
+	unsigned refs;
+	enum scene_prim prim;
+	uint32_t count;     /* vertices in xyz */
+	uint32_t prims;     /* primitives they make */
+	uint8_t *prim_rgb;  /* NULL, or 3 bytes per primitive (alpha applied) */
+	float xyz[];
+};
+
+struct vdata *vdata_ref(struct vdata *v);
+void vdata_unref(struct vdata *v);
+
+/* Vertex layouts: the protocol's list.vertex_format values. */
+enum draw_format {
+	DRAW_XYZ = 0,
+	DRAW_XYZ_RGBA8 = 1,
+	DRAW_XYZ_RGBA_FLOAT = 2,
+};
+
+/* Draw modes: the protocol's list.mode values. */
+enum draw_mode {
+	DRAW_POINTS = 0,
+	DRAW_LINES = 1,
+	DRAW_TRIANGLES = 2,
+	DRAW_LINE_STRIP = 3,
+};
+
+/* out = a * b, column-major 4x4 (out may not alias a or b). */
+void mat4_mul(float out[16], const float a[16], const float b[16]);
+
+/* Bytes of one vertex of a format (0: unknown format). */
+uint32_t draw_format_size(uint32_t format);
+
+/* Where a draw reads: vertex i at base + i * stride (i < vertex_count),
+ * and, when index is not NULL, the index_count indices there, of
+ * index_size bytes (2 or 4), picking the vertices in order. The caller
+ * has checked that every byte named lies inside its buffer. */
+struct draw_source {
+	enum draw_mode mode;
+	enum draw_format format;
+	const uint8_t *base;
+	uint32_t stride;
+	uint32_t vertex_count;
+	const uint8_t *index;
+	uint32_t index_count;
+	uint32_t index_size;
+};
+
+/* Why a draw was refused. */
+enum draw_error {
+	DRAW_OK = 0,
+	DRAW_BAD_COUNT,   /* the vertices do not make whole primitives */
+	DRAW_BAD_INDEX,   /* an index at or past vertex_count */
+	DRAW_TOO_MANY,    /* more vertices than max_vertices */
+	DRAW_NO_MEMORY,
+};
+
+/* Builds the vertex data of a draw, at most max_vertices vertices after
+ * expansion (strips to segments, colour subdivision). On DRAW_BAD_INDEX,
+ * *bad_index gets the position of the first bad index. *out is NULL for a
+ * draw of no primitives. */
+enum draw_error draw_build(const struct draw_source *src, uint64_t max_vertices, struct vdata **out,
+			   uint32_t *bad_index);
+
+#endif
