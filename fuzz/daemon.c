@@ -26,6 +26,8 @@ static const char *const base_config[] = {
 	"max-objects", "64",
 	"max-buffer-bytes", "1048576",
 	"max-vertices", "4096",
+	"max-primitives", "2048",
+	"max-scene-primitives", "3072",
 	NULL,
 };
 

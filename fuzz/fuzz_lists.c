@@ -8,7 +8,9 @@
  * and objects within the quotas, and equal to the sums of what its lists
  * and buffers hold), and that no fd is left open after the input.
  *
- * Input: version: u8 (1 + v % PROTO_VERSION), then requests until the
+ * Input: v: u8 (version 1 + (v & 15) % PROTO_VERSION; exclusive layers
+ * policy (v >> 4) % 3: none, admin (the fuzzer's user is), any), then
+ * requests until the
  * input ends: op: u8 (op % OPS, below), then its arguments. Object ids are
  * one byte each (2 + b % 16), shared by buffers, lists and layers; numbers
  * are fuzz_num() / fuzz_num64(); floats one byte each (read_float()),
@@ -45,6 +47,8 @@ enum op {
 	OP_LAYER,         /* layer id, list id (0: none): create if new, set_list */
 	OP_COMMIT,        /* - */
 	OP_RAW,           /* object id, opcode u8, len u8, len bytes: any message */
+	OP_LAYER_STATE,   /* layer, what u8 % 4: visible num, transform matrix,
+			   * priority (int32_t)num, exclusive num */
 	OPS
 };
 
@@ -200,6 +204,23 @@ static int op_layer(struct lists *s, struct fuzz_input *in)
 	return proto_req_layer_set_list(s->conn, layer, list ? 2 + list % 16u : 0);
 }
 
+static int op_layer_state(struct lists *s, struct fuzz_input *in)
+{
+	uint32_t layer = read_id(in);
+	float m[16];
+	switch (fuzz_u8(in) % 4) {
+	case 0:
+		return proto_req_layer_set_visible(s->conn, layer, fuzz_num(in));
+	case 1:
+		read_matrix(in, m);
+		return proto_req_layer_set_transform(s->conn, layer, m);
+	case 2:
+		return proto_req_layer_set_priority(s->conn, layer, (int32_t)fuzz_num(in));
+	default:
+		return proto_req_layer_set_exclusive(s->conn, layer, fuzz_num(in));
+	}
+}
+
 static int op_raw(struct lists *s, struct fuzz_input *in)
 {
 	struct proto_writer w;
@@ -261,6 +282,8 @@ static int send_op(struct lists *s, struct fuzz_input *in)
 		return op_layer(s, in);
 	case OP_COMMIT:
 		return proto_req_display_commit(s->conn, 1);
+	case OP_LAYER_STATE:
+		return op_layer_state(s, in);
 	case OP_RAW:
 	case OPS:
 		break;
@@ -275,15 +298,18 @@ static void check_client(const struct client *c, const struct config *cfg)
 	uint32_t objects = 0;
 	const struct list *l;
 	link_for_each(l, &c->lists, link) {
-		uint64_t v = 0;
+		uint64_t v = 0, p = 0;
 		for (uint32_t i = 0; i < l->pending.count; i++) {
-			if (!l->pending.draws[i].data->count)
+			const struct vdata *d = l->pending.draws[i].data;
+			if (!d->count || !d->prims)
 				fuzz_fail("list %u: an empty draw", l->base.id);
-			v += l->pending.draws[i].data->count;
+			v += d->count;
+			p += d->prims;
 		}
-		if (v != l->pending.vertices)
-			fuzz_fail("list %u: %llu vertices counted, %llu held", l->base.id,
-				  (unsigned long long)l->pending.vertices, (unsigned long long)v);
+		if (v != l->pending.vertices || p != l->pending.prims)
+			fuzz_fail("list %u: %llu vertices and %llu primitives counted, %llu and %llu held", l->base.id,
+				  (unsigned long long)l->pending.vertices, (unsigned long long)l->pending.prims,
+				  (unsigned long long)v, (unsigned long long)p);
 		vertices += v;
 	}
 	for (uint32_t i = 0; i < c->objects.cap; i++) {
@@ -331,8 +357,14 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	struct fuzz_input in = { data, size, 0 };
 	int fds_before = fuzz_count_fds();
-	struct lists s = { .version = 1 + fuzz_u8(&in) % PROTO_VERSION };
-	fuzz_server_start(&s.fs, NULL);
+	uint8_t v = fuzz_u8(&in);
+	struct lists s = { .version = 1 + (v & 15u) % PROTO_VERSION };
+	static const char *const policies[][3] = {
+		{ "exclusive", "none", NULL },
+		{ "exclusive", "admin", NULL },
+		{ "exclusive", "any", NULL },
+	};
+	fuzz_server_start(&s.fs, policies[(v >> 4) % 3]);
 	int sock = fuzz_server_connect(&s.fs);
 	/* The senders write on a connection of their own over a duplicate;
 	 * sock reads (and drops) the events. */

@@ -190,7 +190,7 @@ def session_seeds():
         + msg(3, "list", "draw", 1, 2, 12, 2, 0), [fd_desc(MEMFD_SEALED, 24, AXIS)])
     s["error-bad-size"] = chunk(hello() + struct.pack("<IHHI", 1, 7, 0, 13))
     s["error-fd-missing"] = chunk(hello() + msg(1, "display", "create_buffer", 2, 36, 0))
-    s["error-too-many-fds"] = chunk(hello()) + chunk(b"\0" * 4, [fd_desc(DEV_NULL, 0)] * 7, no_run=True) * 5
+    s["error-too-many-fds"] = chunk(hello()) + chunk(b"\0", [fd_desc(DEV_NULL, 0)] * 7, no_run=True) * 5
     s["error-transform"] = chunk(hello() + msg(1, "display", "create_list", 2)
                                  + msg(2, "list", "set_transform", [float("nan")] * 16))
     s["error-mid-message"] = chunk(hello() + msg(1, "display", "create_list", 2)[:10], close=True)
@@ -201,7 +201,13 @@ def session_seeds():
 
 (OP_BUFFER, OP_BUFFER_INLINE, OP_LIST, OP_DESTROY, OP_CLEAR, OP_COLOR, OP_TRANSFORM, OP_DRAW,
  OP_DRAW_INDEXED, OP_FORMAT, OP_POINT_SIZE, OP_PUSH, OP_POP, OP_MULTIPLY, OP_LAYER, OP_COMMIT,
- OP_RAW) = range(17)
+ OP_RAW, OP_LAYER_STATE) = range(18)
+POLICY_NONE, POLICY_ADMIN, POLICY_ANY = range(3)
+
+
+def start(version, policy=POLICY_ADMIN):
+    """The first byte: version and exclusive policy."""
+    return bytes([(version - 1) | policy << 4])
 
 
 def num(v):
@@ -217,8 +223,10 @@ def oid(i):
     return bytes([i - 2])
 
 
-def op_buffer(i, data, kind=MEMFD_SEALED):
-    return bytes([OP_BUFFER]) + oid(i) + struct.pack("<BH", kind, len(data)) + num64(0) + bytes([len(data)]) + data
+def op_buffer(i, data, kind=MEMFD_SEALED, size=None):
+    """A memfd of size bytes (default len(data)): data repeated."""
+    size = len(data) if size is None else size
+    return bytes([OP_BUFFER]) + oid(i) + struct.pack("<BH", kind, size) + num64(0) + bytes([len(data)]) + data
 
 
 def op_inline(i, data):
@@ -241,8 +249,8 @@ def op_matrix(op, lst, kind, floats=()):
 
 def lists_seeds():
     s = {}
-    v2 = bytes([VERSION - 1])
-    v1 = bytes([0])
+    v2 = start(2, POLICY_ANY)
+    v1 = start(1)
     def show(lst):
         """Layer 15 showing list lst, and commit."""
         return bytes([OP_LAYER]) + oid(15) + bytes([lst - 2]) + bytes([OP_COMMIT])
@@ -273,6 +281,22 @@ def lists_seeds():
                      + op_matrix(OP_MULTIPLY, 3, 2, (0.5, 0.5, 0.5)) + bytes([OP_POINT_SIZE]) + oid(3) + num(4)
                      + op_draw(3, 0, 2, 0, 2) + bytes([OP_POP]) + oid(3) + op_draw(3, 1, 2, 0, 2)
                      + bytes([OP_POP]) + oid(3))
+    def layer(y, lst, *state):
+        """Layer y showing list lst, then (what, value bytes) pairs."""
+        out = bytes([OP_LAYER]) + oid(y) + bytes([lst - 2])
+        for what, value in state:
+            out += bytes([OP_LAYER_STATE]) + oid(y) + bytes([what]) + value
+        return out
+    s["v2-layers"] = (v2 + op_inline(2, TRIANGLE) + bytes([OP_LIST]) + oid(3) + op_draw(3, 2, 2, 0, 3)
+                      + layer(4, 3, (2, num(0xfffffff6))) + layer(5, 3, (2, num(7)), (1, bytes([1, 130, 124, 124])))
+                      + layer(6, 3, (3, num(1))) + bytes([OP_COMMIT])
+                      + bytes([OP_LAYER_STATE]) + oid(6) + bytes([0]) + num(0) + bytes([OP_COMMIT]))
+    s["v2-exclusive-denied"] = (start(2, POLICY_NONE) + op_inline(2, AXIS) + bytes([OP_LIST]) + oid(3)
+                                + op_draw(3, 0, 2, 0, 2) + layer(4, 3, (3, num(1))) + bytes([OP_COMMIT]))
+    # 1500 points shown by two layers: over max-primitives (2048), refused.
+    s["v2-refused"] = (v2 + op_buffer(2, AXIS, size=18000) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 1500)
+                       + layer(4, 3) + layer(5, 3) + bytes([OP_COMMIT]) + bytes([OP_DESTROY]) + oid(5)
+                       + bytes([OP_COMMIT]))
     s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
     s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
     return s
