@@ -291,6 +291,33 @@ static int send_op(struct lists *s, struct fuzz_input *in)
 	return op_raw(s, in);
 }
 
+static int by_address(const void *a, const void *b)
+{
+	uintptr_t x = (uintptr_t) * (const struct vdata *const *)a, y = (uintptr_t) * (const struct vdata *const *)b;
+	return x < y ? -1 : x > y;
+}
+
+/* Vertices the client's lists hold, pending and committed, each vertex
+ * data counted once (the two share it after a commit). */
+static uint64_t held_vertices(const struct client *c)
+{
+	const struct vdata *held[2048];
+	size_t n = 0;
+	const struct list *l;
+	link_for_each(l, &c->lists, link) {
+		for (uint32_t i = 0; i < l->pending.count && n < 2048; i++)
+			held[n++] = l->pending.draws[i].data;
+		for (uint32_t i = 0; i < l->committed.count && n < 2048; i++)
+			held[n++] = l->committed.draws[i].data;
+	}
+	qsort(held, n, sizeof(*held), by_address);
+	uint64_t v = 0;
+	for (size_t i = 0; i < n; i++)
+		if (i == 0 || held[i] != held[i - 1])
+			v += held[i]->count;
+	return v;
+}
+
 /* The client's accounting against what its objects hold. */
 static void check_client(const struct client *c, const struct config *cfg)
 {
@@ -325,6 +352,17 @@ static void check_client(const struct client *c, const struct config *cfg)
 	if (vertices != c->vertices || vertices > cfg->max_vertices)
 		fuzz_fail("client: %llu vertices counted, %llu held, quota %llu", (unsigned long long)c->vertices,
 			  (unsigned long long)vertices, (unsigned long long)cfg->max_vertices);
+	/* The protocol counts "vertices held by lists, pending and
+	 * committed" against max-vertices; the daemon counts pending ones
+	 * only, so a client holds up to twice its quota (reported; the
+	 * seed lists/quota-held-twice shows it). Checked on request until
+	 * that is settled. */
+	static int strict = -1;
+	if (strict < 0)
+		strict = getenv("SPINDLE_FUZZ_HELD_VERTICES") != NULL;
+	if (strict && held_vertices(c) > cfg->max_vertices)
+		fuzz_fail("client: %llu vertices held, pending and committed, quota %llu",
+			  (unsigned long long)held_vertices(c), (unsigned long long)cfg->max_vertices);
 	if (bytes != c->buffer_bytes || bytes > cfg->max_buffer_bytes)
 		fuzz_fail("client: %llu buffer bytes counted, %llu held, quota %llu",
 			  (unsigned long long)c->buffer_bytes, (unsigned long long)bytes,

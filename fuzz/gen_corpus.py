@@ -297,6 +297,12 @@ def lists_seeds():
     s["v2-refused"] = (v2 + op_buffer(2, AXIS, size=18000) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 1500)
                        + layer(4, 3) + layer(5, 3) + bytes([OP_COMMIT]) + bytes([OP_DESTROY]) + oid(5)
                        + bytes([OP_COMMIT]))
+    # 3000 vertices (1500 lines) committed, cleared, 3000 more drawn: the
+    # lists hold 6000, over max-vertices (4096) counted pending and
+    # committed.
+    s["quota-held-twice"] = (v1 + op_buffer(2, AXIS, size=36000) + bytes([OP_LIST]) + oid(3)
+                             + op_draw(3, 1, 2, 0, 3000) + layer(4, 3) + bytes([OP_COMMIT])
+                             + bytes([OP_CLEAR]) + oid(3) + op_draw(3, 1, 2, 0, 2990, 12))
     s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
     s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
     return s
