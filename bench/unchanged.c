@@ -12,142 +12,24 @@
  *
  * Usage: unchanged [--seconds S] [--header] SPINDLED|SOCKET */
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <poll.h>
-#include <signal.h>
 #include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/socket.h>
-#include <sys/stat.h>
-#include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
 
+#include "daemon.h"
 #include "spindle/spindle.h"
 
 #define TORUS_RINGS 64
 #define TORUS_SIDES 32 /* 2 * 64 * 32 = 4096 triangles */
 
-struct daemon {
-	pid_t pid;
-	bool ours; /* started here: stop it at the end */
-	char dir[64];
-	char socket[128];
-};
-
-static int64_t mono_ns(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
-
-static void sleep_ms(int ms)
-{
-	struct timespec ts = { ms / 1000, (ms % 1000) * 1000000L };
-	nanosleep(&ts, NULL);
-}
+static const char prog[] = "unchanged";
 
 static void die(const char *what, int err)
 {
-	fprintf(stderr, "unchanged: %s: %s\n", what, strerror(err));
-	exit(1);
-}
-
-/* ---- the daemon ---- */
-
-static bool is_socket(const char *path)
-{
-	struct stat st;
-	return stat(path, &st) == 0 && S_ISSOCK(st.st_mode);
-}
-
-static void start_daemon(struct daemon *d, const char *exe)
-{
-	snprintf(d->dir, sizeof(d->dir), "/tmp/spindle-bench-XXXXXX");
-	if (!mkdtemp(d->dir))
-		die("mkdtemp", errno);
-	snprintf(d->socket, sizeof(d->socket), "%s/spindle.sock", d->dir);
-	d->ours = true;
-	d->pid = fork();
-	if (d->pid < 0)
-		die("fork", errno);
-	if (d->pid > 0)
-		return;
-	char log[128];
-	snprintf(log, sizeof(log), "%s/spindled.log", d->dir);
-	int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-	if (fd >= 0)
-		dup2(fd, 2);
-	unsetenv("LISTEN_FDS");
-	execl(exe, exe, "--device", "sim", "--profile", "perspecta", "--socket", d->socket, "--config", "/dev/null",
-	      (char *)NULL);
-	_exit(127);
-}
-
-/* Connects, waiting up to 10 s for a daemon we started to listen. */
-static struct spindle *connect_daemon(struct daemon *d)
-{
-	for (int i = 0; i < 1000; i++) {
-		struct spindle *sp = spindle_connect(d->socket);
-		if (sp || !d->ours)
-			return sp;
-		if (waitpid(d->pid, NULL, WNOHANG) != 0) {
-			fprintf(stderr, "unchanged: spindled exited; see %s/spindled.log\n", d->dir);
-			exit(1);
-		}
-		sleep_ms(10);
-	}
-	return NULL;
-}
-
-/* The daemon's pid, from the socket's peer credentials. */
-static pid_t peer_pid(struct spindle *sp)
-{
-	struct ucred cred;
-	socklen_t len = sizeof(cred);
-	if (getsockopt(spindle_get_fd(sp), SOL_SOCKET, SO_PEERCRED, &cred, &len) < 0)
-		die("SO_PEERCRED", errno);
-	return cred.pid;
-}
-
-static void stop_daemon(struct daemon *d)
-{
-	if (!d->ours)
-		return;
-	int status = 0;
-	kill(d->pid, SIGTERM);
-	waitpid(d->pid, &status, 0);
-	if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-		fprintf(stderr, "unchanged: spindled did not exit cleanly; see %s/spindled.log\n", d->dir);
-		return;
-	}
-	char path[128];
-	snprintf(path, sizeof(path), "%s/spindled.log", d->dir);
-	unlink(path);
-	rmdir(d->dir);
-}
-
-/* utime + stime of every thread of pid, in seconds. */
-static double cpu_seconds(pid_t pid)
-{
-	char path[64], buf[1024];
-	snprintf(path, sizeof(path), "/proc/%d/stat", (int)pid);
-	FILE *f = fopen(path, "r");
-	if (!f)
-		die(path, errno);
-	size_t n = fread(buf, 1, sizeof(buf) - 1, f);
-	fclose(f);
-	buf[n] = 0;
-	/* Fields after the command name: state is field 3, utime 14, stime 15. */
-	const char *p = strrchr(buf, ')');
-	unsigned long long utime, stime;
-	if (!p || sscanf(p + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %llu %llu", &utime, &stime) != 2)
-		die("parsing /proc/PID/stat", EINVAL);
-	return (double)(utime + stime) / (double)sysconf(_SC_CLK_TCK);
+	bench_die(prog, what, err);
 }
 
 /* ---- the scene ---- */
@@ -219,8 +101,8 @@ static void on_frame(void *data, const struct spindle_frame *frame)
 /* Waits up to 2 s for pf. */
 static bool wait_frame(struct spindle *sp, struct pending_frame *pf)
 {
-	int64_t deadline = mono_ns() + 2000000000;
-	while (!pf->done && mono_ns() < deadline) {
+	int64_t deadline = bench_mono_ns() + 2000000000;
+	while (!pf->done && bench_mono_ns() < deadline) {
 		struct pollfd p = { spindle_get_fd(sp), POLLIN, 0 };
 		if (spindle_flush(sp) < 0 || poll(&p, 1, 100) < 0 || spindle_dispatch(sp) < 0)
 			return false;
@@ -232,13 +114,13 @@ static bool wait_frame(struct spindle *sp, struct pending_frame *pf)
 static void commit_once(struct spindle *sp, struct commit_phase *ph)
 {
 	struct pending_frame pf = { 0 };
-	int64_t t0 = mono_ns();
+	int64_t t0 = bench_mono_ns();
 	if (spindle_request_frame(sp, on_frame, &pf) < 0 || spindle_commit(sp) < 0)
 		die("commit", EPIPE);
 	ph->commits++;
 	if (!wait_frame(sp, &pf))
 		return;
-	int64_t latency = mono_ns() - t0;
+	int64_t latency = bench_mono_ns() - t0;
 	ph->answered++;
 	ph->early += (int64_t)pf.frame.time_ns < t0;
 	if (latency > ph->max_latency_ns)
@@ -255,20 +137,20 @@ static void get_status(struct spindle *sp, struct spindle_status *st)
 static void run_commits(struct spindle *sp, pid_t pid, double seconds, struct commit_phase *ph)
 {
 	get_status(sp, &ph->before);
-	double cpu0 = cpu_seconds(pid);
-	int64_t start = mono_ns(), end = start + (int64_t)(seconds * 1e9);
-	while (mono_ns() < end)
+	double cpu0 = bench_cpu_seconds(prog, pid);
+	int64_t start = bench_mono_ns(), end = start + (int64_t)(seconds * 1e9);
+	while (bench_mono_ns() < end)
 		commit_once(sp, ph);
-	ph->cpu = 100.0 * (cpu_seconds(pid) - cpu0) / ((double)(mono_ns() - start) / 1e9);
+	ph->cpu = 100.0 * (bench_cpu_seconds(prog, pid) - cpu0) / ((double)(bench_mono_ns() - start) / 1e9);
 	get_status(sp, &ph->after);
 }
 
 static double run_idle(pid_t pid, double seconds)
 {
-	double cpu0 = cpu_seconds(pid);
-	int64_t start = mono_ns();
-	sleep_ms((int)(seconds * 1000));
-	return 100.0 * (cpu_seconds(pid) - cpu0) / ((double)(mono_ns() - start) / 1e9);
+	double cpu0 = bench_cpu_seconds(prog, pid);
+	int64_t start = bench_mono_ns();
+	bench_sleep_ms((int)(seconds * 1000));
+	return 100.0 * (bench_cpu_seconds(prog, pid) - cpu0) / ((double)(bench_mono_ns() - start) / 1e9);
 }
 
 static void print_row(const struct commit_phase *ph, double idle_cpu, bool header)
@@ -308,15 +190,12 @@ int main(int argc, char **argv)
 	}
 	if (!target || !(seconds > 0))
 		usage();
-	struct daemon d = { 0 };
-	if (is_socket(target))
-		snprintf(d.socket, sizeof(d.socket), "%s", target);
-	else
-		start_daemon(&d, target);
-	struct spindle *sp = connect_daemon(&d);
+	struct bench_daemon d = { 0 };
+	bench_daemon_start(&d, prog, target, "perspecta", NULL);
+	struct spindle *sp = bench_daemon_connect(&d);
 	if (!sp)
 		die("connect", errno);
-	pid_t pid = peer_pid(sp);
+	pid_t pid = bench_daemon_pid(&d, sp);
 	uint64_t seq = show_scene(sp);
 	struct commit_phase ph = { 0 };
 	run_commits(sp, pid, seconds, &ph);
@@ -328,6 +207,6 @@ int main(int argc, char **argv)
 	fprintf(stderr, "unchanged: scene shown by volume %llu; %.1f commits/s\n", (unsigned long long)seq,
 		(double)ph.commits / seconds);
 	spindle_disconnect(sp);
-	stop_daemon(&d);
+	bench_daemon_stop(&d);
 	return ph.early || ph.answered < ph.commits ? 1 : 0;
 }

@@ -176,6 +176,10 @@ static bool commit_refused(struct client *c)
 	uint32_t code = objects_commit_check(c, &object, text, sizeof(text));
 	if (!code)
 		return false;
+	if (c->version < 2) {
+		client_fail(c, object, PROTO_ERR_QUOTA, "%s", text); /* no refused event at version 1 */
+		return true;
+	}
 	log_debug("client %d: commit refused: %s", proto_conn_get_fd(c->conn), text);
 	client_sent(c, proto_ev_display_refused(c->conn, 1, object, code, text));
 	return true;

@@ -378,6 +378,17 @@ bool devices_lit(const struct devices *dev)
 	return !dev->blanked;
 }
 
+int64_t devices_next_revolution(const struct devices *dev, int64_t now, int64_t *period_ns)
+{
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	if (dev->blanked || !st->locked || st->period_ns <= 0 || st->phase_ns <= 0)
+		return 0;
+	*period_ns = st->period_ns;
+	if (now < st->phase_ns)
+		return st->phase_ns;
+	return st->phase_ns + ((now - st->phase_ns) / st->period_ns + 1) * st->period_ns;
+}
+
 struct projector *devices_projector(struct devices *dev)
 {
 	return dev->proj;

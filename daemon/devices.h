@@ -42,5 +42,9 @@ const struct volume *devices_shown(struct devices *dev);
 /* Whether the projector is lit (not blanked). */
 bool devices_lit(const struct devices *dev);
 void devices_get_status(struct devices *dev, struct devices_status *out);
+/* While lit: the predicted start of the first revolution after now (ns,
+ * CLOCK_MONOTONIC), with the period in *period_ns; 0 when dark or not
+ * locked. */
+int64_t devices_next_revolution(const struct devices *dev, int64_t now, int64_t *period_ns);
 
 #endif

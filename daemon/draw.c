@@ -55,10 +55,19 @@ static float unit(float x)
 	return x > 0 ? (x < 1 ? x : 1) : 0; /* NaN: 0 */
 }
 
-static uint32_t vertex_index(const struct draw_source *s, uint32_t i)
+/* The client may write its memory while the daemon reads it: what a draw
+ * is checked and sized on is read once, into the daemon's own memory.
+ * Indices are copied, then checked; coloured vertices are copied, then
+ * subdivided. Plain positions are read once each, straight into the
+ * result. */
+struct staged {
+	const struct draw_source *s;
+	uint32_t *index;     /* copied indices, or NULL: vertex i is i */
+	struct vertex *vtx;  /* coloured draws: every vertex of the draw, in order */
+};
+
+static uint32_t read_index(const struct draw_source *s, uint32_t i)
 {
-	if (!s->index)
-		return i;
 	if (s->index_size == 2) {
 		uint16_t v;
 		memcpy(&v, s->index + 2 * (size_t)i, 2);
@@ -69,20 +78,33 @@ static uint32_t vertex_index(const struct draw_source *s, uint32_t i)
 	return le32toh(v);
 }
 
-/* Vertex i of the draw (the i-th index's vertex when indexed). */
-static void fetch(const struct draw_source *s, uint32_t i, struct vertex *v)
+/* Vertex i of the draw (the i-th index's vertex when indexed), read from
+ * the client's buffer. */
+static void fetch(const struct staged *st, uint32_t i, struct vertex *v)
 {
-	const uint8_t *p = s->base + (size_t)vertex_index(s, i) * s->stride;
+	const struct draw_source *s = st->s;
+	const uint8_t *p = s->base + (size_t)(st->index ? st->index[i] : i) * s->stride;
 	memcpy(v->p, p, 12);
 	if (s->format == DRAW_XYZ_RGBA8) {
-		for (int c = 0; c < 3; c++)
-			v->rgb[c] = p[12 + c] * (p[15] / 255.0f);
+		uint8_t c[4];
+		memcpy(c, p + 12, 4);
+		for (int k = 0; k < 3; k++)
+			v->rgb[k] = c[k] * (c[3] / 255.0f);
 	} else if (s->format == DRAW_XYZ_RGBA_FLOAT) {
 		float f[4];
 		memcpy(f, p + 12, 16);
-		for (int c = 0; c < 3; c++)
-			v->rgb[c] = 255.0f * unit(f[c]) * unit(f[3]);
+		for (int k = 0; k < 3; k++)
+			v->rgb[k] = 255.0f * unit(f[k]) * unit(f[3]);
 	}
+}
+
+/* Vertex i as the draw is built from: the copy when there is one. */
+static void vertex_at(const struct staged *st, uint32_t i, struct vertex *v)
+{
+	if (st->vtx)
+		*v = st->vtx[i];
+	else
+		fetch(st, i, v);
 }
 
 static uint32_t draw_count(const struct draw_source *s)
@@ -147,12 +169,12 @@ static uint32_t pieces_prims(unsigned nv, unsigned k)
 	return nv == 3 ? k * k : nv == 2 ? k : 1;
 }
 
-static void read_prim(const struct draw_source *s, uint32_t p, struct vertex v[3])
+static void read_prim(const struct staged *st, uint32_t p, struct vertex v[3])
 {
 	uint32_t pos[3];
-	prim_positions(s->mode, p, pos);
-	for (unsigned i = 0; i < prim_vertices(s->mode); i++)
-		fetch(s, pos[i], &v[i]);
+	prim_positions(st->s->mode, p, pos);
+	for (unsigned i = 0; i < prim_vertices(st->s->mode); i++)
+		vertex_at(st, pos[i], &v[i]);
 }
 
 /* Writes the result: into xyz (and rgb when coloured), one primitive at a
@@ -218,11 +240,12 @@ static void emit_triangle_pieces(struct emitter *e, const struct vertex v[3], un
 			}
 }
 
-static void emit_prim(struct emitter *e, const struct draw_source *s, uint32_t p)
+static void emit_prim(struct emitter *e, const struct staged *st, uint32_t p)
 {
+	const struct draw_source *s = st->s;
 	struct vertex v[3];
 	unsigned nv = prim_vertices(s->mode);
-	read_prim(s, p, v);
+	read_prim(st, p, v);
 	if (!coloured(s)) {
 		for (unsigned i = 0; i < nv; i++)
 			emit_vertex(e, v[i].p);
@@ -240,43 +263,67 @@ static void emit_prim(struct emitter *e, const struct draw_source *s, uint32_t p
 }
 
 /* Primitives of the result: subdivision counted when coloured. */
-static uint64_t result_prims(const struct draw_source *s, uint32_t prims)
+static uint64_t result_prims(const struct staged *st, uint32_t prims)
 {
+	const struct draw_source *s = st->s;
 	if (!coloured(s) || s->mode == DRAW_POINTS)
 		return prims;
 	uint64_t total = 0;
 	unsigned nv = prim_vertices(s->mode);
 	for (uint32_t p = 0; p < prims; p++) {
 		struct vertex v[3];
-		read_prim(s, p, v);
+		read_prim(st, p, v);
 		total += pieces_prims(nv, pieces(v, nv));
 	}
 	return total;
 }
 
-static bool indices_valid(const struct draw_source *s, uint32_t *bad)
+/* Copies the indices, then checks the copy. */
+static enum draw_error stage_indices(struct staged *st, uint32_t *bad)
 {
-	for (uint32_t i = 0; s->index && i < s->index_count; i++)
-		if (vertex_index(s, i) >= s->vertex_count) {
+	const struct draw_source *s = st->s;
+	if (!s->index)
+		return DRAW_OK;
+	st->index = malloc(((size_t)s->index_count + 1) * sizeof(uint32_t));
+	if (!st->index)
+		return DRAW_NO_MEMORY;
+	for (uint32_t i = 0; i < s->index_count; i++)
+		st->index[i] = read_index(s, i);
+	for (uint32_t i = 0; i < s->index_count; i++)
+		if (st->index[i] >= s->vertex_count) {
 			*bad = i;
-			return false;
+			return DRAW_BAD_INDEX;
 		}
-	return true;
+	return DRAW_OK;
 }
 
-enum draw_error draw_build(const struct draw_source *s, uint64_t max_vertices, struct vdata **out,
-			   uint32_t *bad_index)
+/* Coloured draws are sized by their colours: read them once. */
+static enum draw_error stage_vertices(struct staged *st, uint32_t n)
 {
-	*out = NULL;
-	uint32_t n = draw_count(s);
-	if (!whole_primitives(s->mode, n))
-		return DRAW_BAD_COUNT;
-	if (!indices_valid(s, bad_index))
-		return DRAW_BAD_INDEX;
+	if (!coloured(st->s))
+		return DRAW_OK;
+	st->vtx = malloc(((size_t)n + 1) * sizeof(*st->vtx));
+	if (!st->vtx)
+		return DRAW_NO_MEMORY;
+	for (uint32_t i = 0; i < n; i++)
+		fetch(st, i, &st->vtx[i]);
+	return DRAW_OK;
+}
+
+static void unstage(struct staged *st)
+{
+	free(st->index);
+	free(st->vtx);
+}
+
+/* Builds the result from the staged draw. */
+static enum draw_error build(const struct staged *st, uint32_t n, uint64_t max_vertices, struct vdata **out)
+{
+	const struct draw_source *s = st->s;
 	uint32_t prims = prim_count(s->mode, n);
 	if (prims == 0)
 		return DRAW_OK;
-	uint64_t total = result_prims(s, prims);
+	uint64_t total = result_prims(st, prims);
 	uint64_t verts = total * prim_vertices(s->mode);
 	if (verts > max_vertices || verts > UINT32_MAX)
 		return DRAW_TOO_MANY;
@@ -296,7 +343,26 @@ enum draw_error draw_build(const struct draw_source *s, uint64_t max_vertices, s
 		memcpy(v->xyz, s->base, (size_t)verts * 12); /* the common case, at memory speed */
 	else
 		for (uint32_t p = 0; p < prims; p++)
-			emit_prim(&e, s, p);
+			emit_prim(&e, st, p);
 	*out = v;
 	return DRAW_OK;
+}
+
+enum draw_error draw_build(const struct draw_source *s, uint64_t max_vertices, struct vdata **out,
+			   uint32_t *bad_index)
+{
+	*out = NULL;
+	uint32_t n = draw_count(s);
+	if (!whole_primitives(s->mode, n))
+		return DRAW_BAD_COUNT;
+	if (n > max_vertices)
+		return DRAW_TOO_MANY; /* the result has at least n: copy nothing */
+	struct staged st = { .s = s };
+	enum draw_error r = stage_indices(&st, bad_index);
+	if (r == DRAW_OK)
+		r = stage_vertices(&st, n);
+	if (r == DRAW_OK)
+		r = build(&st, n, max_vertices, out);
+	unstage(&st);
+	return r;
 }

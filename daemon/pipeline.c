@@ -9,6 +9,7 @@
 #include <systemd/sd-event.h>
 #include <unistd.h>
 
+#include "devices.h"
 #include "log.h"
 #include "projector.h"
 #include "render.h"
@@ -56,6 +57,7 @@ struct pipeline {
 	int64_t started_ns;
 	int done_fd;
 	sd_event_source *done_source;
+	sd_event_source *start_timer; /* a render put off (render_start_time()) */
 };
 
 static void *render_thread(void *data)
@@ -198,6 +200,53 @@ static void keep_rendered(struct pipeline *p)
 	p->last_seq = p->work_seq;
 }
 
+/* When the next render may start: now (0), at a time (ns), or not
+ * before the volume on its way is swapped in (INT64_MAX).
+ *
+ * A scene that renders well within a revolution is rendered once the
+ * volume before it is on display, and as late as it can be while its
+ * volume still makes the next revolution start: the commits that came
+ * meanwhile are all in it, and none waits behind a queue of volumes. A
+ * commit is then shown within about a revolution and a lead. A slow
+ * scene is rendered back to back instead, for throughput; so is every
+ * scene while the projector is dark. */
+static int64_t render_start_time(struct pipeline *p, int64_t now)
+{
+	int64_t period = 0;
+	int64_t next = devices_next_revolution(p->srv->dev, now, &period);
+	if (!next)
+		return 0;
+	int64_t render = (int64_t)p->stats.last_render_us * 1000;
+	int64_t lead = 2 * render + period / 8 + 4000000; /* render, upload, and slack */
+	if (lead >= period / 2)
+		return 0;
+	if (p->uploaded >= 0 || p->pending >= 0)
+		return INT64_MAX; /* kicked again at the swap */
+	int64_t start = next - lead;
+	return start <= now ? 0 : start;
+}
+
+static int on_start_timer(sd_event_source *s, uint64_t usec, void *data)
+{
+	pipeline_kick(data);
+	return 0;
+}
+
+static void arm_start_timer(struct pipeline *p, int64_t at_ns)
+{
+	uint64_t usec = (uint64_t)at_ns / 1000;
+	if (!p->start_timer) {
+		if (sd_event_add_time(p->srv->event, &p->start_timer, CLOCK_MONOTONIC, usec, 100, on_start_timer, p) <
+		    0) {
+			start_render(p); /* no timer: render now rather than never */
+			return;
+		}
+	} else {
+		sd_event_source_set_time(p->start_timer, usec);
+	}
+	sd_event_source_set_enabled(p->start_timer, SD_EVENT_ONESHOT);
+}
+
 static void pipeline_kick(struct pipeline *p)
 {
 	if (p->resend >= 0 && p->uploaded < 0 && p->pending < 0)
@@ -213,8 +262,13 @@ static void pipeline_kick(struct pipeline *p)
 			log_warn("projector swap failed: %s", strerror(-r));
 		}
 	}
-	if (p->dirty && !p->busy && !p->ready)
-		start_render(p);
+	if (p->dirty && !p->busy && !p->ready) {
+		int64_t at = render_start_time(p, now_ns());
+		if (at == 0)
+			start_render(p);
+		else if (at != INT64_MAX)
+			arm_start_timer(p, at);
+	}
 }
 
 static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
@@ -403,6 +457,7 @@ void pipeline_destroy(struct pipeline *p)
 		pthread_join(p->thread, NULL);
 		sd_event_source_disable_unref(p->done_source);
 	}
+	sd_event_source_disable_unref(p->start_timer);
 	if (p->done_fd >= 0)
 		close(p->done_fd);
 	snapshot_finish(&p->snaps[0]);

@@ -54,7 +54,7 @@ struct spindle_device_info {
  * the daemon's start. A commit that leaves the whole scene (every visible
  * layer of every client) as it was in the last volume rendered renders
  * and uploads nothing: volumes_skipped counts such scenes (commits made
- * while a render runs are taken together, as one scene). */
+ * while a render runs, or waits to start, are taken together, as one scene). */
 struct spindle_status {
 	float rpm;                 /* measured rotor speed, 0 when not turning */
 	bool locked;               /* sync estimator locked to the rotor */
