@@ -298,8 +298,8 @@ def lists_seeds():
                        + layer(4, 3) + layer(5, 3) + bytes([OP_COMMIT]) + bytes([OP_DESTROY]) + oid(5)
                        + bytes([OP_COMMIT]))
     # 3000 vertices (1500 lines) committed, cleared, 3000 more drawn: the
-    # lists hold 6000, over max-vertices (4096) counted pending and
-    # committed.
+    # list holds 6000, within max-vertices (4096), which counts the
+    # pending state, and under twice it.
     s["quota-held-twice"] = (v1 + op_buffer(2, AXIS, size=36000) + bytes([OP_LIST]) + oid(3)
                              + op_draw(3, 1, 2, 0, 3000) + layer(4, 3) + bytes([OP_COMMIT])
                              + bytes([OP_CLEAR]) + oid(3) + op_draw(3, 1, 2, 0, 2990, 12))
