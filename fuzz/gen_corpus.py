@@ -303,6 +303,11 @@ def lists_seeds():
     s["quota-held-twice"] = (v1 + op_buffer(2, AXIS, size=36000) + bytes([OP_LIST]) + oid(3)
                              + op_draw(3, 1, 2, 0, 3000) + layer(4, 3) + bytes([OP_COMMIT])
                              + bytes([OP_CLEAR]) + oid(3) + op_draw(3, 1, 2, 0, 2990, 12))
+    # Draws of nothing from empty buffers: the daemon computes map + 0 with
+    # map NULL (clang's UBSan: "applying zero offset to null pointer").
+    s["draw-empty-buffer"] = v1 + op_buffer(2, b"") + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 0)
+    s["draw-indexed-empty-buffer"] = (v2 + op_inline(2, AXIS) + op_buffer(3, b"") + bytes([OP_LIST]) + oid(4)
+                                      + op_draw_indexed(4, 0, 2, 0, 2, 0, 3, 0, 0, 2))
     s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
     s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
     return s
