@@ -217,7 +217,8 @@ static void read_input(void *arg)
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	struct fuzz_input in = { data, size, 0 };
-	int fds_before = fuzz_count_fds();
+	struct fuzz_resources before;
+	fuzz_resources_take(&before);
 	struct framing f = { .version = 1 + fuzz_u8(&in) % (PROTO_VERSION + 1) };
 	int sv[2];
 	if (socketpair(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0, sv) < 0)
@@ -259,8 +260,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	proto_conn_destroy(f.echo_in);
 	proto_conn_destroy(f.echo2_out);
 	proto_conn_destroy(f.echo2_in);
-	int fds_after = fuzz_count_fds();
-	if (fds_after != fds_before)
-		fuzz_fail("%d fds open before the input, %d after", fds_before, fds_after);
+	fuzz_resources_check(&before);
 	return 0;
 }

@@ -390,7 +390,8 @@ static void exchange(struct lists *s)
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 {
 	struct fuzz_input in = { data, size, 0 };
-	int fds_before = fuzz_count_fds();
+	struct fuzz_resources before;
+	fuzz_resources_take(&before);
 	uint8_t v = fuzz_u8(&in);
 	struct lists s = { .version = 1 + (v & 15u) % PROTO_VERSION };
 	static const char *const policies[][3] = {
@@ -426,8 +427,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (s.fs.srv.client_count != 0)
 		fuzz_fail("a closed client was not reaped");
 	fuzz_server_stop(&s.fs);
-	int fds_after = fuzz_count_fds();
-	if (fds_after != fds_before)
-		fuzz_fail("%d fds open before the input, %d after", fds_before, fds_after);
+	fuzz_resources_check(&before);
 	return 0;
 }

@@ -68,7 +68,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	struct fuzz_server *fs = &s.fs;
 	int *socks = s.socks;
 	unsigned connections = 0;
-	int fds_before = fuzz_count_fds();
+	struct fuzz_resources before;
+	fuzz_resources_take(&before);
 
 	fuzz_server_start(fs, NULL);
 	while (!fuzz_done(&in)) {
@@ -113,8 +114,6 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	fuzz_server_run(fs);
 	fuzz_server_stop(fs);
 
-	int fds_after = fuzz_count_fds();
-	if (fds_after != fds_before)
-		fuzz_fail("%d fds open before the input, %d after", fds_before, fds_after);
+	fuzz_resources_check(&before);
 	return 0;
 }

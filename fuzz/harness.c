@@ -116,7 +116,21 @@ int fuzz_fd(unsigned kind, uint64_t size)
  * does), declared weak so that plain builds link without it. */
 void __sanitizer_symbolize_pc(void *pc, const char *fmt, char *out, size_t size) __attribute__((weak));
 
-int fuzz_count_fds(void)
+/* Entries of a /proc directory, but . and .. */
+static int count_entries(const char *path)
+{
+	DIR *d = opendir(path);
+	if (!d)
+		return -1;
+	int n = 0;
+	struct dirent *e;
+	while ((e = readdir(d)))
+		n += e->d_name[0] != '.';
+	closedir(d);
+	return n;
+}
+
+void fuzz_resources_take(struct fuzz_resources *r)
 {
 	/* The sanitizers start their symbolizer, with two pipes, the first
 	 * time they symbolize (a suppressed report): start it now, or the
@@ -127,15 +141,18 @@ int fuzz_count_fds(void)
 		__sanitizer_symbolize_pc(__builtin_return_address(0), "%p %F", buf, sizeof(buf));
 	}
 	symbolizer_started = true;
-	DIR *d = opendir("/proc/self/fd");
-	if (!d)
-		return -1;
-	int n = 0;
-	struct dirent *e;
-	while ((e = readdir(d)))
-		n += e->d_name[0] != '.';
-	closedir(d);
-	return n - 1; /* the directory's own fd */
+	r->fds = count_entries("/proc/self/fd") - 1; /* the directory's own */
+	r->threads = count_entries("/proc/self/task");
+}
+
+void fuzz_resources_check(const struct fuzz_resources *before)
+{
+	struct fuzz_resources after;
+	fuzz_resources_take(&after);
+	if (after.fds != before->fds)
+		fuzz_fail("%d fds open before the input, %d after", before->fds, after.fds);
+	if (after.threads != before->threads)
+		fuzz_fail("%d threads before the input, %d after", before->threads, after.threads);
 }
 
 bool fuzz_verbose(void)

@@ -53,8 +53,14 @@ int fuzz_memfd(enum fuzz_fd_kind kind, uint64_t size, const void *data, size_t l
  * bytes. -errno on failure. */
 int fuzz_fd(unsigned kind, uint64_t size);
 
-/* The open fds of this process: targets check that an input leaks none. */
-int fuzz_count_fds(void);
+/* The open fds and the threads of this process, taken before an input and
+ * checked after it: an input leaves none behind. */
+struct fuzz_resources {
+	int fds, threads;
+};
+void fuzz_resources_take(struct fuzz_resources *r);
+/* Aborts if there are more or fewer fds or threads than in before. */
+void fuzz_resources_check(const struct fuzz_resources *before);
 /* Whether SPINDLE_FUZZ_VERBOSE is set: targets say what they do, and the
  * daemon logs at its info level. */
 bool fuzz_verbose(void);
