@@ -308,6 +308,12 @@ def lists_seeds():
     s["draw-empty-buffer"] = v1 + op_buffer(2, b"") + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 0)
     s["draw-indexed-empty-buffer"] = (v2 + op_inline(2, AXIS) + op_buffer(3, b"") + bytes([OP_LIST]) + oid(4)
                                       + op_draw_indexed(4, 0, 2, 0, 2, 0, 3, 0, 0, 2))
+    # A vertex that the transform takes past the float range (finite in
+    # double): the renderer's slot lookup divides inf by inf and casts the
+    # NaN to an index (clang's UBSan: float-cast-overflow in slot_of()).
+    huge = vertices(3e38, 0, 3e38, 0.5, 0, 0, 0, 0.5, 0)
+    s["huge-vertex"] = (v2 + op_inline(2, huge) + bytes([OP_LIST]) + oid(3)
+                        + op_matrix(OP_TRANSFORM, 3, 2, (2, 2, 2)) + op_draw(3, 2, 2, 0, 3) + show(3))
     s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
     s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
     return s
