@@ -324,6 +324,14 @@ static bool range_valid(uint64_t buffer_size, uint64_t offset, uint32_t count, u
 	return last <= buffer_size - offset && size <= buffer_size - offset - last;
 }
 
+/* The bytes of b from offset on (offset <= size, checked): an empty
+ * buffer has no mapping, and NULL + 0 is undefined. */
+static const uint8_t *buffer_at(const struct buffer *b, uint64_t offset)
+{
+	static const uint8_t none[4];
+	return b->map ? b->map + offset : none;
+}
+
 static struct buffer *draw_buffer(struct list *l, uint32_t id, const char *what)
 {
 	struct buffer *b = idmap_get(&l->base.client->objects, id);
@@ -355,7 +363,7 @@ static int vertex_source(struct list *l, uint32_t mode, uint32_t buffer, uint64_
 	*src = (struct draw_source){
 		.mode = (enum draw_mode)mode,
 		.format = (enum draw_format)l->state.format,
-		.base = b->map + offset,
+		.base = buffer_at(b, offset),
 		.stride = stride,
 		.vertex_count = count,
 	};
@@ -422,7 +430,7 @@ static int list_draw_indexed(void *target, const struct proto_list_draw_indexed_
 				 (unsigned long long)a->index_offset, a->index_type);
 	if (!range_valid(ib->size, a->index_offset, a->index_count, a->index_type, a->index_type))
 		return list_fail(l, PROTO_ERR_VALUE, "draw_indexed: indices past the end of buffer %u", a->indices);
-	src.index = ib->map + a->index_offset;
+	src.index = buffer_at(ib, a->index_offset);
 	src.index_count = a->index_count;
 	src.index_size = a->index_type;
 	return list_append_draw(l, &src);

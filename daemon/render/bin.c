@@ -328,13 +328,15 @@ static void scatter_job(void *arg, unsigned t)
 	uint32_t pk = prim_keys(b);
 	uint32_t *off = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
-	for (const struct stage_prim *s = &w->stage_prims[2 * c.lo]; s < &w->stage_prims[2 * c.hi]; s++)
-		if (s->key != KEY_NONE)
-			b->prims[off[s->key]++] = s->rec;
+	/* Indexed, not pointer-stepped: a scene without lines or triangles
+	 * (or points) has no staging array at all. */
+	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+		if (w->stage_prims[i].key != KEY_NONE)
+			b->prims[off[w->stage_prims[i].key]++] = w->stage_prims[i].rec;
 	c = chunk_of(w->point_items, w->threads, t);
-	for (const struct stage_point *s = &w->stage_points[2 * c.lo]; s < &w->stage_points[2 * c.hi]; s++)
-		if (s->key != KEY_NONE)
-			b->points[off[pk + s->key]++] = s->rec;
+	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+		if (w->stage_points[i].key != KEY_NONE)
+			b->points[off[pk + w->stage_points[i].key]++] = w->stage_points[i].rec;
 }
 
 static int grow(void **p, size_t *cap, size_t need, size_t size)
