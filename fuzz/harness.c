@@ -149,6 +149,13 @@ void fuzz_resources_check(const struct fuzz_resources *before)
 {
 	struct fuzz_resources after;
 	fuzz_resources_take(&after);
+	/* A joined thread may still be listed for a moment: pthread_join()
+	 * returns when the thread's tid is cleared, before the kernel has
+	 * removed it from the process. Wait up to 100 ms for that. */
+	for (int i = 0; i < 100 && after.threads > before->threads; i++) {
+		usleep(1000);
+		fuzz_resources_take(&after);
+	}
 	if (after.fds != before->fds)
 		fuzz_fail("%d fds open before the input, %d after", before->fds, after.fds);
 	if (after.threads != before->threads)
