@@ -1,6 +1,7 @@
 #include "bin.h"
 
 #include <errno.h>
+#include <float.h>
 #include <math.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -110,13 +111,14 @@ static int draw_verts(const struct scene_draw *d)
 	return 0;
 }
 
-/* Column-major affine transform in double; false if not finite. */
+/* Column-major affine transform in double; false if the result is not a
+ * finite float (primitives are stored in float: past FLT_MAX is inf). */
 static bool transform(const float m[16], const float *xyz, double out[3])
 {
 	double x = xyz[0], y = xyz[1], z = xyz[2];
 	for (int i = 0; i < 3; i++) {
 		out[i] = (double)m[i] * x + (double)m[4 + i] * y + (double)m[8 + i] * z + m[12 + i];
-		if (!isfinite(out[i]))
+		if (!(fabs(out[i]) <= FLT_MAX))
 			return false;
 	}
 	return true;
