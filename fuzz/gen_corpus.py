@@ -309,9 +309,9 @@ def lists_seeds():
     s["draw-indexed-empty-buffer"] = (v2 + op_inline(2, AXIS) + op_buffer(3, b"") + bytes([OP_LIST]) + oid(4)
                                       + op_draw_indexed(4, 0, 2, 0, 2, 0, 3, 0, 0, 2))
     # A vertex that the transform takes past the float range (finite in
-    # double): the renderer's slot lookup divides inf by inf and casts the
+    # double): the renderer's slot lookup divided inf by inf and cast the
     # NaN to an index (clang's UBSan: float-cast-overflow in slot_of();
-    # reported, suppressed in fuzz/ubsan.supp until fixed).
+    # fixed).
     huge = vertices(3e38, 0, 3e38, 0.5, 0, 0, 0, 0.5, 0)
     s["huge-vertex"] = (v2 + op_inline(2, huge) + bytes([OP_LIST]) + oid(3)
                         + op_matrix(OP_TRANSFORM, 3, 2, (2, 2, 2)) + op_draw(3, 2, 2, 0, 3) + show(3))
