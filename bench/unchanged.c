@@ -27,7 +27,7 @@
 
 static const char prog[] = "unchanged";
 
-static void die(const char *what, int err)
+_Noreturn static void die(const char *what, int err)
 {
 	bench_die(prog, what, err);
 }
