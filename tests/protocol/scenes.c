@@ -132,3 +132,14 @@ struct spindle_status status_of(struct spindle *sp)
 	return st;
 }
 
+
+int run_named_tests(const struct named_test *tests, size_t count, int argc, char **argv)
+{
+	for (size_t i = 0; i < count; i++) {
+		if (argc < 2 || strcmp(argv[1], tests[i].name) == 0) {
+			tests[i].run();
+			printf("ok %s\n", tests[i].name);
+		}
+	}
+	return check_done();
+}

@@ -40,4 +40,13 @@ struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *f
 
 struct spindle_status status_of(struct spindle *sp);
 
+/* A test program's tests by name: runs the one named in argv[1] (every
+ * one without an argument), printing "ok NAME" after each; returns the
+ * exit status. */
+struct named_test {
+	const char *name;
+	void (*run)(void);
+};
+int run_named_tests(const struct named_test *tests, size_t count, int argc, char **argv);
+
 #endif

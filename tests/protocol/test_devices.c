@@ -275,10 +275,7 @@ static void test_late_projector(void)
 	daemon_stop(&d);
 }
 
-static const struct {
-	const char *name;
-	void (*run)(void);
-} tests[] = {
+static const struct named_test tests[] = {
 	{ "delta", test_delta },
 	{ "underrun", test_underrun },
 	{ "stall", test_stall },
@@ -289,11 +286,5 @@ static const struct {
 
 int main(int argc, char **argv)
 {
-	for (size_t i = 0; i < sizeof(tests) / sizeof(tests[0]); i++) {
-		if (argc < 2 || strcmp(argv[1], tests[i].name) == 0) {
-			tests[i].run();
-			printf("ok %s\n", tests[i].name);
-		}
-	}
-	return check_done();
+	return run_named_tests(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

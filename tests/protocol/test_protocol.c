@@ -728,10 +728,7 @@ static void test_gl_bad_shader(void)
 	test_gl_unavailable("shader", "shader does not compile");
 }
 
-static const struct {
-	const char *name;
-	void (*run)(void);
-} tests[] = {
+static const struct named_test tests[] = {
 	{ "device-info", test_device_info },
 	{ "axis-line", test_axis_line },
 	{ "disk", test_disk },
@@ -756,11 +753,5 @@ static const struct {
 
 int main(int argc, char **argv)
 {
-	for (size_t i = 0; i < sizeof(tests) / sizeof(tests[0]); i++) {
-		if (argc < 2 || strcmp(argv[1], tests[i].name) == 0) {
-			tests[i].run();
-			printf("ok %s\n", tests[i].name);
-		}
-	}
-	return check_done();
+	return run_named_tests(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
 }

@@ -450,10 +450,7 @@ static void test_state_events(void)
 	daemon_stop(&d);
 }
 
-static const struct {
-	const char *name;
-	void (*fn)(void);
-} tests[] = {
+static const struct named_test tests[] = {
 	{ "indexed", test_indexed },
 	{ "bad-index", test_bad_index },
 	{ "nested-transforms", test_nested_transforms },
@@ -467,11 +464,5 @@ static const struct {
 
 int main(int argc, char **argv)
 {
-	for (size_t i = 0; i < sizeof(tests) / sizeof(tests[0]); i++) {
-		if (argc < 2 || strcmp(argv[1], tests[i].name) == 0) {
-			tests[i].fn();
-			printf("ok %s\n", tests[i].name);
-		}
-	}
-	return check_done();
+	return run_named_tests(tests, sizeof(tests) / sizeof(tests[0]), argc, argv);
 }
