@@ -11,21 +11,25 @@
 #include <unistd.h>
 
 #include "client.h"
+#include "config.h"
+#include "geometry.h"
 #include "log.h"
-#include "server.h"
+#include "stage.h"
 
 /* Events a client may leave unread before it is cut off. */
 #define CLIENT_MAX_OUT (1u << 20)
 /* Reads per wake-up, so that one busy client cannot starve the others. */
 #define CLIENT_READS_PER_WAKEUP 16
 
-/* Stops serving c; it is freed from the event loop soon. */
+/* Stops serving c: its layers leave the stage now; it is freed from the
+ * event loop soon (its listener's dead()). */
 static void client_kill(struct client *c)
 {
 	c->dead = true;
+	c->left_scene = objects_leave_stage(c);
 	/* A closed socket stays readable: stop listening, or the loop spins. */
 	sd_event_source_set_enabled(c->source, SD_EVENT_OFF);
-	server_reap_later(c->server);
+	c->env->listener->dead(c->env->data, c);
 }
 
 int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fmt, ...)
@@ -75,42 +79,42 @@ static void client_sent(struct client *c, int r)
 static int display_hello(void *target, const struct proto_display_hello_args *a)
 {
 	struct client *c = target;
-	struct server *srv = c->server;
+	const struct client_env *env = c->env;
 	if (c->version)
 		return client_fail(c, 1, PROTO_ERR_VERSION, "hello sent twice");
 	if (a->version == 0)
 		return client_fail(c, 1, PROTO_ERR_VERSION, "no common protocol version");
 	c->version = a->version < PROTO_VERSION ? a->version : PROTO_VERSION;
-	const struct geometry *g = &srv->geom;
+	const struct geometry *g = env->geom;
 	proto_ev_display_welcome(c->conn, 1, c->version);
 	int r = proto_ev_display_device(c->conn, 1, g->width, g->height, g->images_per_rev,
 					g->mirrored ? PROTO_DISPLAY_DEVICE_FLAGS_MIRRORED : 0, g->half_height, g->rpm,
-					srv->device_name);
+					env->device_name);
 	client_sent(c, r);
 	if (c->version >= 2) {
-		struct server_status st;
-		server_get_status(srv, &st);
-		client_send_state(c, st.flags, st.rpm, true);
+		struct proto_display_status_args st;
+		env->listener->status(env->data, &st);
+		client_send_state(c, &st, true);
 	}
 	return 0;
 }
 
-void client_send_state(struct client *c, uint32_t flags, float rpm, bool force)
+void client_send_state(struct client *c, const struct proto_display_status_args *st, bool force)
 {
 	if (c->dead || c->version < 2)
 		return;
-	float step = c->server->geom.rpm * 0.01f;
-	if (!force && flags == c->state_flags && fabsf(rpm - c->state_rpm) < step)
+	float step = c->env->geom->rpm * 0.01f;
+	if (!force && st->flags == c->state_flags && fabsf(st->rpm - c->state_rpm) < step)
 		return;
-	c->state_flags = flags;
-	c->state_rpm = rpm;
-	client_sent(c, proto_ev_display_state(c->conn, 1, flags, rpm));
+	c->state_flags = st->flags;
+	c->state_rpm = st->rpm;
+	client_sent(c, proto_ev_display_state(c->conn, 1, st->flags, st->rpm));
 	client_flush(c);
 }
 
 bool client_may_be_exclusive(const struct client *c)
 {
-	switch (c->server->cfg.exclusive) {
+	switch (c->env->cfg->exclusive) {
 	case POLICY_NONE: return false;
 	case POLICY_ADMIN: return c->admin;
 	case POLICY_ANY: return true;
@@ -118,19 +122,46 @@ bool client_may_be_exclusive(const struct client *c)
 	return false;
 }
 
-static int new_waiter(struct client *c, uint32_t id, enum proto_interface type, struct link *queue)
+/* A new frame callback or capture object, not queued anywhere yet. */
+static struct callback *new_callback(struct client *c, uint32_t id, enum proto_interface type)
 {
-	struct waiter *w = calloc(1, sizeof(*w));
-	if (!w)
-		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
-	link_init(&w->link);
-	int r = object_register(c, &w->base, id, type);
-	if (r < 0) {
-		free(w);
-		return r;
+	struct callback *cb = calloc(1, sizeof(*cb));
+	if (!cb) {
+		client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+		return NULL;
 	}
-	link_append(queue, &w->link);
-	return 0;
+	link_init(&cb->wait.link);
+	if (object_register(c, &cb->base, id, type) < 0) {
+		free(cb);
+		return NULL;
+	}
+	return cb;
+}
+
+void client_frame_done(struct waiter *w, uint64_t seq, int64_t time_ns)
+{
+	struct callback *cb = link_entry(w, struct callback, wait);
+	struct client *c = cb->base.client;
+	if (!c->dead) {
+		client_sent(c, proto_ev_callback_done(c->conn, cb->base.id, seq, (uint64_t)time_ns));
+		client_flush(c);
+	}
+	object_destroy(&cb->base);
+}
+
+void client_capture_done(struct waiter *w, int fd, uint64_t size)
+{
+	struct callback *cb = link_entry(w, struct callback, wait);
+	struct client *c = cb->base.client;
+	if (!c->dead) {
+		if (fd >= 0)
+			client_sent(c, proto_ev_capture_ready(c->conn, cb->base.id, fd, size));
+		else
+			client_sent(c, proto_ev_capture_failed(c->conn, cb->base.id, PROTO_CAPTURE_FAILURE_ERROR,
+							       strerror(-fd)));
+		client_flush(c);
+	}
+	object_destroy(&cb->base);
 }
 
 static int display_sync(void *target, const struct proto_display_sync_args *a)
@@ -165,7 +196,11 @@ static int display_create_layer(void *target, const struct proto_display_create_
 static int display_frame(void *target, const struct proto_display_frame_args *a)
 {
 	struct client *c = target;
-	return new_waiter(c, a->callback, PROTO_IFACE_CALLBACK, &c->frames_pending);
+	struct callback *cb = new_callback(c, a->callback, PROTO_IFACE_CALLBACK);
+	if (!cb)
+		return -EPROTO;
+	link_append(&c->frames_pending, &cb->wait.link);
+	return 0;
 }
 
 /* A refused commit changes nothing: its changes and frames stay pending. */
@@ -192,47 +227,37 @@ static int display_commit(void *target)
 	if (commit_refused(c))
 		return 0;
 	int64_t now = now_ns();
-	c->commit_serial++;
-	link_for_each_safe(w, tmp, &c->frames_pending, link) {
-		w->commit_serial = c->commit_serial;
-		w->commit_ns = now;
-		link_remove(&w->link);
-		link_append(&c->frames, &w->link);
-	}
-	bool frames = !link_empty(&c->frames);
+	bool frames = !link_empty(&c->frames_pending);
+	link_for_each_safe(w, tmp, &c->frames_pending, link) frames_commit(c->env->frames, w, now);
 	bool changed = objects_commit(c);
 	if (!c->dead && (changed || frames))
-		server_commit(c->server);
+		stage_changed(c->env->stage);
 	return 0;
 }
 
 static int display_get_status(void *target)
 {
 	struct client *c = target;
-	struct server_status st;
-	server_get_status(c->server, &st);
-	client_sent(c, proto_ev_display_status(c->conn, 1, st.rpm, st.flags, st.volumes_shown, st.underruns,
-					       st.clients, st.volumes_rendered, st.volumes_skipped, st.bytes_uploaded,
-					       st.render_us, st.jitter_us, st.missed_pulses, st.upload_rate,
-					       st.index_error_us, st.angle_error_p99, st.angle_error_max));
+	struct proto_display_status_args st;
+	c->env->listener->status(c->env->data, &st);
+	client_sent(c, proto_ev_display_status(c->conn, 1, &st));
 	return 0;
 }
 
 static int display_capture(void *target, const struct proto_display_capture_args *a)
 {
 	struct client *c = target;
-	int r = new_waiter(c, a->id, PROTO_IFACE_CAPTURE, &c->captures);
-	if (r < 0)
-		return r;
+	struct callback *cb = new_callback(c, a->id, PROTO_IFACE_CAPTURE);
+	if (!cb)
+		return -EPROTO;
 	if (!c->admin) {
-		struct waiter *w = idmap_get(&c->objects, a->id);
 		client_sent(c, proto_ev_capture_failed(c->conn, a->id, PROTO_CAPTURE_FAILURE_DENIED,
 						       "capture is restricted to root, the daemon's user and the admin "
 						       "group"));
-		object_destroy(&w->base);
+		object_destroy(&cb->base);
 		return 0;
 	}
-	server_capture_requested(c->server);
+	frames_capture(c->env->frames, &cb->wait);
 	return 0;
 }
 
@@ -328,25 +353,25 @@ static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data
 
 /* Root, the daemon's own user, or a member of the admin group: by the
  * peer's credentials at connect (SO_PEERCRED, SO_PEERGROUPS), never pid. */
-static bool peer_is_admin(const struct server *srv, int fd, const struct ucred *cred)
+static bool peer_is_admin(gid_t admin_gid, int fd, const struct ucred *cred)
 {
 	if (cred->uid == 0 || cred->uid == geteuid())
 		return true;
-	if (srv->admin_gid == (gid_t)-1)
+	if (admin_gid == (gid_t)-1)
 		return false;
-	if (cred->gid == srv->admin_gid)
+	if (cred->gid == admin_gid)
 		return true;
 	gid_t groups[256];
 	socklen_t len = sizeof(groups);
 	if (getsockopt(fd, SOL_SOCKET, SO_PEERGROUPS, groups, &len) < 0)
 		return false; /* too many groups, or an old kernel: not admin */
 	for (size_t i = 0; i < len / sizeof(gid_t); i++)
-		if (groups[i] == srv->admin_gid)
+		if (groups[i] == admin_gid)
 			return true;
 	return false;
 }
 
-struct client *client_create(struct server *srv, int fd)
+struct client *client_create(const struct client_env *env, int fd)
 {
 	struct client *c = calloc(1, sizeof(*c));
 	if (!c) {
@@ -363,17 +388,16 @@ struct client *client_create(struct server *srv, int fd)
 	c->uid = cred.uid;
 	c->gid = cred.gid;
 	c->pid = cred.pid;
-	c->admin = peer_is_admin(srv, fd, &cred);
-	c->server = srv;
+	c->admin = peer_is_admin(env->admin_gid, fd, &cred);
+	c->env = env;
+	link_init(&c->link);
 	link_init(&c->lists);
 	link_init(&c->layers);
 	link_init(&c->frames_pending);
-	link_init(&c->frames);
-	link_init(&c->captures);
 	c->conn = proto_conn_create(fd, CLIENT_MAX_OUT);
 	if (!c->conn)
 		goto err_free;
-	int r = sd_event_add_io(srv->event, &c->source, fd, EPOLLIN, client_event, c);
+	int r = sd_event_add_io(env->event, &c->source, fd, EPOLLIN, client_event, c);
 	if (r < 0) {
 		errno = -r;
 		goto err_conn;

@@ -9,27 +9,42 @@
 #include <stdint.h>
 #include <sys/types.h>
 
-#include "draw.h"
+#include "frames.h"
 #include "idmap.h"
+#include "layer.h"
 #include "link.h"
-#include "scene.h"
 #include "spindle-protocol.h"
 
-struct server;
+struct config;
+struct geometry;
+struct sd_event;
 struct sd_event_source;
+struct stage;
+struct client;
 
-struct list_draw {
-	struct vdata *data;
-	float transform[16];
-	uint8_t rgba[4];     /* used when data has no colour per primitive */
-	uint8_t point_size;
+#define CLIENT_LISTENER_VERSION 1
+
+/* What a client tells, or asks, the daemon around it. */
+struct client_listener {
+	uint32_t version; /* CLIENT_LISTENER_VERSION */
+	/* c stopped being served (its layers are off the stage already):
+	 * call client_destroy() on it soon, from the event loop. */
+	void (*dead)(void *data, struct client *c);
+	/* The daemon's status now, for display.get_status and state events. */
+	void (*status)(void *data, struct proto_display_status_args *out);
 };
 
-struct draw_array {
-	struct list_draw *draws;
-	uint32_t count, cap;
-	uint64_t vertices;
-	uint64_t prims;
+/* What every client shares, set up by the daemon and outliving them. */
+struct client_env {
+	struct sd_event *event;
+	const struct config *cfg;
+	const struct geometry *geom;
+	const char *device_name;
+	gid_t admin_gid; /* admin-group's gid, or (gid_t)-1 */
+	struct stage *stage;   /* where committed layers go */
+	struct frames *frames; /* where committed frames and captures wait */
+	const struct client_listener *listener;
+	void *data;
 };
 
 /* The state draws take, saved and restored by push and pop. */
@@ -70,6 +85,7 @@ struct list {
 	struct link link;   /* client.lists */
 };
 
+/* A layer's state as requests set it, before display.commit. */
 struct layer_state {
 	struct list *list; /* holds a reference */
 	float transform[16];
@@ -80,24 +96,22 @@ struct layer_state {
 
 struct layer {
 	struct object base;
-	uint64_t serial; /* creation order, server-wide: ties of priority */
-	struct layer_state pending, committed;
+	struct layer_state pending;
+	struct list *committed_list; /* holds a reference; its committed draws show */
+	struct stage_layer committed; /* on the stage from creation to destruction */
 	bool changed;
 	struct link link; /* client.layers */
 };
 
-/* Frame callbacks and captures waiting for a volume. */
-struct waiter {
+/* A frame callback or a capture object. */
+struct callback {
 	struct object base;
-	uint64_t commit_serial; /* frame: the commit it belongs to (0: next) */
-	uint64_t volume_seq;    /* frame: the volume first showing it (0: none yet) */
-	int64_t commit_ns;      /* frame: when its commit was handled */
-	struct link link;
+	struct waiter wait;
 };
 
 struct client {
-	struct server *server;
-	struct link link; /* server.clients */
+	const struct client_env *env;
+	struct link link; /* the server's list of clients */
 	struct proto_conn *conn;
 	struct sd_event_source *source;
 	uid_t uid;
@@ -107,18 +121,16 @@ struct client {
 	struct idmap objects;
 	struct link lists, layers;
 	struct link frames_pending; /* asked for, before their commit */
-	struct link frames;         /* committed, waiting to be shown */
-	struct link captures;
-	uint64_t commit_serial;
 	uint64_t buffer_bytes, vertices;
 	bool admin;     /* root, the daemon's user, or in the admin group */
 	uint32_t state_flags; /* the last state event sent (version 2) */
 	float state_rpm;
 	bool dead;
+	bool left_scene; /* its layers, taken off the stage when it died, showed */
 };
 
 /* Takes over a connected socket. NULL + errno. */
-struct client *client_create(struct server *srv, int fd);
+struct client *client_create(const struct client_env *env, int fd);
 /* Frees the client and its objects. */
 void client_destroy(struct client *c);
 
@@ -127,8 +139,13 @@ void client_destroy(struct client *c);
 int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fmt, ...)
 	__attribute__((format(printf, 4, 5)));
 
-/* Queues events are flushed; a client that cannot take them is failed. */
+/* Queued events are flushed; a client that cannot take them is failed. */
 void client_flush(struct client *c);
+
+/* A frame callback or capture of a client is answered (frames.h): what
+ * the daemon's frames listener calls. A dead client's is just freed. */
+void client_frame_done(struct waiter *w, uint64_t seq, int64_t time_ns);
+void client_capture_done(struct waiter *w, int fd, uint64_t size);
 
 /* Request handlers of buffer, list and layer objects (objects.c). */
 extern const struct proto_buffer_requests buffer_requests;
@@ -148,15 +165,12 @@ bool objects_commit(struct client *c);
 /* Whether a commit now may be made: 0, or the display.refused code, with
  * the object at fault and a reason in text. */
 uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size);
-/* The layer's committed state is exclusive and visible. */
-bool layer_exclusive(const struct layer *y);
-/* Removing the layer changes the scene: it shows a list, or hides the
- * other clients (exclusive). */
-bool layer_affects_scene(const struct layer *y);
+/* Takes every layer of c off the stage. Returns whether the scene changed. */
+bool objects_leave_stage(struct client *c);
 /* The exclusive policy lets c have exclusive layers. */
 bool client_may_be_exclusive(const struct client *c);
 /* Sends c a state event if the state changed (version 2 clients). */
-void client_send_state(struct client *c, uint32_t flags, float rpm, bool force);
+void client_send_state(struct client *c, const struct proto_display_status_args *st, bool force);
 
 void list_unref(struct list *l);
 

@@ -7,16 +7,20 @@
 #include <string.h>
 #include <systemd/sd-event.h>
 
+#include "config.h"
 #include "log.h"
-#include "pipeline.h"
 #include "projector.h"
-#include "server.h"
 #include "sim_rotor.h"
 #include "sync.h"
 #include "sync_estimator.h"
 
 struct devices {
-	struct server *srv;
+	struct sd_event *event;
+	const struct config *cfg;
+	struct geometry geom;
+	char name[64];
+	const struct devices_listener *listener;
+	void *data;
 	struct sim_rotor *rotor;
 	struct sync_source *sync;
 	struct sync_estimator *est;
@@ -40,6 +44,7 @@ static void set_blank(struct devices *dev, bool blank)
 	}
 	dev->blanked = blank;
 	log_info("projector %s", blank ? "blanked" : "lit");
+	dev->listener->state_changed(dev->data);
 }
 
 static void log_lock(const struct sync_state *st)
@@ -63,7 +68,7 @@ static void update_light(struct devices *dev, int64_t time_ns)
 		return;
 	set_blank(dev, !lit);
 	if (!dev->blanked)
-		server_projector_lit(dev->srv, time_ns);
+		dev->listener->lit(dev->data, time_ns);
 }
 
 static void arm_check(struct devices *dev)
@@ -83,6 +88,7 @@ static int on_check(sd_event_source *s, uint64_t usec, void *data)
 	int64_t now = now_ns();
 	if (sync_estimator_check(dev->est, now)) {
 		log_lock(sync_estimator_state(dev->est));
+		dev->listener->state_changed(dev->data);
 		update_light(dev, now);
 	}
 	arm_check(dev);
@@ -109,11 +115,12 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	for (int i = 0; i < n; i++) {
 		if (sync_estimator_feed(dev->est, ts[i])) {
 			log_lock(st);
+			dev->listener->state_changed(dev->data);
 			update_light(dev, ts[i]);
 		}
 		/* An accepted edge starts a revolution; a glitch does not. */
 		if (!dev->blanked && st->edge_ns == ts[i])
-			server_revolution(dev->srv, ts[i]);
+			dev->listener->revolution(dev->data, ts[i]);
 	}
 	if (n > 0) {
 		/* The timing first: a device lit without it places slices
@@ -121,9 +128,8 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 		if (st->period_ns > 0)
 			dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
 		update_light(dev, ts[n - 1]);
-		/* A capture takes the volume on display at a revolution start. */
 		if (!dev->blanked)
-			server_serve_captures(dev->srv, server_shown(dev->srv));
+			dev->listener->synced(dev->data);
 	}
 	arm_check(dev);
 	return 0;
@@ -132,13 +138,13 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
 {
 	struct devices *dev = data;
-	pipeline_swapped(dev->srv->pipe, buffer, time_ns, seq);
+	dev->listener->swapped(dev->data, buffer, time_ns, seq);
 }
 
 static void on_error(void *data, uint32_t buffer, int err)
 {
 	struct devices *dev = data;
-	pipeline_device_error(dev->srv->pipe, buffer, err);
+	dev->listener->buffer_error(dev->data, buffer, err);
 }
 
 static void on_gone(void *data, int err)
@@ -147,7 +153,8 @@ static void on_gone(void *data, int err)
 	log_error("projector gone: %s", strerror(-err));
 	dev->present = false;
 	dev->blanked = true; /* a missing projector emits no light */
-	pipeline_projector_gone(dev->srv->pipe);
+	dev->listener->gone(dev->data);
+	dev->listener->state_changed(dev->data);
 }
 
 /* A (re)attached projector is dark and empty: give it the timing, light it
@@ -161,7 +168,8 @@ static void on_arrived(void *data)
 	dev->blanked = true;
 	if (st->period_ns > 0)
 		dev->proj->impl->set_timing(dev->proj, st->period_ns, st->phase_ns);
-	pipeline_projector_arrived(dev->srv->pipe);
+	dev->listener->arrived(dev->data);
+	dev->listener->state_changed(dev->data);
 	update_light(dev, now_ns());
 }
 
@@ -183,12 +191,12 @@ static int on_projector(sd_event_source *s, int fd, uint32_t revents, void *data
 
 static int open_sim(struct devices *dev)
 {
-	const struct config *cfg = &dev->srv->cfg;
+	const struct config *cfg = dev->cfg;
 	struct sim_faults faults;
 	int r = sim_faults_parse(cfg->sim_faults, &faults);
 	if (r < 0)
 		return r; /* config_set checked it already */
-	dev->rotor = sim_rotor_create(dev->srv->geom.rpm);
+	dev->rotor = sim_rotor_create(dev->geom.rpm);
 	if (!dev->rotor)
 		return -errno;
 	if ((r = sim_rotor_apply_faults(dev->rotor, &faults)) < 0)
@@ -199,7 +207,7 @@ static int open_sim(struct devices *dev)
 	if (!dev->sync)
 		return -errno;
 	struct proj_sim_config pc = {
-		.geom = dev->srv->geom,
+		.geom = dev->geom,
 		.buffers = cfg->projector_buffers,
 		.link_bytes_per_sec = cfg->sim_link_bytes_per_sec,
 		.faults = &faults,
@@ -207,7 +215,7 @@ static int open_sim(struct devices *dev)
 	dev->proj = proj_sim_create(dev->rotor, &pc, &proj_listener, dev);
 	if (!dev->proj)
 		return -errno;
-	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "simulated %s", cfg->profile);
+	snprintf(dev->name, sizeof(dev->name), "simulated %s", cfg->profile);
 	return 0;
 }
 
@@ -238,7 +246,7 @@ static void usb_config(const struct config *cfg, const struct geometry *geom, st
  * lit, and the config is wrong. */
 static int open_hw(struct devices *dev)
 {
-	const struct config *cfg = &dev->srv->cfg;
+	const struct config *cfg = dev->cfg;
 	struct sync_gpiod_config sc = { .active_low = cfg->sync_active_low };
 	snprintf(sc.chip, sizeof(sc.chip), "%s", cfg->sync_chip);
 	snprintf(sc.line, sizeof(sc.line), "%s", cfg->sync_line);
@@ -246,7 +254,7 @@ static int open_hw(struct devices *dev)
 	if (!dev->sync)
 		return -errno;
 	struct proj_usb_config pc;
-	usb_config(cfg, &dev->srv->geom, &pc);
+	usb_config(cfg, &dev->geom, &pc);
 	dev->proj = proj_usb_create(&pc, &proj_listener, dev);
 	if (!dev->proj)
 		return -errno;
@@ -254,7 +262,7 @@ static int open_hw(struct devices *dev)
 	dev->proj->impl->get_stats(dev->proj, &ps);
 	if (!ps.present)
 		log_warn("no projector attached yet; waiting for one");
-	snprintf(dev->srv->device_name, sizeof(dev->srv->device_name), "%.20s:%.20s + usb projector", cfg->sync_chip,
+	snprintf(dev->name, sizeof(dev->name), "%.20s:%.20s + usb projector", cfg->sync_chip,
 		 cfg->sync_line);
 	return 0;
 }
@@ -288,7 +296,7 @@ int devices_blank(const struct config *cfg)
 
 static int add_sources(struct devices *dev)
 {
-	sd_event *e = dev->srv->event;
+	sd_event *e = dev->event;
 	int r = sd_event_add_io(e, &dev->sync_source, sync_get_fd(dev->sync), EPOLLIN, on_sync, dev);
 	if (r < 0)
 		return r;
@@ -307,22 +315,27 @@ static int add_sources(struct devices *dev)
 	return sd_event_source_set_enabled(dev->rate_timer, SD_EVENT_ON);
 }
 
-struct devices *devices_create(struct server *srv)
+struct devices *devices_create(struct sd_event *event, const struct config *cfg, const struct geometry *geom,
+			       const struct devices_listener *listener, void *data)
 {
 	struct devices *dev = calloc(1, sizeof(*dev));
 	if (!dev)
 		return NULL;
-	dev->srv = srv;
+	dev->event = event;
+	dev->cfg = cfg;
+	dev->geom = *geom;
+	dev->listener = listener;
+	dev->data = data;
 	dev->blanked = true; /* the projector starts dark */
-	int64_t period = llround(60e9 / srv->geom.rpm);
-	dev->max_err_ns = sync_light_max_err(period, srv->geom.images_per_rev);
+	int64_t period = llround(60e9 / geom->rpm);
+	dev->max_err_ns = sync_light_max_err(period, geom->images_per_rev);
 	struct sync_estimator_config ec;
-	sync_estimator_config_default(&ec, srv->geom.rpm);
+	sync_estimator_config_default(&ec, geom->rpm);
 	int r = -ENOMEM;
 	dev->est = sync_estimator_create(&ec);
 	if (!dev->est)
 		goto err;
-	r = strcmp(srv->cfg.device, "hw") ? open_sim(dev) : open_hw(dev);
+	r = strcmp(cfg->device, "hw") ? open_sim(dev) : open_hw(dev);
 	if (r < 0)
 		goto err;
 	r = add_sources(dev);
@@ -344,7 +357,7 @@ static void log_sim_safety(struct devices *dev)
 {
 	struct proj_sim_stats ss;
 	proj_sim_get_stats(dev->proj, &ss);
-	double period = 60e9 / dev->srv->geom.rpm;
+	double period = 60e9 / dev->geom.rpm;
 	log_info("simulated projector: %llu stalls, dark at most %.2f periods after the last true index "
 		 "pulse, lit %.1f ms while stopped and %.1f ms without timing, %llu watchdog blanks; slice "
 		 "angle error p50 %.3f p99 %.3f max %.3f",
@@ -387,6 +400,11 @@ int64_t devices_next_revolution(const struct devices *dev, int64_t now, int64_t 
 	if (now < st->phase_ns)
 		return st->phase_ns;
 	return st->phase_ns + ((now - st->phase_ns) / st->period_ns + 1) * st->period_ns;
+}
+
+const char *devices_name(const struct devices *dev)
+{
+	return dev->name;
 }
 
 struct projector *devices_projector(struct devices *dev)

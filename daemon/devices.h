@@ -8,9 +8,36 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-struct server;
+struct config;
+struct geometry;
 struct projector;
+struct sd_event;
 struct volume;
+
+#define DEVICES_LISTENER_VERSION 1
+
+/* What the devices report, from the event loop. */
+struct devices_listener {
+	uint32_t version; /* DEVICES_LISTENER_VERSION */
+	/* The projector was lit at time_ns (a volume swapped in while it
+	 * was dark is shown from then on). */
+	void (*lit)(void *data, int64_t time_ns);
+	/* A revolution started at time_ns (an accepted index edge), the
+	 * projector lit. */
+	void (*revolution)(void *data, int64_t time_ns);
+	/* A batch of index edges was taken and the projector is lit: the
+	 * volume on display is whole at a revolution start. */
+	void (*synced)(void *data);
+	/* Lock, light or projector presence changed (devices_get_status()). */
+	void (*state_changed)(void *data);
+	/* The projector's events (drivers/projector.h): buffer, holding
+	 * volume seq, is shown from time_ns on; it lost what buffer held;
+	 * it went away; one (dark, empty) arrived. */
+	void (*swapped)(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq);
+	void (*buffer_error)(void *data, uint32_t buffer, int err);
+	void (*gone)(void *data);
+	void (*arrived)(void *data);
+};
 
 struct devices_status {
 	float rpm; /* measured; 0 when not turning */
@@ -25,9 +52,10 @@ struct devices_status {
 	float angle_error_p99, angle_error_max; /* slices, < 0: unknown */
 };
 
-/* Opens the devices of srv->cfg.device with srv->geom, and fills
- * srv->device_name. NULL + errno on failure. */
-struct devices *devices_create(struct server *srv);
+/* Opens the devices of cfg->device (cfg is kept) with geom, their event
+ * sources in event. NULL + errno on failure. */
+struct devices *devices_create(struct sd_event *event, const struct config *cfg, const struct geometry *geom,
+			       const struct devices_listener *listener, void *data);
 /* Blanks the projector and closes everything. Accepts NULL. */
 void devices_destroy(struct devices *dev);
 
@@ -36,6 +64,8 @@ struct config;
  * lets it go. 0 (also with no projector, or device sim) or negative errno. */
 int devices_blank(const struct config *cfg);
 
+/* What the devices are, for logs and clients ("simulated small"). */
+const char *devices_name(const struct devices *dev);
 struct projector *devices_projector(struct devices *dev);
 /* The volume on display as the projector holds it, if it can tell. */
 const struct volume *devices_shown(struct devices *dev);

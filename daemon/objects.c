@@ -10,7 +10,8 @@
 #include <unistd.h>
 
 #include "client.h"
-#include "server.h"
+#include "config.h"
+#include "stage.h"
 
 static const float identity[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
 
@@ -20,8 +21,8 @@ int object_register(struct client *c, struct object *obj, uint32_t id, enum prot
 		return client_fail(c, 1, PROTO_ERR_OBJECT, "new id %u out of range", id);
 	if (idmap_get(&c->objects, id))
 		return client_fail(c, 1, PROTO_ERR_OBJECT, "id %u already in use", id);
-	if (c->objects.count >= c->server->cfg.max_objects)
-		return client_fail(c, 1, PROTO_ERR_QUOTA, "more than %u objects", c->server->cfg.max_objects);
+	if (c->objects.count >= c->env->cfg->max_objects)
+		return client_fail(c, 1, PROTO_ERR_QUOTA, "more than %u objects", c->env->cfg->max_objects);
 	if (idmap_insert(&c->objects, id, obj) < 0)
 		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
 	obj->id = id;
@@ -32,7 +33,7 @@ int object_register(struct client *c, struct object *obj, uint32_t id, enum prot
 
 /* ---- buffers ---- */
 
-static void buffer_free(struct buffer *b)
+static void buffer_destroy(struct buffer *b)
 {
 	if (b->inline_data)
 		free((void *)b->map);
@@ -62,9 +63,9 @@ int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd)
 	int r = check_memfd(c, fd, size);
 	if (r < 0)
 		goto out_close;
-	if (size > c->server->cfg.max_buffer_bytes - c->buffer_bytes || size > SIZE_MAX / 2) {
+	if (size > c->env->cfg->max_buffer_bytes - c->buffer_bytes || size > SIZE_MAX / 2) {
 		r = client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
-				(unsigned long long)c->server->cfg.max_buffer_bytes);
+				(unsigned long long)c->env->cfg->max_buffer_bytes);
 		goto out_close;
 	}
 	struct buffer *b = calloc(1, sizeof(*b));
@@ -86,7 +87,7 @@ int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd)
 	b->base.client = c;
 	r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
 	if (r < 0)
-		buffer_free(b);
+		buffer_destroy(b);
 out_close:
 	close(fd);
 	return r;
@@ -95,9 +96,9 @@ out_close:
 /* Inline data is copied: the message's bytes go with the message. */
 int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size)
 {
-	if (size > c->server->cfg.max_buffer_bytes - c->buffer_bytes)
+	if (size > c->env->cfg->max_buffer_bytes - c->buffer_bytes)
 		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
-				   (unsigned long long)c->server->cfg.max_buffer_bytes);
+				   (unsigned long long)c->env->cfg->max_buffer_bytes);
 	struct buffer *b = calloc(1, sizeof(*b));
 	void *copy = malloc(size ? size : 1);
 	if (!b || !copy) {
@@ -114,7 +115,7 @@ int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data
 	b->base.client = c;
 	int r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
 	if (r < 0)
-		buffer_free(b);
+		buffer_destroy(b);
 	return r;
 }
 
@@ -134,7 +135,7 @@ const struct proto_buffer_requests buffer_requests = {
 static void draws_clear(struct draw_array *a)
 {
 	for (uint32_t i = 0; i < a->count; i++)
-		vdata_unref(a->draws[i].data);
+		vdata_unref(a->items[i].data);
 	a->count = 0;
 	a->vertices = 0;
 	a->prims = 0;
@@ -143,21 +144,21 @@ static void draws_clear(struct draw_array *a)
 static void draws_finish(struct draw_array *a)
 {
 	draws_clear(a);
-	free(a->draws);
+	free(a->items);
 	*a = (struct draw_array){ 0 };
 }
 
-static int draws_append(struct draw_array *a, const struct list_draw *d)
+static int draws_append(struct draw_array *a, const struct list_item *d)
 {
 	if (a->count == a->cap) {
 		uint32_t cap = a->cap ? a->cap * 2 : 8;
-		struct list_draw *draws = realloc(a->draws, cap * sizeof(*draws));
-		if (!draws)
+		struct list_item *items = realloc(a->items, cap * sizeof(*items));
+		if (!items)
 			return -ENOMEM;
-		a->draws = draws;
+		a->items = items;
 		a->cap = cap;
 	}
-	a->draws[a->count++] = *d;
+	a->items[a->count++] = *d;
 	a->vertices += d->data->count;
 	a->prims += d->data->prims;
 	return 0;
@@ -168,7 +169,7 @@ static int draws_copy(struct draw_array *dst, const struct draw_array *src)
 {
 	draws_clear(dst);
 	for (uint32_t i = 0; i < src->count; i++) {
-		struct list_draw d = src->draws[i];
+		struct list_item d = src->items[i];
 		vdata_ref(d.data);
 		if (draws_append(dst, &d) < 0) {
 			vdata_unref(d.data);
@@ -376,7 +377,7 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 	struct client *c = l->base.client;
 	struct vdata *v;
 	uint32_t bad = 0;
-	switch (draw_build(src, c->server->cfg.max_vertices - c->vertices, &v, &bad)) {
+	switch (draw_build(src, c->env->cfg->max_vertices - c->vertices, &v, &bad)) {
 	case DRAW_OK:
 		break;
 	case DRAW_BAD_COUNT:
@@ -387,13 +388,13 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 				 src->vertex_count);
 	case DRAW_TOO_MANY:
 		return list_fail(l, PROTO_ERR_QUOTA, "more than %llu vertices",
-				 (unsigned long long)c->server->cfg.max_vertices);
+				 (unsigned long long)c->env->cfg->max_vertices);
 	case DRAW_NO_MEMORY:
 		return list_fail(l, PROTO_ERR_NO_MEMORY, "out of memory");
 	}
 	if (!v)
 		return 0;
-	struct list_draw d = { .data = v, .point_size = l->state.point_size };
+	struct list_item d = { .data = v, .point_size = l->state.point_size };
 	memcpy(d.transform, l->state.transform, sizeof(d.transform));
 	memcpy(d.rgba, l->state.color, 4);
 	if (draws_append(&l->pending, &d) < 0) {
@@ -460,21 +461,24 @@ int objects_create_layer(struct client *c, uint32_t id)
 	link_init(&y->link);
 	memcpy(y->pending.transform, identity, sizeof(identity));
 	y->pending.visible = true;
-	y->committed = y->pending;
-	y->serial = ++c->server->layer_serial;
+	memcpy(y->committed.transform, identity, sizeof(identity));
+	y->committed.visible = true;
+	y->committed.owner = c;
 	int r = object_register(c, &y->base, id, PROTO_IFACE_LAYER);
 	if (r < 0) {
 		free(y);
 		return r;
 	}
+	stage_add(c->env->stage, &y->committed);
 	link_append(&c->layers, &y->link);
 	return 0;
 }
 
+/* Off the stage already. */
 static void layer_free(struct layer *y)
 {
 	list_unref(y->pending.list);
-	list_unref(y->committed.list);
+	list_unref(y->committed_list);
 	link_remove(&y->link);
 	free(y);
 }
@@ -547,9 +551,12 @@ const struct proto_layer_requests layer_requests = {
 
 /* ---- commit and destruction ---- */
 
-static const struct layer_state *layer_after_commit(const struct layer *y)
+/* The layer's list, and whether it is visible and exclusive, after a commit now. */
+static const struct list *layer_after_commit(const struct layer *y, bool *visible, bool *exclusive)
 {
-	return y->changed ? &y->pending : &y->committed;
+	*visible = y->changed ? y->pending.visible : y->committed.visible;
+	*exclusive = y->changed ? y->pending.exclusive : y->committed.exclusive;
+	return y->changed ? y->pending.list : y->committed_list;
 }
 
 static uint64_t list_prims_after_commit(const struct list *l)
@@ -559,17 +566,18 @@ static uint64_t list_prims_after_commit(const struct list *l)
 
 uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size)
 {
-	const struct config *cfg = &c->server->cfg;
+	const struct config *cfg = c->env->cfg;
 	uint64_t prims = 0;
 	const struct layer *exclusive = NULL;
 	struct layer *y;
 	link_for_each(y, &c->layers, link) {
-		const struct layer_state *s = layer_after_commit(y);
-		if (!s->visible)
+		bool visible, excl;
+		const struct list *l = layer_after_commit(y, &visible, &excl);
+		if (!visible)
 			continue;
-		if (s->list)
-			prims += list_prims_after_commit(s->list);
-		if (s->exclusive && !exclusive)
+		if (l)
+			prims += list_prims_after_commit(l);
+		if (excl && !exclusive)
 			exclusive = y;
 	}
 	*object = 1;
@@ -586,7 +594,7 @@ uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, si
 			 config_policy_name(cfg->exclusive));
 		return PROTO_DISPLAY_REFUSAL_DENIED;
 	}
-	const struct client *holder = server_exclusive_client(c->server);
+	const void *holder = stage_exclusive_owner(c->env->stage);
 	if (holder && holder != c) {
 		snprintf(text, size, "another client's exclusive layer is showing");
 		return PROTO_DISPLAY_REFUSAL_BUSY;
@@ -594,14 +602,29 @@ uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, si
 	return 0;
 }
 
-bool layer_exclusive(const struct layer *y)
+bool objects_leave_stage(struct client *c)
 {
-	return y->committed.exclusive && y->committed.visible;
+	bool changed = false;
+	struct layer *y;
+	link_for_each(y, &c->layers, link) changed |= stage_remove(&y->committed);
+	return changed;
 }
 
-bool layer_affects_scene(const struct layer *y)
+/* The pending state becomes what the stage shows of y. */
+static void layer_commit(struct layer *y)
 {
-	return y->committed.visible && (y->committed.list || y->committed.exclusive);
+	struct list *l = y->pending.list;
+	if (l)
+		l->refs++;
+	list_unref(y->committed_list);
+	y->committed_list = l;
+	struct stage_layer *s = &y->committed;
+	s->draws = l ? &l->committed : NULL;
+	memcpy(s->transform, y->pending.transform, sizeof(s->transform));
+	s->priority = y->pending.priority;
+	s->visible = y->pending.visible;
+	s->exclusive = y->pending.exclusive;
+	y->changed = false;
 }
 
 bool objects_commit(struct client *c)
@@ -620,11 +643,7 @@ bool objects_commit(struct client *c)
 	link_for_each(y, &c->layers, link) {
 		if (!y->changed)
 			continue;
-		if (y->pending.list)
-			y->pending.list->refs++;
-		list_unref(y->committed.list);
-		y->committed = y->pending;
-		y->changed = false;
+		layer_commit(y);
 		changed = true;
 	}
 	return changed;
@@ -636,24 +655,24 @@ void object_destroy(struct object *obj)
 	idmap_remove(&c->objects, obj->id);
 	switch (obj->type) {
 	case PROTO_IFACE_BUFFER:
-		buffer_free((struct buffer *)obj);
+		buffer_destroy((struct buffer *)obj);
 		break;
 	case PROTO_IFACE_LIST:
 		list_unref((struct list *)obj);
 		break;
 	case PROTO_IFACE_LAYER: {
 		struct layer *y = (struct layer *)obj;
-		/* A departing client's layers are accounted for by the reaper. */
-		if (!c->dead)
-			server_scene_changed(c->server, layer_affects_scene(y));
+		/* A departing client's layers are accounted for when it dies. */
+		if (stage_remove(&y->committed) && !c->dead)
+			stage_changed(c->env->stage);
 		layer_free(y);
 		break;
 	}
 	case PROTO_IFACE_CALLBACK:
 	case PROTO_IFACE_CAPTURE: {
-		struct waiter *w = (struct waiter *)obj;
-		link_remove(&w->link);
-		free(w);
+		struct callback *cb = (struct callback *)obj;
+		frames_remove(&cb->wait);
+		free(cb);
 		break;
 	}
 	case PROTO_IFACE_DISPLAY:

@@ -13,14 +13,15 @@
 #include "log.h"
 #include "projector.h"
 #include "render.h"
-#include "server.h"
 #include "snapshot.h"
 #include "volume.h"
 
 #define MAX_BUFFERS 3
 
 struct pipeline {
-	struct server *srv;
+	struct pipeline_config cfg;
+	const struct pipeline_listener *listener;
+	void *data;
 	struct renderer *renderer;
 	struct projector *proj;
 	uint32_t buffers;
@@ -85,14 +86,14 @@ static void *render_thread(void *data)
 
 static void pipeline_kick(struct pipeline *p);
 
-static bool buffer_free(const struct pipeline *p, int b)
+static bool buffer_available(const struct pipeline *p, int b)
 {
 	return b != p->shown && b != p->pending && b != p->uploaded;
 }
 
 /* Sends content[b] into buffer b: a delta against what b held (old),
  * when the device is known to hold that. */
-static int send(struct pipeline *p, int b, const struct volume *old)
+static int upload_buffer(struct pipeline *p, int b, const struct volume *old)
 {
 	int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], p->known[b] ? old : NULL);
 	if (r < 0) {
@@ -117,7 +118,7 @@ static int pick_buffer(const struct pipeline *p)
 	uint64_t best_seq = 0;
 	for (int b = 0; b < (int)p->buffers; b++) {
 		uint64_t seq = p->known[b] ? p->content[b]->seq + 1 : 0;
-		if (buffer_free(p, b) && (best < 0 || seq > best_seq)) {
+		if (buffer_available(p, b) && (best < 0 || seq > best_seq)) {
 			best = b;
 			best_seq = seq;
 		}
@@ -132,7 +133,7 @@ static void upload_ready(struct pipeline *p)
 		return;
 	struct volume *old = p->content[b];
 	p->content[b] = p->work;
-	if (send(p, b, old) < 0) {
+	if (upload_buffer(p, b, old) < 0) {
 		p->content[b] = old; /* keep the rendered volume for later */
 		return;
 	}
@@ -148,7 +149,7 @@ static void resend_lost(struct pipeline *p)
 	p->resend = -1;
 	if (p->ready || b == p->shown || p->failures > 3)
 		return;
-	send(p, b, NULL);
+	upload_buffer(p, b, NULL);
 }
 
 /* The scene being built is the one last rendered: the volume of that
@@ -157,13 +158,12 @@ static void skip_unchanged(struct pipeline *p)
 {
 	snapshot_release(p->building);
 	p->stats.volumes_skipped++;
-	if (snapshot_tie_frames(p->srv, p->last_seq))
-		server_frames_waiting(p->srv);
+	p->listener->scene_taken(p->data, p->last_seq, true);
 }
 
 static void start_render(struct pipeline *p)
 {
-	if (snapshot_build(p->building, p->srv) < 0) {
+	if (snapshot_build(p->building, p->cfg.stage, p->cfg.max_scene_primitives) < 0) {
 		log_error("out of memory building the scene; retrying with the next change");
 		return;
 	}
@@ -171,14 +171,14 @@ static void start_render(struct pipeline *p)
 	if (p->building->layers_left_out != p->layers_left_out) {
 		p->layers_left_out = p->building->layers_left_out;
 		log_info("%u layers left out of the scene: over max-scene-primitives (%llu)", p->layers_left_out,
-			 (unsigned long long)p->srv->cfg.max_scene_primitives);
+			 (unsigned long long)p->cfg.max_scene_primitives);
 	}
 	if (p->have_last && snapshot_same(p->building, p->last)) {
 		skip_unchanged(p);
 		return;
 	}
 	uint64_t seq = p->next_seq++;
-	snapshot_tie_frames(p->srv, seq);
+	p->listener->scene_taken(p->data, seq, false);
 	p->busy = true;
 	p->work_seq = seq;
 	pthread_mutex_lock(&p->lock);
@@ -213,7 +213,7 @@ static void keep_rendered(struct pipeline *p)
 static int64_t render_start_time(struct pipeline *p, int64_t now)
 {
 	int64_t period = 0;
-	int64_t next = devices_next_revolution(p->srv->dev, now, &period);
+	int64_t next = devices_next_revolution(p->cfg.devices, now, &period);
 	if (!next)
 		return 0;
 	int64_t render = (int64_t)p->stats.last_render_us * 1000;
@@ -236,7 +236,7 @@ static void arm_start_timer(struct pipeline *p, int64_t at_ns)
 {
 	uint64_t usec = (uint64_t)at_ns / 1000;
 	if (!p->start_timer) {
-		if (sd_event_add_time(p->srv->event, &p->start_timer, CLOCK_MONOTONIC, usec, 100, on_start_timer, p) <
+		if (sd_event_add_time(p->cfg.event, &p->start_timer, CLOCK_MONOTONIC, usec, 100, on_start_timer, p) <
 		    0) {
 			start_render(p); /* no timer: render now rather than never */
 			return;
@@ -322,7 +322,7 @@ void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns, uint
 	struct volume *v = p->content[buffer];
 	v->shown_ns = (uint64_t)time_ns;
 	p->stats.volumes_shown++;
-	server_volume_shown(p->srv, v->seq, time_ns);
+	p->listener->shown(p->data, v->seq, time_ns);
 	pipeline_kick(p);
 }
 
@@ -402,7 +402,8 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 	return 0;
 }
 
-struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj)
+struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct renderer *renderer,
+				 const struct pipeline_listener *listener, void *data)
 {
 	int r;
 	struct pipeline *p = calloc(1, sizeof(*p));
@@ -410,11 +411,13 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 		render_destroy(renderer);
 		return NULL;
 	}
-	p->srv = srv;
+	p->cfg = *cfg;
+	p->listener = listener;
+	p->data = data;
 	p->renderer = renderer;
-	p->proj = proj;
+	p->proj = devices_projector(cfg->devices);
 	/* With no projector attached yet, arrived() says how many. */
-	p->buffers = buffers_of(proj);
+	p->buffers = buffers_of(p->proj);
 	p->shown = p->pending = p->uploaded = p->latest = p->resend = -1;
 	p->next_seq = 1;
 	p->building = &p->snaps[0];
@@ -430,7 +433,7 @@ struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, 
 		r = -errno;
 		goto err;
 	}
-	r = sd_event_add_io(srv->event, &p->done_source, p->done_fd, EPOLLIN, render_done, p);
+	r = sd_event_add_io(cfg->event, &p->done_source, p->done_fd, EPOLLIN, render_done, p);
 	if (r < 0)
 		goto err;
 	r = -pthread_create(&p->thread, NULL, render_thread, p);

@@ -11,9 +11,10 @@
 
 #include "geometry.h"
 
-struct server;
+struct devices;
 struct renderer;
-struct projector;
+struct sd_event;
+struct stage;
 struct volume;
 
 struct pipeline_stats {
@@ -26,9 +27,31 @@ struct pipeline_stats {
 	uint64_t bytes_uploaded;    /* wire bytes of every upload */
 };
 
-/* Takes ownership of renderer; the projector stays the caller's and says
- * how many volume buffers it has. NULL + errno on failure. */
-struct pipeline *pipeline_create(struct server *srv, struct renderer *renderer, struct projector *proj);
+struct pipeline_config {
+	struct sd_event *event;
+	struct stage *stage;     /* what is shown, read at each scene taken */
+	struct devices *devices; /* its projector, and when revolutions start */
+	uint64_t max_scene_primitives;
+};
+
+#define PIPELINE_LISTENER_VERSION 1
+
+struct pipeline_listener {
+	uint32_t version; /* PIPELINE_LISTENER_VERSION */
+	/* A scene was taken from the stage for volume seq: the frames of
+	 * every commit made so far belong to it. unchanged: the scene was
+	 * the one last rendered, so volume seq (shown already, or on its
+	 * way) shows it, and nothing is rendered. */
+	void (*scene_taken)(void *data, uint64_t seq, bool unchanged);
+	/* Volume seq was swapped in at time_ns (shown then if the projector
+	 * is lit). */
+	void (*shown)(void *data, uint64_t seq, int64_t time_ns);
+};
+
+/* Takes ownership of renderer; the devices stay the caller's, and their
+ * projector says how many volume buffers it has. NULL + errno on failure. */
+struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct renderer *renderer,
+				 const struct pipeline_listener *listener, void *data);
 /* Waits for a render in flight. Accepts NULL. */
 void pipeline_destroy(struct pipeline *p);
 

@@ -7,7 +7,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -20,7 +19,6 @@
 #include "log.h"
 #include "pipeline.h"
 #include "render.h"
-#include "svol.h"
 
 /* ---- the listening socket ---- */
 
@@ -138,126 +136,174 @@ static int reap(sd_event_source *s, void *data)
 {
 	struct server *srv = data;
 	struct client *c, *tmp;
-	bool visible = false;
+	bool changed = false;
 	link_for_each_safe(c, tmp, &srv->clients, link) {
 		if (!c->dead)
 			continue;
-		struct layer *y;
-		link_for_each(y, &c->layers, link) visible |= layer_affects_scene(y);
+		changed |= c->left_scene;
 		link_remove(&c->link);
 		srv->client_count--;
 		log_debug("client %d disconnected", proto_conn_get_fd(c->conn));
 		client_destroy(c);
 	}
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
-	if (visible)
-		pipeline_mark_dirty(srv->pipe);
+	if (changed)
+		stage_changed(&srv->stage);
 	return 0;
 }
 
-void server_reap_later(struct server *srv)
+static void client_dead(void *data, struct client *c)
 {
+	struct server *srv = data;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_ONESHOT);
 }
 
-void server_commit(struct server *srv)
+static void client_status(void *data, struct proto_display_status_args *out)
 {
-	pipeline_mark_dirty(srv->pipe);
+	server_get_status(data, out);
 }
 
-void server_scene_changed(struct server *srv, bool changed)
+static const struct client_listener client_listener = {
+	.version = CLIENT_LISTENER_VERSION,
+	.dead = client_dead,
+	.status = client_status,
+};
+
+/* ---- the stage, frames and captures ---- */
+
+static void stage_changed_(void *data)
 {
-	if (changed && srv->pipe)
+	struct server *srv = data;
+	if (srv->pipe)
 		pipeline_mark_dirty(srv->pipe);
 }
 
-/* Frame callbacks of c tied to volume seq or older are done: shown at
- * time_ns; those of commits made after time_ns wait. Returns whether any
- * waits so. */
-static bool client_frames_done(struct client *c, uint64_t seq, int64_t time_ns)
+static const struct stage_listener stage_listener = {
+	.version = STAGE_LISTENER_VERSION,
+	.changed = stage_changed_,
+};
+
+static void frame_done(void *data, struct waiter *w, uint64_t seq, int64_t time_ns)
 {
-	bool later = false, sent = false;
-	struct waiter *w, *tmp;
-	link_for_each_safe(w, tmp, &c->frames, link) {
-		if (!w->volume_seq || w->volume_seq > seq)
-			continue;
-		if (w->commit_ns > time_ns) {
-			later = true;
-			continue;
-		}
-		proto_ev_callback_done(c->conn, w->base.id, seq, (uint64_t)time_ns);
-		object_destroy(&w->base);
-		sent = true;
-	}
-	if (sent)
-		client_flush(c);
-	return later;
+	client_frame_done(w, seq, time_ns);
 }
 
-/* The same for every client. Returns whether any frame waits for a later
- * revolution start of seq. */
-static bool frames_done(struct server *srv, uint64_t seq, int64_t time_ns)
+static void capture_done(void *data, struct waiter *w, int fd, uint64_t size)
 {
-	bool later = false;
-	struct client *c;
-	link_for_each(c, &srv->clients, link) {
-		if (!c->dead)
-			later |= client_frames_done(c, seq, time_ns);
-	}
-	return later;
+	client_capture_done(w, fd, size);
 }
 
-void server_volume_shown(struct server *srv, uint64_t seq, int64_t time_ns)
+static const struct frames_listener frames_listener = {
+	.version = FRAMES_LISTENER_VERSION,
+	.frame_done = frame_done,
+	.capture_done = capture_done,
+};
+
+/* Waiting captures get the volume on display: as the projector holds it
+ * when it can tell, else as the daemon sent it. */
+static void serve_captures(struct server *srv)
 {
-	/* Swapped in while dark is not shown: that waits for the light. */
-	if (!devices_lit(srv->dev)) {
-		srv->unseen_seq = seq;
+	if (!frames_capture_waiting(&srv->frames))
 		return;
-	}
-	srv->unseen_seq = 0;
-	srv->shown_seq = seq;
-	if (frames_done(srv, seq, time_ns))
-		srv->frames_waiting = true;
-	if (srv->captures_waiting)
-		server_serve_captures(srv, server_shown(srv));
+	const struct volume *v = devices_shown(srv->dev);
+	frames_serve_captures(&srv->frames, v ? v : pipeline_shown(srv->pipe));
 }
 
-void server_projector_lit(struct server *srv, int64_t time_ns)
+/* ---- the pipeline ---- */
+
+static void scene_taken(void *data, uint64_t seq, bool unchanged)
 {
-	if (srv->unseen_seq)
-		server_volume_shown(srv, srv->unseen_seq, time_ns);
+	struct server *srv = data;
+	if (frames_tie(&srv->frames, seq) && unchanged)
+		frames_wait_revolution(&srv->frames);
 }
 
-void server_frames_waiting(struct server *srv)
+static void volume_shown(void *data, uint64_t seq, int64_t time_ns)
 {
-	srv->frames_waiting = true;
+	struct server *srv = data;
+	if (frames_shown(&srv->frames, seq, time_ns, devices_lit(srv->dev)))
+		serve_captures(srv);
 }
 
-void server_revolution(struct server *srv, int64_t time_ns)
+static const struct pipeline_listener pipeline_listener = {
+	.version = PIPELINE_LISTENER_VERSION,
+	.scene_taken = scene_taken,
+	.shown = volume_shown,
+};
+
+/* ---- the devices ---- */
+
+static void projector_lit(void *data, int64_t time_ns)
 {
-	if (!srv->frames_waiting || !srv->shown_seq)
-		return;
-	/* A volume swapped in at this very start is not shown_seq; its swap
-	 * report answers the frames instead. */
-	if (pipeline_swap_pending(srv->pipe))
-		return;
-	srv->frames_waiting = frames_done(srv, srv->shown_seq, time_ns);
+	struct server *srv = data;
+	if (frames_lit(&srv->frames, time_ns))
+		serve_captures(srv);
 }
 
-struct client *server_exclusive_client(struct server *srv)
+static void revolution(void *data, int64_t time_ns)
 {
-	struct client *c;
-	link_for_each(c, &srv->clients, link) {
-		if (c->dead)
-			continue;
-		struct layer *y;
-		link_for_each(y, &c->layers, link) if (layer_exclusive(y)) return c;
-	}
-	return NULL;
+	struct server *srv = data;
+	if (srv->pipe) /* none while setting up */
+		frames_revolution(&srv->frames, time_ns, pipeline_swap_pending(srv->pipe));
 }
+
+/* A capture takes the volume on display at a revolution start. */
+static void synced(void *data)
+{
+	serve_captures(data);
+}
+
+static void push_state(struct server *srv);
+
+static void devices_state_changed(void *data)
+{
+	push_state(data);
+}
+
+static void swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
+{
+	struct server *srv = data;
+	if (srv->pipe) /* none while setting up */
+		pipeline_swapped(srv->pipe, buffer, time_ns, seq);
+}
+
+static void buffer_error(void *data, uint32_t buffer, int err)
+{
+	struct server *srv = data;
+	if (srv->pipe) /* none while setting up */
+		pipeline_device_error(srv->pipe, buffer, err);
+}
+
+static void projector_gone(void *data)
+{
+	struct server *srv = data;
+	if (srv->pipe) /* none while setting up */
+		pipeline_projector_gone(srv->pipe);
+}
+
+static void projector_arrived(void *data)
+{
+	struct server *srv = data;
+	if (srv->pipe) /* none while setting up */
+		pipeline_projector_arrived(srv->pipe);
+}
+
+static const struct devices_listener devices_listener = {
+	.version = DEVICES_LISTENER_VERSION,
+	.lit = projector_lit,
+	.revolution = revolution,
+	.synced = synced,
+	.state_changed = devices_state_changed,
+	.swapped = swapped,
+	.buffer_error = buffer_error,
+	.gone = projector_gone,
+	.arrived = projector_arrived,
+};
+
+/* ---- status and state events ---- */
 
 /* Clients past the handshake and not being dropped. */
-static uint32_t server_active_clients(struct server *srv)
+static uint32_t active_clients(struct server *srv)
 {
 	uint32_t n = 0;
 	struct client *c;
@@ -265,20 +311,20 @@ static uint32_t server_active_clients(struct server *srv)
 	return n;
 }
 
-void server_get_status(struct server *srv, struct server_status *out)
+void server_get_status(struct server *srv, struct proto_display_status_args *out)
 {
 	struct devices_status ds;
 	struct pipeline_stats ps;
 	devices_get_status(srv->dev, &ds);
 	pipeline_get_stats(srv->pipe, &ps);
-	*out = (struct server_status){
+	*out = (struct proto_display_status_args){
 		.rpm = ds.rpm,
 		.flags = (ds.locked ? PROTO_DISPLAY_STATUS_FLAGS_LOCKED : 0) |
 			 (ds.blanked ? PROTO_DISPLAY_STATUS_FLAGS_BLANKED : 0) |
 			 (ds.projector_present ? PROTO_DISPLAY_STATUS_FLAGS_PROJECTOR_PRESENT : 0),
 		.volumes_shown = ps.volumes_shown,
 		.underruns = ds.underruns,
-		.clients = server_active_clients(srv),
+		.clients = active_clients(srv),
 		.volumes_rendered = ps.volumes_rendered,
 		.volumes_skipped = ps.volumes_skipped,
 		.bytes_uploaded = ps.bytes_uploaded,
@@ -292,19 +338,23 @@ void server_get_status(struct server *srv, struct server_status *out)
 	};
 }
 
-/* ---- state events ---- */
-
-/* Checks the state 20 times a second and tells version 2 clients of a
- * change (a flag, or rpm by 1% of nominal). */
+/* Tells version 2 clients of a change of state (a flag, or rpm by 1% of
+ * nominal): when the devices report one, and 20 times a second for rpm. */
 #define STATE_INTERVAL_US 50000
+
+static void push_state(struct server *srv)
+{
+	if (!srv->pipe)
+		return; /* still setting up */
+	struct proto_display_status_args st;
+	server_get_status(srv, &st);
+	struct client *c;
+	link_for_each(c, &srv->clients, link) client_send_state(c, &st, false);
+}
 
 static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
 {
-	struct server *srv = data;
-	struct server_status st;
-	server_get_status(srv, &st);
-	struct client *c;
-	link_for_each(c, &srv->clients, link) client_send_state(c, st.flags, st.rpm, false);
+	push_state(data);
 	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
 	return 0;
 }
@@ -332,72 +382,6 @@ static gid_t admin_gid(const char *name)
 		return (gid_t)-1;
 	}
 	return g->gr_gid;
-}
-
-/* ---- captures ---- */
-
-const struct volume *server_shown(struct server *srv)
-{
-	const struct volume *v = devices_shown(srv->dev);
-	return v ? v : pipeline_shown(srv->pipe);
-}
-
-void server_capture_requested(struct server *srv)
-{
-	srv->captures_waiting++;
-}
-
-/* The volume as an .svol file in a sealed memfd. -errno on failure. */
-static int svol_memfd(const struct volume *vol, uint64_t *size)
-{
-	int fd = memfd_create("spindle-capture", MFD_CLOEXEC | MFD_ALLOW_SEALING);
-	if (fd < 0)
-		return -errno;
-	int dup = fcntl(fd, F_DUPFD_CLOEXEC, 3);
-	FILE *f = dup >= 0 ? fdopen(dup, "w") : NULL;
-	int r = f ? svol_write(f, vol) : -errno;
-	if (f && fclose(f) != 0 && r == 0)
-		r = -EIO;
-	if (!f && dup >= 0)
-		close(dup);
-	struct stat st;
-	if (r == 0 && fstat(fd, &st) < 0)
-		r = -errno;
-	if (r == 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) < 0)
-		r = -errno;
-	if (r < 0) {
-		close(fd);
-		return r;
-	}
-	*size = (uint64_t)st.st_size;
-	return fd;
-}
-
-void server_serve_captures(struct server *srv, const struct volume *shown)
-{
-	if (!shown || !srv->captures_waiting)
-		return;
-	uint64_t size = 0;
-	int fd = svol_memfd(shown, &size);
-	if (fd < 0)
-		log_error("capture failed: %s", strerror(-fd));
-	struct client *c;
-	link_for_each(c, &srv->clients, link) {
-		struct waiter *w, *tmp;
-		link_for_each_safe(w, tmp, &c->captures, link) {
-			if (c->dead)
-				break;
-			if (fd >= 0)
-				proto_ev_capture_ready(c->conn, w->base.id, fd, size);
-			else
-				proto_ev_capture_failed(c->conn, w->base.id, PROTO_CAPTURE_FAILURE_ERROR, strerror(-fd));
-			object_destroy(&w->base);
-		}
-		client_flush(c);
-	}
-	srv->captures_waiting = 0;
-	if (fd >= 0)
-		close(fd);
 }
 
 /* ---- set-up and the loop ---- */
@@ -439,7 +423,13 @@ static int setup_render(struct server *srv)
 	if (!r)
 		return -errno;
 	log_info("renderer: %s", r->impl->name);
-	srv->pipe = pipeline_create(srv, r, devices_projector(srv->dev));
+	struct pipeline_config pc = {
+		.event = srv->event,
+		.stage = &srv->stage,
+		.devices = srv->dev,
+		.max_scene_primitives = cfg->max_scene_primitives,
+	};
+	srv->pipe = pipeline_create(&pc, r, &pipeline_listener, srv);
 	return srv->pipe ? 0 : -errno;
 }
 
@@ -470,6 +460,8 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 {
 	*srv = (struct server){ .cfg = *cfg, .listen_fd = -1 };
 	link_init(&srv->clients);
+	stage_init(&srv->stage, &stage_listener, srv);
+	frames_init(&srv->frames, &frames_listener, srv);
 	int r = geometry_from_profile(cfg->profile, &srv->geom);
 	if (r < 0) {
 		log_error("unknown profile '%s'", cfg->profile);
@@ -479,7 +471,7 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		log_error("event loop: %s", strerror(-r));
 		return r;
 	}
-	srv->dev = devices_create(srv);
+	srv->dev = devices_create(srv->event, &srv->cfg, &srv->geom, &devices_listener, srv);
 	if (!srv->dev) {
 		r = -errno;
 		log_error("devices: %s", strerror(errno));
@@ -489,7 +481,17 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		log_error("renderer: %s", strerror(-r));
 		return r;
 	}
-	srv->admin_gid = admin_gid(cfg->admin_group);
+	srv->client_env = (struct client_env){
+		.event = srv->event,
+		.cfg = &srv->cfg,
+		.geom = &srv->geom,
+		.device_name = devices_name(srv->dev),
+		.admin_gid = admin_gid(cfg->admin_group),
+		.stage = &srv->stage,
+		.frames = &srv->frames,
+		.listener = &client_listener,
+		.data = srv,
+	};
 	if ((r = setup_state_timer(srv)) < 0)
 		return r;
 	if (!listen)
@@ -501,7 +503,7 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 
 int server_add_client(struct server *srv, int fd)
 {
-	struct client *c = client_create(srv, fd);
+	struct client *c = client_create(&srv->client_env, fd);
 	if (!c)
 		return -errno;
 	link_append(&srv->clients, &c->link);
@@ -515,7 +517,7 @@ int server_run(const struct config *cfg)
 	int r = server_init(&srv, cfg, true);
 	if (r < 0)
 		goto out;
-	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", srv.device_name, srv.geom.width,
+	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", devices_name(srv.dev), srv.geom.width,
 		 srv.geom.height, srv.geom.images_per_rev, srv.geom.mirrored ? " (mirrored)" : "", srv.geom.rpm);
 	sd_notify(0, "READY=1\nSTATUS=Serving clients");
 	r = sd_event_loop(srv.event);

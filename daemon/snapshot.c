@@ -4,8 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "client.h"
-#include "server.h"
+#include "draw.h"
+#include "stage.h"
 
 static int snapshot_grow(struct snapshot *snap)
 {
@@ -22,11 +22,11 @@ static int snapshot_grow(struct snapshot *snap)
 	return 0;
 }
 
-static int add_layer(struct snapshot *snap, const struct layer_state *ls)
+static int add_layer(struct snapshot *snap, const struct stage_layer *y)
 {
-	const struct draw_array *a = &ls->list->committed;
+	const struct draw_array *a = y->draws;
 	for (uint32_t i = 0; i < a->count; i++) {
-		const struct list_draw *d = &a->draws[i];
+		const struct list_item *d = &a->items[i];
 		if (snap->scene.draw_count == snap->cap && snapshot_grow(snap) < 0)
 			return -ENOMEM;
 		struct scene_draw *sd = &snap->draws[snap->scene.draw_count];
@@ -37,7 +37,7 @@ static int add_layer(struct snapshot *snap, const struct layer_state *ls)
 			.point_size = d->point_size,
 			.prim_rgb = d->data->prim_rgb,
 		};
-		mat4_mul(sd->transform, ls->transform, d->transform);
+		mat4_mul(sd->transform, y->transform, d->transform);
 		for (int c = 0; c < 3; c++)
 			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);
 		snap->data[snap->scene.draw_count++] = vdata_ref(d->data);
@@ -45,85 +45,24 @@ static int add_layer(struct snapshot *snap, const struct layer_state *ls)
 	return 0;
 }
 
-/* Highest priority first; of equal ones, the older layer. */
-static int layer_order(const void *pa, const void *pb)
-{
-	const struct layer *a = *(const struct layer *const *)pa, *b = *(const struct layer *const *)pb;
-	if (a->committed.priority != b->committed.priority)
-		return a->committed.priority > b->committed.priority ? -1 : 1;
-	return a->serial < b->serial ? -1 : a->serial > b->serial;
-}
-
-/* The layers to show, in priority order, into snap->layers: every
- * visible layer with a list, or only the exclusive client's. */
-static int gather_layers(struct snapshot *snap, struct server *srv)
-{
-	struct client *only = server_exclusive_client(srv), *c;
-	snap->layer_count = 0;
-	link_for_each(c, &srv->clients, link) {
-		if (c->dead || (only && c != only))
-			continue;
-		struct layer *y;
-		link_for_each(y, &c->layers, link) {
-			if (!y->committed.visible || !y->committed.list)
-				continue;
-			if (snap->layer_count == snap->layer_cap) {
-				uint32_t cap = snap->layer_cap ? 2 * snap->layer_cap : 16;
-				struct layer **l = realloc(snap->layers, cap * sizeof(*l));
-				if (!l)
-					return -ENOMEM;
-				snap->layers = l;
-				snap->layer_cap = cap;
-			}
-			snap->layers[snap->layer_count++] = y;
-		}
-	}
-	if (snap->layer_count > 1)
-		qsort(snap->layers, snap->layer_count, sizeof(*snap->layers), layer_order);
-	return 0;
-}
-
-/* Frames of commits made so far are first shown by volume seq. */
-static unsigned tie_frames(struct client *c, uint64_t seq)
-{
-	unsigned n = 0;
-	struct waiter *w;
-	link_for_each(w, &c->frames, link) {
-		if (!w->volume_seq) {
-			w->volume_seq = seq;
-			n++;
-		}
-	}
-	return n;
-}
-
-unsigned snapshot_tie_frames(struct server *srv, uint64_t seq)
-{
-	unsigned n = 0;
-	struct client *c;
-	link_for_each(c, &srv->clients, link) {
-		if (!c->dead)
-			n += tie_frames(c, seq);
-	}
-	return n;
-}
-
-int snapshot_build(struct snapshot *snap, struct server *srv)
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget)
 {
 	snap->scene.draw_count = 0;
 	snap->layers_left_out = 0;
-	if (gather_layers(snap, srv) < 0)
+	int n = stage_shown_layers(stage, &snap->layers, &snap->layer_cap);
+	if (n < 0)
 		return -ENOMEM;
-	uint64_t prims = 0, budget = srv->cfg.max_scene_primitives;
+	snap->layer_count = (uint32_t)n;
+	uint64_t prims = 0;
 	for (uint32_t i = 0; i < snap->layer_count; i++) {
-		const struct layer_state *ls = &snap->layers[i]->committed;
+		const struct stage_layer *y = snap->layers[i];
 		/* Over the budget: this layer and every later (lower) one. */
-		if (ls->list->committed.prims > budget - prims) {
+		if (y->draws->prims > budget - prims) {
 			snap->layers_left_out = snap->layer_count - i;
 			break;
 		}
-		prims += ls->list->committed.prims;
-		if (add_layer(snap, ls) < 0) {
+		prims += y->draws->prims;
+		if (add_layer(snap, y) < 0) {
 			snapshot_release(snap);
 			return -ENOMEM;
 		}

@@ -9,9 +9,9 @@
 
 #include "scene.h"
 
-struct server;
+struct stage;
+struct stage_layer;
 struct vdata;
-struct layer;
 
 struct snapshot {
 	struct scene scene;
@@ -19,19 +19,16 @@ struct snapshot {
 	struct vdata **data; /* one reference per draw */
 	uint32_t cap;
 	/* Work space: the layers shown, in priority order. */
-	struct layer **layers;
+	const struct stage_layer **layers;
 	uint32_t layer_count, layer_cap;
 	uint32_t layers_left_out; /* over max-scene-primitives */
 };
 
-/* Fills snap from every visible layer of every client (of the client
- * with an exclusive layer only, when one has), highest priority first,
- * until max-scene-primitives: the layer that would go over and every
- * later one are left out, whole. 0 or -ENOMEM. */
-int snapshot_build(struct snapshot *snap, struct server *srv);
-/* Ties the frame callbacks of every commit made so far, not yet tied, to
- * volume seq (the first volume showing their state). Returns how many. */
-unsigned snapshot_tie_frames(struct server *srv, uint64_t seq);
+/* Fills snap from the layers the stage shows (stage_shown_layers()), in
+ * their order, until budget primitives (max-scene-primitives): the layer
+ * that would go over and every later one are left out, whole. 0 or
+ * -ENOMEM. */
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget);
 /* Whether a draws exactly what b draws: draw for draw the same primitive,
  * vertex data, transform and colour. Vertex data is compared by identity:
  * safe because b holds references to its data, so none of it can have been

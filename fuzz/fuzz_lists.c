@@ -179,17 +179,18 @@ static int op_draw(struct lists *s, struct fuzz_input *in)
 static int op_draw_indexed(struct lists *s, struct fuzz_input *in)
 {
 	uint32_t list = read_id(in);
-	uint32_t mode = fuzz_num(in);
-	uint32_t vertices = read_id(in);
-	uint64_t offset = fuzz_num64(in);
-	uint32_t vertex_count = fuzz_num(in);
-	uint32_t stride = fuzz_num(in);
-	uint32_t indices = read_id(in);
-	uint64_t index_offset = fuzz_num64(in);
-	uint32_t index_count = fuzz_num(in);
-	uint32_t index_type = fuzz_num(in);
-	return proto_req_list_draw_indexed(s->conn, list, mode, vertices, offset, vertex_count, stride, indices,
-					   index_offset, index_count, index_type);
+	/* Read in the order of the arguments: the corpus depends on it. */
+	struct proto_list_draw_indexed_args d;
+	d.mode = fuzz_num(in);
+	d.vertices = read_id(in);
+	d.offset = fuzz_num64(in);
+	d.vertex_count = fuzz_num(in);
+	d.stride = fuzz_num(in);
+	d.indices = read_id(in);
+	d.index_offset = fuzz_num64(in);
+	d.index_count = fuzz_num(in);
+	d.index_type = fuzz_num(in);
+	return proto_req_list_draw_indexed(s->conn, list, &d);
 }
 
 static int op_layer(struct lists *s, struct fuzz_input *in)
@@ -307,9 +308,9 @@ static uint64_t held_vertices(const struct client *c)
 	const struct list *l;
 	link_for_each(l, &c->lists, link) {
 		for (uint32_t i = 0; i < l->pending.count && n < 2048; i++)
-			held[n++] = l->pending.draws[i].data;
+			held[n++] = l->pending.items[i].data;
 		for (uint32_t i = 0; i < l->committed.count && n < 2048; i++)
-			held[n++] = l->committed.draws[i].data;
+			held[n++] = l->committed.items[i].data;
 	}
 	qsort(held, n, sizeof(*held), by_address);
 	uint64_t v = 0;
@@ -328,7 +329,7 @@ static void check_client(const struct client *c, const struct config *cfg)
 	link_for_each(l, &c->lists, link) {
 		uint64_t v = 0, p = 0;
 		for (uint32_t i = 0; i < l->pending.count; i++) {
-			const struct vdata *d = l->pending.draws[i].data;
+			const struct vdata *d = l->pending.items[i].data;
 			if (!d->count || !d->prims)
 				fuzz_fail("list %u: an empty draw", l->base.id);
 			v += d->count;

@@ -17,6 +17,8 @@ import gen  # noqa: E402
 
 
 def call_args(m):
+    if gen.by_struct(m):
+        return ["a"]
     out = []
     for a in m.args:
         if a.type == "array":

@@ -193,10 +193,18 @@ int spindle_list_draw_indexed(struct spindle_list *list, enum spindle_mode mode,
 {
 	if (!vertices || !indices || vertices->base.sp != list->base.sp || indices->base.sp != list->base.sp)
 		return -EINVAL;
-	return SEND_V2(&list->base, proto_req_list_draw_indexed(list->base.sp->conn, list->base.id, mode,
-								 vertices->base.id, offset, vertex_count, stride,
-								 indices->base.id, index_offset, index_count,
-								 index_type));
+	struct proto_list_draw_indexed_args a = {
+		.mode = mode,
+		.vertices = vertices->base.id,
+		.offset = offset,
+		.vertex_count = vertex_count,
+		.stride = stride,
+		.indices = indices->base.id,
+		.index_offset = index_offset,
+		.index_count = index_count,
+		.index_type = index_type,
+	};
+	return SEND_V2(&list->base, proto_req_list_draw_indexed(list->base.sp->conn, list->base.id, &a));
 }
 
 int spindle_list_set_vertex_format(struct spindle_list *list, enum spindle_vertex_format format)

@@ -90,6 +90,23 @@ def opcode_const(iface, msg, kind):
     return f"PROTO_{iface.name.upper()}_{'REQ' if kind == 'request' else 'EV'}_{msg.name.upper()}"
 
 
+# A message with more arguments than this is sent by passing its args
+# struct, which is also what its handler receives: a call with a dozen
+# positional numbers of the same type is easy to get wrong.
+MAX_POSITIONAL_ARGS = 8
+
+
+def by_struct(msg):
+    return len(msg.args) > MAX_POSITIONAL_ARGS
+
+
+def sender_params(iface, msg):
+    """The parameters of a message's sender, after conn and target_id."""
+    if by_struct(msg):
+        return [f"const struct proto_{iface.name}_{msg.name}_args *a"]
+    return c_params(msg)
+
+
 def c_params(msg):
     out = []
     for a in msg.args:
@@ -152,7 +169,7 @@ def header(version, ifaces):
             o.append("")
             prefix = "req" if kind == "requests" else "ev"
             for m in msgs:
-                params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + c_params(m))
+                params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + sender_params(iface, m))
                 o.append(f"int proto_{prefix}_{iface.name}_{m.name}({params});")
             o.append("")
     o += ["#endif", ""]
@@ -204,11 +221,12 @@ def dispatcher(iface, msgs, kind):
 
 def sender(iface, m, kind):
     prefix = "req" if kind == "request" else "ev"
-    params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + c_params(m))
+    params = ", ".join(["struct proto_conn *conn", "uint32_t target_id"] + sender_params(iface, m))
+    src = "a->" if by_struct(m) else ""
     o = [f"int proto_{prefix}_{iface.name}_{m.name}({params})", "{", "\tstruct proto_writer w;", "",
          f"\tproto_writer_begin(&w, conn, target_id, {opcode_const(iface, m, kind)});"]
-    o += [f"\tproto_put_array(&w, {a.name}, {a.name}_size);" if a.type == "array"
-          else f"\tproto_put_{ACCESSORS[a.type]}(&w, {a.name});" for a in m.args]
+    o += [f"\tproto_put_array(&w, {src}{a.name}, {src}{a.name}_size);" if a.type == "array"
+          else f"\tproto_put_{ACCESSORS[a.type]}(&w, {src}{a.name});" for a in m.args]
     return o + ["\treturn proto_writer_end(&w);", "}", ""]
 
 

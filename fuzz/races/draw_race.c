@@ -76,8 +76,15 @@ static void round_of_draws(struct fuzz_server *fs, struct race *r, int memfd)
 			proto_req_list_set_vertex_format(conn, 4, PROTO_LIST_VERTEX_FORMAT_XYZ_RGBA8);
 			proto_req_list_draw(conn, 4, PROTO_LIST_MODE_TRIANGLES, 2, 0, 3, 0);
 		} else {
-			proto_req_list_draw_indexed(conn, 4, PROTO_LIST_MODE_POINTS, 3, 0, 3, 0, 2, 0, INDICES,
-						    PROTO_LIST_INDEX_TYPE_U32);
+			struct proto_list_draw_indexed_args d = {
+				.mode = PROTO_LIST_MODE_POINTS,
+				.vertices = 3,
+				.vertex_count = 3,
+				.indices = 2,
+				.index_count = INDICES,
+				.index_type = PROTO_LIST_INDEX_TYPE_U32,
+			};
+			proto_req_list_draw_indexed(conn, 4, &d);
 		}
 		proto_req_list_clear(conn, 4);
 	}
