@@ -1,7 +1,9 @@
-/* The GL renderer's back end (render_gl_priv.h): the GPU halftone + pack
+/* The GL renderer's back end (gl_pack.h): the GPU halftone + pack
  * pass over the touched tiles of a batch (gl_list_cs, gl_pack_cs), and the
  * CPU collecting its output behind a fence; and the naive pipeline's back
  * end, a whole-image glReadPixels packed on the CPU. */
+#include "gl_pack.h"
+
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>

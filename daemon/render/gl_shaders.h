@@ -243,6 +243,8 @@ static const char gl_list_cs[] = GL_SHADER_VERSION
  * bytes read MSB = leftmost) and is zeroed in the atlas for the next batch;
  * a tile with any bit set takes the next slot of the output (atomic
  * counter) and records its number (slot in batch * tiles per image + t).
+ * The thresholds are halftone_threshold()'s (halftone.c), bayer16 and the
+ * phase 97 k included: keep the two the same.
  * u_pack: first volume image of the batch, W, H, tiles per image. */
 static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"precision highp float;\n"

@@ -4,7 +4,6 @@
 #include <pthread.h>
 #include <string.h>
 
-#include "render.h"
 #include "volume.h"
 
 #if defined(__x86_64__) || defined(__i386__)
@@ -12,13 +11,37 @@
 #define HALFTONE_X86 1
 #endif
 
+/* Entry (x, y) of the 16x16 Bayer index matrix, 0..255: bit-reverse of the
+ * interleaved bits of x ^ y and y (recursive Bayer construction). */
+static unsigned bayer16(unsigned x, unsigned y)
+{
+	unsigned a = (x ^ y) & 15, b = y & 15, v = 0;
+	for (int i = 0; i < 4; i++) {
+		v |= ((a >> i) & 1u) << (7 - 2 * i);
+		v |= ((b >> i) & 1u) << (6 - 2 * i);
+	}
+	return v;
+}
+
+uint8_t halftone_threshold(uint32_t k, uint32_t u, uint32_t v)
+{
+	/* Phase: image k shifts the matrix by p = 97 k mod 256 (x by p % 16, y
+	 * by p / 16). 97 is odd, so any 256 consecutive images all differ, and
+	 * neighbouring images are offset by (1, 6): no two adjacent slices light
+	 * the same pixels of a mid-grey area. */
+	uint32_t p = (k * 97u) & 255u;
+	unsigned idx = bayer16((u + (p & 15u)) & 15u, (v + (p >> 4)) & 15u);
+	/* 0..255 -> 0..254, so 0 is never lit and 255 always. */
+	return (uint8_t)((idx * 255u) >> 8);
+}
+
 void halftone_table_init(struct halftone_table *t, uint32_t k)
 {
 	/* Tile origins are multiples of 32, so a tile's local coordinates
 	 * have the image's phase. */
 	for (uint32_t y = 0; y < 16; y++)
 		for (uint32_t x = 0; x < HALFTONE_ROW_BYTES; x++)
-			t->thr[y][halftone_pos(x)] = render_dither_threshold(k, x, y);
+			t->thr[y][halftone_pos(x)] = halftone_threshold(k, x, y);
 }
 
 /* The packed row is the little-endian 32-bit word whose bit j says whether
@@ -160,7 +183,7 @@ int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
 		for (uint32_t y = 0; y < VOLUME_TILE && v0 + y < g->height; y++) {
 			for (uint32_t x = 0; x < VOLUME_TILE && u0 + x < g->width; x++) {
 				const uint8_t *px = rgba + ((size_t)(v0 + y) * g->width + u0 + x) * 4;
-				uint8_t thr = render_dither_threshold(k, u0 + x, v0 + y);
+				uint8_t thr = halftone_threshold(k, u0 + x, v0 + y);
 				for (int c = 0; c < 3; c++)
 					if (px[c] > thr)
 						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));

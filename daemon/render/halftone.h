@@ -1,6 +1,7 @@
-/* Halftone + pack of one canvas tile: 8-bit RGB in, 1 bit per channel out
- * (DESIGN.md section 3), in several bit-identical variants chosen at run
- * time by what the CPU supports.
+/* The ordered dither of DESIGN.md section 3 (the threshold of a pixel in an
+ * image), and halftone + pack of one canvas tile: 8-bit RGB in, 1 bit per
+ * channel out, in several bit-identical variants chosen at run time by what
+ * the CPU supports.
  *
  * Canvas tile layout: planes R, G, B, each 32 rows of 32 bytes. Pixel x
  * (0..31) of a row is stored at byte halftone_pos(x) = x ^ 7, i.e. reversed
@@ -21,6 +22,10 @@ static inline uint32_t halftone_pos(uint32_t x)
 {
 	return x ^ 7u;
 }
+
+/* The ordered-dither threshold (0..254) of pixel (u, v) in image k: a pixel
+ * of channel value c is lit iff c > threshold. 0 is never lit, 255 always. */
+uint8_t halftone_threshold(uint32_t k, uint32_t u, uint32_t v);
 
 /* Image k's thresholds for tile rows y % 16, in canvas byte order (the
  * 16-periodic matrix repeated to 32 columns). A pixel of value c is lit

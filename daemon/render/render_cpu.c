@@ -4,6 +4,8 @@
  * (bin.h); then the workers take images one at a time, light the points
  * binned there, section the primitives of the image's runs into an 8-bit
  * canvas, and halftone and pack only the tiles something touched. */
+#include "render_cpu.h"
+
 #include <errno.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -15,7 +17,6 @@
 #include "halftone.h"
 #include "log.h"
 #include "pool.h"
-#include "render.h"
 #include "section.h"
 
 struct cpu_worker {

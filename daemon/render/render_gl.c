@@ -16,6 +16,8 @@
  * touched tiles of the batch on the GPU and collects the non-empty ones
  * while the GPU draws the next batch. This file: set-up, upload, drawing,
  * the render and its failures. */
+#include "render_gl.h"
+
 #include <errno.h>
 #include <math.h>
 #include <stdatomic.h>
@@ -26,10 +28,11 @@
 
 #include "bin.h"
 #include "gl_context.h"
+#include "gl_pack.h"
 #include "gl_shaders.h"
 #include "log.h"
 #include "pool.h"
-#include "render.h"
+#include "render_cpu.h"
 #include "render_gl_priv.h"
 
 static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims", "u_tile" };

@@ -1,6 +1,6 @@
 /* The GL renderer's state, shared by render_gl.c (set-up, upload, drawing,
- * the render) and gl_pack.c (the GPU halftone + pack pass and reading its
- * output back). Private to daemon/render/. */
+ * the render) and gl_pack.c (gl_pack.h: the GPU halftone + pack pass and
+ * reading its output back). Private to daemon/render/. */
 #ifndef SPINDLE_RENDER_GL_PRIV_H
 #define SPINDLE_RENDER_GL_PRIV_H
 
@@ -9,7 +9,7 @@
 
 #include "bin.h"
 #include "gl_context.h"
-#include "render.h"
+#include "renderer.h"
 
 _Static_assert(sizeof(struct bin_prim) == 11 * 4, "bin_prim is 9 vertex words and 2 more");
 _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two words");
@@ -87,16 +87,5 @@ struct render_gl {
 	struct volume *vol;
 	uint64_t wait_ns, copy_ns;
 };
-
-/* gl_pack.c */
-/* The storage buffers of the pack pass, all zero. 0 or -ENOMEM. */
-int gl_pack_create_buffers(struct render_gl *r);
-/* Queues the pack of the batch just drawn into out, with a fence. */
-void gl_pack_batch(struct render_gl *r, struct gl_batch *out);
-/* Waits for out's fence and appends its tiles to r->vol. 0 (also when
- * nothing is pending) or -ETIMEDOUT, -EIO, -ENOMEM, -EINVAL. */
-int gl_pack_collect(struct render_gl *r, struct gl_batch *out);
-/* The naive back end: reads image k back whole and packs it on the CPU. */
-int gl_pack_naive(struct render_gl *r, uint32_t k);
 
 #endif

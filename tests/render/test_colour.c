@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "halftone.h"
 #include "rtest.h"
 
 static void check_threshold_matrix(void)
@@ -16,9 +17,9 @@ static void check_threshold_matrix(void)
 		int below[256] = { 0 };
 		for (uint32_t v = 0; v < 16; v++)
 			for (uint32_t u = 0; u < 16; u++) {
-				uint8_t t = render_dither_threshold(k, u + 5, v + 3);
+				uint8_t t = halftone_threshold(k, u + 5, v + 3);
 				CHECK(t <= 254);
-				CHECK(t == render_dither_threshold(k, u + 5 + 16 * 7, v + 3 + 16 * 3));
+				CHECK(t == halftone_threshold(k, u + 5 + 16 * 7, v + 3 + 16 * 3));
 				below[t]++;
 			}
 		int n = 0;
@@ -32,7 +33,7 @@ static void check_threshold_matrix(void)
 	static uint8_t pat[256][256];
 	for (uint32_t k = 0; k < 256; k++)
 		for (uint32_t i = 0; i < 256; i++)
-			pat[k][i] = render_dither_threshold(k + 11, i % 16, i / 16);
+			pat[k][i] = halftone_threshold(k + 11, i % 16, i / 16);
 	for (uint32_t a = 0; a < 256; a++)
 		for (uint32_t b = a + 1; b < 256; b++)
 			CHECK_MSG(memcmp(pat[a], pat[b], 256) != 0, "images %u and %u share a phase", a + 11,
@@ -47,7 +48,7 @@ static void check_dithered(const struct volume *vol, uint32_t k, uint32_t u0, ui
 	for (uint32_t v = v0; v <= v1; v++)
 		for (uint32_t u = u0; u <= u1; u++)
 			for (int c = 0; c < 3; c++) {
-				bool want = rgb[c] > render_dither_threshold(k, u, v);
+				bool want = rgb[c] > halftone_threshold(k, u, v);
 				CHECK_MSG(rtest_lit(vol, k, u, v, c) == want, "image %u (%u,%u) c%d", k, u, v, c);
 			}
 }

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "check.h"
+#include "halftone.h"
 #include "rtest.h"
 
 static const uint8_t white[3] = { 255, 255, 255 };
@@ -63,7 +64,7 @@ static void check_expected(const struct volume *vol, const struct expect *e)
 				if (!(px[0] | px[1] | px[2]))
 					continue;
 				for (int c = 0; c < 3; c++) {
-					bool lit = px[c] > render_dither_threshold(k, u, v);
+					bool lit = px[c] > halftone_threshold(k, u, v);
 					want[c] += lit;
 					CHECK_MSG(rtest_lit(vol, k, u, v, c) == lit, "image %u (%u,%u) c%d: value %u",
 						  k, u, v, c, px[c]);

@@ -1,0 +1,83 @@
+/* The renderer base every implementation embeds (render_cpu.c, render_gl.c)
+ * and the calls on it: what render.h's callers use on a renderer, whichever
+ * one render_create() picked; and each renderer's options. */
+#ifndef SPINDLE_RENDERER_H
+#define SPINDLE_RENDERER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "geometry.h"
+#include "scene.h"
+#include "volume.h"
+
+struct renderer;
+
+/* What the last render cost and produced. Times in ns; the per-stage times
+ * are summed over the threads that ran them (divide by threads for a wall
+ * share), total_ns is wall time. */
+struct render_stats {
+	uint64_t total_ns;     /* wall: the whole render_volume() call */
+	uint64_t bin_ns;       /* transform + outcodes + binning + sort */
+	uint64_t raster_ns;    /* sectioning and conservative raster */
+	uint64_t pack_ns;      /* halftone + pack + canvas clear */
+	uint64_t prims;        /* primitives after transform (finite) */
+	uint64_t prim_images;  /* (primitive, image) pairs sectioned */
+	uint64_t canvas_tiles; /* tiles halftoned (something touched them) */
+	uint64_t tiles;        /* non-empty tiles packed */
+	unsigned threads;      /* threads that rendered images */
+};
+
+/* CPU renderer variants, for tests and benchmarks: every variant gives
+ * bit-identical output. */
+struct render_cpu_options {
+	unsigned threads;    /* worker threads; 0 = one per core */
+	const char *simd;    /* halftone+pack variant: NULL or "auto" (best this
+			      * CPU runs), "scalar", "sse2", "avx2", "avx512" */
+};
+
+/* GL renderer options (render_gl.c). */
+struct render_gl_options {
+	const char *backend; /* "egl" (default when NULL) or "osmesa" */
+	unsigned threads;    /* binning threads; 0 = one per core */
+	unsigned batch;      /* images per batch; 0 = as many as fit, at most 16 */
+	bool naive;          /* the unoptimised baseline the benchmark measures
+			      * against: every primitive in every image, RGBA
+			      * read back whole, halftone and pack on the CPU */
+	bool no_fallback;    /* a GL failure fails the render instead of
+			      * handing over to the CPU renderer (tests) */
+	bool hardware_only;  /* fail (ENODEV) on a software rasterizer, before
+			      * building shaders: what "auto" asks for */
+	uint32_t max_prims;  /* binned primitives a volume may have on GL; more
+			      * render that volume on the CPU. 0 = as many as
+			      * the primitive texture holds (tests set less) */
+};
+
+struct renderer_impl {
+	const char *name;
+	/* Renders scene into out (same geometry as the renderer; out is
+	 * cleared first). Returns 0 or negative errno; out is then unusable. */
+	int (*render)(struct renderer *r, const struct scene *scene, struct volume *out);
+	void (*destroy)(struct renderer *r);
+};
+
+/* Base struct, embedded first in each implementation. */
+struct renderer {
+	const struct renderer_impl *impl;
+	struct geometry geom;
+	struct render_stats stats; /* of the last render */
+};
+
+static inline int render_volume(struct renderer *r, const struct scene *s, struct volume *out)
+{
+	return r->impl->render(r, s, out);
+}
+
+/* Accepts NULL. */
+static inline void render_destroy(struct renderer *r)
+{
+	if (r)
+		r->impl->destroy(r);
+}
+
+#endif
