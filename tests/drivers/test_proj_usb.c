@@ -89,6 +89,9 @@ static void rig_init(struct rig *r, const struct geometry *g, const struct geome
 static void rig_finish(struct rig *r)
 {
 	r->p->impl->destroy(r->p);
+	/* umockdev's thread closes its end of the node after the driver closed
+	 * its own; the count is the driver's only once that is done. */
+	CHECK_EQ(usb_emul_wait_closed(r->emul, 2000), 0);
 	CHECK_EQ(count_fds(), r->fds); /* nothing of the driver's left open */
 	usb_emul_destroy(r->emul);
 }

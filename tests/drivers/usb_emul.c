@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/ioctl.h>
+#include <time.h>
 #include <umockdev.h>
 
 #include "log.h"
@@ -34,6 +35,7 @@ struct usb_emul {
 	UMockdevTestbed *testbed;
 	UMockdevIoctlBase *handler;
 	pthread_mutex_t lock;
+	GPtrArray *clients; /* device node opens umockdev may still serve */
 	struct sim_rotor *rotor;
 	struct proj_simdev *dev; /* NULL: unplugged */
 	uint8_t minor;
@@ -232,6 +234,42 @@ static gboolean handle_ioctl(UMockdevIoctlBase *handler, UMockdevIoctlClient *cl
 	return TRUE;
 }
 
+/* umockdev serves each open of the device node on a socket of its own, in
+ * its worker thread, and closes its end some time after the client closed
+ * the node (the client then reads as not connected): these are the opens
+ * it has served, until they are seen closed. */
+static void on_client_connected(UMockdevIoctlBase *handler, UMockdevIoctlClient *client, gpointer data)
+{
+	struct usb_emul *e = data;
+	pthread_mutex_lock(&e->lock);
+	g_ptr_array_add(e->clients, g_object_ref(client));
+	pthread_mutex_unlock(&e->lock);
+}
+
+/* Forgets the clients umockdev has closed; returns how many are left. */
+static unsigned drop_closed(struct usb_emul *e)
+{
+	pthread_mutex_lock(&e->lock);
+	for (unsigned i = e->clients->len; i-- > 0;) {
+		if (!umockdev_ioctl_client_get_connected(g_ptr_array_index(e->clients, i)))
+			g_ptr_array_remove_index_fast(e->clients, i);
+	}
+	unsigned left = e->clients->len;
+	pthread_mutex_unlock(&e->lock);
+	return left;
+}
+
+int usb_emul_wait_closed(struct usb_emul *e, int ms)
+{
+	int64_t deadline = now_ns() + (int64_t)ms * 1000000;
+	unsigned left;
+	while ((left = drop_closed(e)) > 0 && now_ns() < deadline) {
+		struct timespec ts = { .tv_nsec = 1000000 };
+		nanosleep(&ts, NULL);
+	}
+	return (int)left;
+}
+
 struct usb_emul *usb_emul_create(void)
 {
 	/* umockdev_in_mock_environment() says no under a plain LD_PRELOAD. */
@@ -242,10 +280,12 @@ struct usb_emul *usb_emul_create(void)
 	if (!e)
 		return NULL;
 	pthread_mutex_init(&e->lock, NULL);
+	e->clients = g_ptr_array_new_with_free_func(g_object_unref);
 	e->rotor = sim_rotor_create(1800.0);
 	e->testbed = umockdev_testbed_new();
 	e->handler = umockdev_ioctl_base_new();
 	g_signal_connect(e->handler, "handle-ioctl", G_CALLBACK(handle_ioctl), e);
+	g_signal_connect(e->handler, "client-connected", G_CALLBACK(on_client_connected), e);
 	return e;
 }
 
@@ -258,6 +298,7 @@ void usb_emul_destroy(struct usb_emul *e)
 	g_object_unref(e->testbed);
 	sim_rotor_destroy(e->rotor);
 	pthread_mutex_destroy(&e->lock);
+	g_ptr_array_unref(e->clients);
 	free(e);
 }
 

@@ -54,5 +54,9 @@ bool usb_emul_lit(struct usb_emul *e);
 /* Raw bytes the device sends on its events IN endpoint next. */
 void usb_emul_inject_event(struct usb_emul *e, const uint8_t *bytes, size_t len);
 void usb_emul_get_stats(struct usb_emul *e, struct usb_emul_stats *out);
+/* Waits up to ms for umockdev to close its end of every device node the
+ * client closed (its worker thread does that a little later). Returns how
+ * many opens it still serves. */
+int usb_emul_wait_closed(struct usb_emul *e, int ms);
 
 #endif
