@@ -27,7 +27,7 @@ struct measurement {
 	struct render_stats sum; /* render_stats summed over the volumes */
 	uint64_t tiles, sparse_bytes;
 	double total_s;
-	double cpu_s;            /* process CPU time over the measured volumes */
+	double cpu_s; /* process CPU time over the measured volumes */
 };
 
 /* "1234567" -> "1,234,567". */
@@ -68,8 +68,7 @@ static int variant_open(struct variant *v, const struct geometry *g)
 	}
 	if (!v->r) {
 		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name,
-			errno == ENOENT ? "halftone variant unknown or not runnable on this CPU"
-					: strerror(errno));
+			errno == ENOENT ? "halftone variant unknown or not runnable on this CPU" : strerror(errno));
 		return -1;
 	}
 	v->out = volume_create(g);
@@ -131,8 +130,7 @@ static int cmp_double(const void *a, const void *b)
 /* Warm-up volumes (fewer if one alone takes the whole time budget), then
  * measured volumes until o->volumes or o->seconds, at least one. Frames
  * start at 1: frame 0 is the coverage frame. */
-static int measure(struct variant *v, struct bench_scene *s, const struct options *o,
-		   struct measurement *m)
+static int measure(struct variant *v, struct bench_scene *s, const struct options *o, struct measurement *m)
 {
 	uint64_t frame = 1;
 	double ms;
@@ -213,8 +211,8 @@ static const char *fmt_fraction(char *buf, size_t size, double f, const uint64_t
 	return buf;
 }
 
-static void print_row(const struct bench_scene *s, const struct variant *v,
-		      const struct measurement *m, const struct coverage *c, const struct volume *vol)
+static void print_row(const struct bench_scene *s, const struct variant *v, const struct measurement *m,
+		      const struct coverage *c, const struct volume *vol)
 {
 	char p[96], b[10][32];
 	double n = m->n, images = vol->image_count * (double)volume_tiles_per_image(vol);
@@ -222,21 +220,18 @@ static void print_row(const struct bench_scene *s, const struct variant *v,
 	double tiles = m->tiles / n, sparse = m->sparse_bytes / n;
 	printf("| %s | %s | %s | %u | %s | %s | %s | %.2f | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
 	       "| %s | %s | %s |\n",
-	       s->info->name, fmt_prims(p, sizeof(p), s), v->name, m->n,
-	       fmt_num(b[0], 32, n / m->total_s), fmt_num(b[1], 32, percentile(m, 0.5)),
-	       fmt_num(b[2], 32, percentile(m, 0.99)), m->cpu_s / m->total_s,
-	       fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6),
-	       fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6), fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6),
-	       fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)), 100 * tiles / images,
-	       fmt_num(b[7], 32, sparse / 1e6), 100 * sparse / dense,
-	       c->identical ? "yes" : "no", fmt_fraction(b[8], 32, coverage_score(c), c->ref_lit),
+	       s->info->name, fmt_prims(p, sizeof(p), s), v->name, m->n, fmt_num(b[0], 32, n / m->total_s),
+	       fmt_num(b[1], 32, percentile(m, 0.5)), fmt_num(b[2], 32, percentile(m, 0.99)), m->cpu_s / m->total_s,
+	       fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6), fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6),
+	       fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6), fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)),
+	       100 * tiles / images, fmt_num(b[7], 32, sparse / 1e6), 100 * sparse / dense, c->identical ? "yes" : "no",
+	       fmt_fraction(b[8], 32, coverage_score(c), c->ref_lit),
 	       fmt_fraction(b[9], 32, coverage_stray(c), c->test_lit));
 	fflush(stdout);
 }
 
 /* Measures one variant on scene s and compares its frame 0 with ref. */
-static int run_variant(struct variant *v, struct bench_scene *s, const struct volume *ref,
-		       const struct options *o)
+static int run_variant(struct variant *v, struct bench_scene *s, const struct volume *ref, const struct options *o)
 {
 	struct measurement m;
 	struct coverage c;
@@ -266,8 +261,8 @@ static int save_volume(const char *dir, const char *scene, const struct volume *
 	return r;
 }
 
-static int run_scene(const char *name, const struct geometry *g, struct variant *vars, int nvars,
-		     struct variant *ref, const struct options *o, FILE *notes)
+static int run_scene(const char *name, const struct geometry *g, struct variant *vars, int nvars, struct variant *ref,
+		     const struct options *o, FILE *notes)
 {
 	struct bench_scene s;
 	char err[256];
@@ -296,8 +291,9 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 {
 	double dense = vol->image_count * (double)volume_dense_image_bytes(vol);
 	printf("Profile %s: %ux%u, N = %u%s: %u images per volume, %u tiles of 32x32 per image, "
-	       "dense volume %.2f MB.\n\n", profile, g->width, g->height, g->images_per_rev,
-	       g->mirrored ? ", mirrored" : "", vol->image_count, volume_tiles_per_image(vol), dense / 1e6);
+	       "dense volume %.2f MB.\n\n",
+	       profile, g->width, g->height, g->images_per_rev, g->mirrored ? ", mirrored" : "", vol->image_count,
+	       volume_tiles_per_image(vol), dense / 1e6);
 	printf("Variants (%u cores here; the reference is %s):\n", cores(), REFERENCE_VARIANT);
 	for (int i = 0; i < nvars; i++) {
 		char th[32];
@@ -311,8 +307,7 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 		else
 			snprintf(th, sizeof(th), "one thread per core");
 		if (strcmp(vars[i].simd, "auto") == 0)
-			printf("- %s: %s, halftone auto (%s here)\n", vars[i].name, th,
-			       halftone_variants()[0].name);
+			printf("- %s: %s, halftone auto (%s here)\n", vars[i].name, th, halftone_variants()[0].name);
 		else
 			printf("- %s: %s, halftone %s\n", vars[i].name, th, vars[i].simd);
 	}

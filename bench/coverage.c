@@ -13,8 +13,8 @@
 struct tile_index {
 	const struct volume *vol;
 	int32_t tiles_x, tiles_y;
-	uint32_t tiles;         /* per image */
-	const uint8_t **tile;   /* image_count * tiles */
+	uint32_t tiles;       /* per image */
+	const uint8_t **tile; /* image_count * tiles */
 };
 
 static int index_build(struct tile_index *ix, const struct volume *vol)
@@ -80,8 +80,8 @@ static int32_t floor_div32(int32_t a)
 
 /* The source of the window around tile column tx (pixels 32 tx - 1 ..
  * 32 tx + 32) in tile row ty of image k, mirrored or not. */
-static void row_source_init(struct row_source *s, const struct tile_index *ix, uint32_t k,
-			    bool mirror, int32_t tx, int32_t ty)
+static void row_source_init(struct row_source *s, const struct tile_index *ix, uint32_t k, bool mirror, int32_t tx,
+			    int32_t ty)
 {
 	int32_t x0 = 32 * tx;
 	/* First pixel of the window in image k's own columns: mirrored, the
@@ -120,8 +120,7 @@ static void neighbours(const struct volume *vol, uint32_t k, uint32_t img[3], bo
 /* The pixels of other within one voxel of tile (tx, ty) of image k, for each
  * channel: near[c][y] bit 31 - x is set when pixel (x, y) of the tile has a
  * lit voxel of other within one voxel. */
-static void near_mask(const struct tile_index *other, uint32_t k, int32_t tx, int32_t ty,
-		      uint32_t near[3][32])
+static void near_mask(const struct tile_index *other, uint32_t k, int32_t tx, int32_t ty, uint32_t near[3][32])
 {
 	uint32_t img[3];
 	bool mirror[3];
@@ -158,8 +157,8 @@ static void popcount_tile(const uint8_t *tile, uint64_t lit[3])
 
 /* For every lit voxel of checked: counts it in lit, and in near when other
  * has a lit voxel within one voxel of it. */
-static void count_near(const struct tile_index *checked, const struct tile_index *other,
-		       uint64_t lit[3], uint64_t near_count[3])
+static void count_near(const struct tile_index *checked, const struct tile_index *other, uint64_t lit[3],
+		       uint64_t near_count[3])
 {
 	const struct volume *vol = checked->vol;
 	for (uint32_t k = 0; k < vol->image_count; k++) {
@@ -172,7 +171,8 @@ static void count_near(const struct tile_index *checked, const struct tile_index
 			near_mask(other, k, (int32_t)(t % vol->tiles_x), (int32_t)(t / vol->tiles_x), near);
 			for (int c = 0; c < 3; c++)
 				for (int y = 0; y < 32; y++)
-					near_count[c] += (uint64_t)__builtin_popcount(tile_row(tile, c, y) & near[c][y]);
+					near_count[c] +=
+						(uint64_t)__builtin_popcount(tile_row(tile, c, y) & near[c][y]);
 		}
 	}
 }
@@ -195,8 +195,8 @@ static bool volumes_equal(const struct tile_index *a, const struct tile_index *b
 static bool same_geometry(const struct volume *a, const struct volume *b)
 {
 	return a->geom.width == b->geom.width && a->geom.height == b->geom.height &&
-	       a->geom.images_per_rev == b->geom.images_per_rev &&
-	       a->geom.mirrored == b->geom.mirrored && a->image_count == b->image_count;
+	       a->geom.images_per_rev == b->geom.images_per_rev && a->geom.mirrored == b->geom.mirrored &&
+	       a->image_count == b->image_count;
 }
 
 int coverage_compare(const struct volume *ref, const struct volume *test, struct coverage *out)

@@ -21,11 +21,11 @@
 #include "volume.h"
 
 struct coverage {
-	bool identical;         /* every voxel equal */
-	uint64_t ref_lit[3];    /* lit voxels of the reference, per channel R, G, B */
+	bool identical;          /* every voxel equal */
+	uint64_t ref_lit[3];     /* lit voxels of the reference, per channel R, G, B */
 	uint64_t ref_covered[3]; /* of those, with a lit test voxel within one voxel */
-	uint64_t test_lit[3];   /* lit voxels of the volume under test */
-	uint64_t test_stray[3]; /* of those, with no lit reference voxel within one voxel */
+	uint64_t test_lit[3];    /* lit voxels of the volume under test */
+	uint64_t test_stray[3];  /* of those, with no lit reference voxel within one voxel */
 };
 
 /* Compares test against ref, two volumes of the same geometry. Returns 0,

@@ -49,11 +49,11 @@ static _Noreturn void exec_daemon(const struct bench_daemon *d, const char *exe,
 		dup2(fd, 2);
 	unsetenv("LISTEN_FDS");
 	if (renderer)
-		execl(exe, exe, "--device", "sim", "--profile", profile, "--renderer", renderer, "--socket",
-		      d->socket, "--config", "/dev/null", (char *)NULL);
+		execl(exe, exe, "--device", "sim", "--profile", profile, "--renderer", renderer, "--socket", d->socket,
+		      "--config", "/dev/null", (char *)NULL);
 	else
-		execl(exe, exe, "--device", "sim", "--profile", profile, "--socket", d->socket, "--config",
-		      "/dev/null", (char *)NULL);
+		execl(exe, exe, "--device", "sim", "--profile", profile, "--socket", d->socket, "--config", "/dev/null",
+		      (char *)NULL);
 	_exit(127);
 }
 

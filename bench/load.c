@@ -119,8 +119,7 @@ static void on_refused(void *data, enum spindle_refusal code, uint32_t object, c
 {
 	struct load_client *c = data;
 	c->faults->refused++;
-	fprintf(stderr, "%s: client %d: commit refused (%d, object %u): %s\n", prog, c->id, (int)code, object,
-		message);
+	fprintf(stderr, "%s: client %d: commit refused (%d, object %u): %s\n", prog, c->id, (int)code, object, message);
 }
 
 static const struct spindle_listener listener = { .refused = on_refused };
@@ -431,8 +430,7 @@ static void print_row(const struct load *ld, const struct latency *lat)
 	       (unsigned long long)ld->faults.duplicated, (unsigned long long)reordered(&ld->faults),
 	       (double)lat->p50 / ms, (double)lat->p99 / ms, (double)lat->max / ms, (double)lat->p50 / rev,
 	       (double)lat->p99 / rev, (double)lat->max / rev, ld->daemon_cpu, ld->mem.rss_kib / 1024.0,
-	       ld->mem.hwm_kib / 1024.0,
-	       (unsigned long long)(ld->after.volumes_rendered - ld->before.volumes_rendered),
+	       ld->mem.hwm_kib / 1024.0, (unsigned long long)(ld->after.volumes_rendered - ld->before.volumes_rendered),
 	       (unsigned long long)(ld->after.underruns - ld->before.underruns));
 	fflush(stdout);
 }

@@ -210,8 +210,7 @@ static void print_table(const struct bench *b, const struct result *res, int n)
 	}
 	for (int i = 0; i < n; i++)
 		printf("| %s | %s | %d | %.2f | %.2f | %.2f | %.2f |\n", res[i].name, res[i].what, b->opt.runs,
-		       (double)res[i].p50 / 1e6, (double)res[i].p99 / 1e6, (double)res[i].max / 1e6,
-		       res[i].daemon_ms);
+		       (double)res[i].p50 / 1e6, (double)res[i].p99 / 1e6, (double)res[i].max / 1e6, res[i].daemon_ms);
 	fflush(stdout);
 }
 
@@ -221,8 +220,7 @@ static void run_all(struct bench *b)
 	double mb = (double)b->size / 1e6;
 	snprintf(what[0], sizeof(what[0]), "buffer_create_from_fd + roundtrip, %.1f MB memfd", mb);
 	snprintf(what[1], sizeof(what[1]), "buffer_create (copy into a memfd) + roundtrip, %.1f MB", mb);
-	snprintf(what[2], sizeof(what[2]), "list_points of %u vertices + roundtrip (daemon copies)",
-		 b->opt.vertices);
+	snprintf(what[2], sizeof(what[2]), "list_points of %u vertices + roundtrip (daemon copies)", b->opt.vertices);
 	snprintf(what[3], sizeof(what[3]), "roundtrip alone");
 	struct result res[4] = {
 		{ .name = "from_fd", .what = what[0] },

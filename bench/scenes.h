@@ -20,8 +20,8 @@ struct bench_files {
 struct bench_scene_impl;
 
 struct bench_scene_info {
-	const char *name;  /* e.g. "S1-points-1M"; the group is the part before '-' */
-	const char *what;  /* one line */
+	const char *name; /* e.g. "S1-points-1M"; the group is the part before '-' */
+	const char *what; /* one line */
 	/* What the scene claims to hold; bench_scene_build() checks it. */
 	uint64_t points, segments, triangles, draws;
 	/* Private. */
@@ -34,7 +34,7 @@ const struct bench_scene_info *bench_scene_list(void);
 
 struct bench_scene {
 	const struct bench_scene_info *info;
-	struct scene scene;  /* what gets rendered, valid until freed */
+	struct scene scene; /* what gets rendered, valid until freed */
 	/* Counted from the draws: */
 	uint64_t points, segments, triangles;
 	/* Private. */
@@ -45,9 +45,8 @@ struct bench_scene {
 /* Builds the scene called name for geometry g. Returns 0, -ENOENT (no such
  * scene), -ENODATA (its model file is not given), or another negative errno
  * with a one-line reason in err. */
-int bench_scene_build(const char *name, const struct geometry *g,
-		      const struct bench_files *files, struct bench_scene *out,
-		      char *err, size_t err_size);
+int bench_scene_build(const char *name, const struct geometry *g, const struct bench_files *files,
+		      struct bench_scene *out, char *err, size_t err_size);
 
 /* Sets the draws to what the scene shows in volume number frame (only the
  * animated scenes change). Part of each measured volume. */

@@ -39,8 +39,7 @@ static void add_segment(struct vbuf *b, const double p[3], const double q[3])
 
 /* Point of the sphere at longitude step i and latitude step j (j = 0: the
  * north pole, j = stacks: the south pole). */
-static void sphere_point(double out[3], double r, uint32_t i, uint32_t j,
-			 uint32_t slices, uint32_t stacks)
+static void sphere_point(double out[3], double r, uint32_t i, uint32_t j, uint32_t slices, uint32_t stacks)
 {
 	double lat = M_PI / 2 - M_PI * j / stacks, lon = 2 * M_PI * i / slices;
 	out[0] = r * cos(lat) * cos(lon);
@@ -68,8 +67,7 @@ uint32_t shape_sphere_edges(struct vbuf *b, double r, uint32_t slices, uint32_t 
 	return n;
 }
 
-static void torus_point(double out[3], double R, double r, uint32_t i, uint32_t j,
-			uint32_t major, uint32_t minor)
+static void torus_point(double out[3], double R, double r, uint32_t i, uint32_t j, uint32_t major, uint32_t minor)
 {
 	double a = 2 * M_PI * i / major, t = 2 * M_PI * j / minor;
 	double d = R + r * cos(t);
@@ -179,10 +177,8 @@ void mat4_pose(float out[16], const double t[3], double ax, double ay, double s)
 	double cx = cos(ax), sx = sin(ax), cy = cos(ay), sy = sin(ay);
 	/* Columns of R = Ry * Rx, times s. */
 	double m[16] = {
-		cy * s, 0, -sy * s, 0,
-		sy * sx * s, cx * s, cy * sx * s, 0,
-		sy * cx * s, -sx * s, cy * cx * s, 0,
-		t[0], t[1], t[2], 1,
+		cy * s,      0,       -sy * s,     0, sy * sx * s, cx * s, cy * sx * s, 0,
+		sy * cx * s, -sx * s, cy * cx * s, 0, t[0],        t[1],   t[2],        1,
 	};
 	for (int i = 0; i < 16; i++)
 		out[i] = (float)m[i];

@@ -160,8 +160,8 @@ static void print_row(const struct commit_phase *ph, double idle_cpu, bool heade
 		       "daemon CPU %% | max done latency (ms) | idle daemon CPU %% |\n");
 		printf("|---|---|---|---|---|---|---|---|\n");
 	}
-	printf("| S0 unchanged | %llu | %llu | %llu | %llu | %.2f | %.1f | %.2f |\n",
-	       (unsigned long long)ph->commits, (unsigned long long)ph->answered,
+	printf("| S0 unchanged | %llu | %llu | %llu | %llu | %.2f | %.1f | %.2f |\n", (unsigned long long)ph->commits,
+	       (unsigned long long)ph->answered,
 	       (unsigned long long)(ph->after.volumes_rendered - ph->before.volumes_rendered),
 	       (unsigned long long)(ph->after.bytes_uploaded - ph->before.bytes_uploaded), ph->cpu,
 	       (double)ph->max_latency_ns / 1e6, idle_cpu);

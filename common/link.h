@@ -35,16 +35,18 @@ static inline void link_remove(struct link *elem)
 	elem->prev = elem->next = elem;
 }
 
+/* clang-format 14 takes "(ptr) - offsetof" for a cast of a unary minus. */
+/* clang-format off */
 #define link_entry(ptr, type, member) ((type *)((char *)(ptr) - offsetof(type, member)))
+/* clang-format on */
 
-#define link_for_each(pos, head, member)                                                 \
+#define link_for_each(pos, head, member)                                                       \
 	for (pos = link_entry((head)->next, __typeof__(*pos), member); &pos->member != (head); \
 	     pos = link_entry(pos->member.next, __typeof__(*pos), member))
 
-#define link_for_each_safe(pos, tmp, head, member)                                          \
-	for (pos = link_entry((head)->next, __typeof__(*pos), member),                          \
-	    tmp = link_entry(pos->member.next, __typeof__(*pos), member);                       \
-	     &pos->member != (head);                                                            \
-	     pos = tmp, tmp = link_entry(pos->member.next, __typeof__(*pos), member))
+#define link_for_each_safe(pos, tmp, head, member)                        \
+	for (pos = link_entry((head)->next, __typeof__(*pos), member),    \
+	    tmp = link_entry(pos->member.next, __typeof__(*pos), member); \
+	     &pos->member != (head); pos = tmp, tmp = link_entry(pos->member.next, __typeof__(*pos), member))
 
 #endif

@@ -20,8 +20,10 @@ void log_msg(enum log_level level, const char *fmt, ...)
 		return;
 	if (journal < 0)
 		journal = getenv("JOURNAL_STREAM") != NULL;
-	static const char *names[] = { [LOG_LEVEL_ERROR] = "error", [LOG_LEVEL_WARN] = "warning",
-				       [LOG_LEVEL_INFO] = "info", [LOG_LEVEL_DEBUG] = "debug" };
+	static const char *names[] = { [LOG_LEVEL_ERROR] = "error",
+				       [LOG_LEVEL_WARN] = "warning",
+				       [LOG_LEVEL_INFO] = "info",
+				       [LOG_LEVEL_DEBUG] = "debug" };
 	char line[1024];
 	va_list ap;
 	va_start(ap, fmt);

@@ -47,8 +47,8 @@ void svol_header_encode(const struct svol_header *h, uint8_t out[SVOL_HEADER_SIZ
 
 int svol_header_decode(const uint8_t in[SVOL_HEADER_SIZE], struct svol_header *h)
 {
-	if (memcmp(in, "SVOL", 4) != 0 || in[4] != SVOL_VERSION || in[5] != 0 ||
-	    in[6] != SVOL_HEADER_SIZE || in[7] != 0 || in[24] != 3)
+	if (memcmp(in, "SVOL", 4) != 0 || in[4] != SVOL_VERSION || in[5] != 0 || in[6] != SVOL_HEADER_SIZE ||
+	    in[7] != 0 || in[24] != 3)
 		return -EINVAL;
 	uint32_t hh = get32(in + 28);
 	h->width = get32(in + 8);

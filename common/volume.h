@@ -18,7 +18,7 @@
 
 #define VOLUME_TILE 32
 #define VOLUME_TILE_PLANE_BYTES (VOLUME_TILE * VOLUME_TILE / 8) /* 128 */
-#define VOLUME_TILE_BYTES (3 * VOLUME_TILE_PLANE_BYTES)          /* 384 */
+#define VOLUME_TILE_BYTES (3 * VOLUME_TILE_PLANE_BYTES)         /* 384 */
 
 struct volume_image {
 	uint32_t tile_count; /* stored (non-empty) tiles */
@@ -32,9 +32,9 @@ struct volume {
 	struct geometry geom;
 	uint32_t image_count; /* images per volume (N/2 when mirrored) */
 	uint32_t tiles_x, tiles_y;
-	uint32_t mask_bytes;  /* ceil(tiles_x * tiles_y / 8) */
-	uint64_t seq;         /* volume sequence number */
-	uint64_t shown_ns;    /* CLOCK_MONOTONIC when first shown, 0 if never */
+	uint32_t mask_bytes; /* ceil(tiles_x * tiles_y / 8) */
+	uint64_t seq;        /* volume sequence number */
+	uint64_t shown_ns;   /* CLOCK_MONOTONIC when first shown, 0 if never */
 	struct volume_image *images;
 };
 

@@ -41,8 +41,8 @@ int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fm
 	va_start(ap, fmt);
 	vsnprintf(text, sizeof(text), fmt, ap);
 	va_end(ap);
-	log_info("client %d (pid %d): protocol error on object %u: %s", proto_conn_get_fd(c->conn), (int)c->pid,
-		 object, text);
+	log_info("client %d (pid %d): protocol error on object %u: %s", proto_conn_get_fd(c->conn), (int)c->pid, object,
+		 text);
 	proto_ev_display_error(c->conn, 1, object, code, text);
 	proto_conn_flush(c->conn);
 	client_kill(c);
@@ -115,9 +115,12 @@ void client_send_state(struct client *c, const struct proto_display_status_args 
 bool client_may_be_exclusive(const struct client *c)
 {
 	switch (c->env->cfg->exclusive) {
-	case POLICY_NONE: return false;
-	case POLICY_ADMIN: return c->admin;
-	case POLICY_ANY: return true;
+	case POLICY_NONE:
+		return false;
+	case POLICY_ADMIN:
+		return c->admin;
+	case POLICY_ANY:
+		return true;
 	}
 	return false;
 }
@@ -228,7 +231,8 @@ static int display_commit(void *target)
 		return 0;
 	int64_t now = now_ns();
 	bool frames = !link_empty(&c->frames_pending);
-	link_for_each_safe(w, tmp, &c->frames_pending, link) frames_commit(c->env->frames, w, now);
+	link_for_each_safe(w, tmp, &c->frames_pending, link)
+		frames_commit(c->env->frames, w, now);
 	bool changed = objects_commit(c);
 	if (!c->dead && (changed || frames))
 		stage_changed(c->env->stage);
@@ -321,7 +325,8 @@ static void client_read(struct client *c)
 		}
 		if (n < 0) {
 			if (proto_conn_has_partial(c->conn))
-				log_info("client %d (pid %d) left mid-message", proto_conn_get_fd(c->conn), (int)c->pid);
+				log_info("client %d (pid %d) left mid-message", proto_conn_get_fd(c->conn),
+					 (int)c->pid);
 			client_kill(c);
 			return;
 		}
@@ -414,7 +419,8 @@ void client_destroy(struct client *c)
 {
 	/* Layers first: they hold references to lists. */
 	struct layer *y, *ytmp;
-	link_for_each_safe(y, ytmp, &c->layers, link) object_destroy(&y->base);
+	link_for_each_safe(y, ytmp, &c->layers, link)
+		object_destroy(&y->base);
 	/* Each removal may shift later entries back into slot i. */
 	for (uint32_t i = 0; i < c->objects.cap; i++)
 		while (c->objects.slots[i].id)

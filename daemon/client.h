@@ -40,7 +40,7 @@ struct client_env {
 	const struct config *cfg;
 	const struct geometry *geom;
 	const char *device_name;
-	gid_t admin_gid; /* admin-group's gid, or (gid_t)-1 */
+	gid_t admin_gid;       /* admin-group's gid, or (gid_t)-1 */
 	struct stage *stage;   /* where committed layers go */
 	struct frames *frames; /* where committed frames and captures wait */
 	const struct client_listener *listener;
@@ -81,8 +81,8 @@ struct list {
 	struct list_state state;
 	struct list_state stack[LIST_STACK_DEPTH];
 	unsigned depth;
-	bool changed;       /* pending differs from committed */
-	struct link link;   /* client.lists */
+	bool changed;     /* pending differs from committed */
+	struct link link; /* client.lists */
 };
 
 /* A layer's state as requests set it, before display.commit. */
@@ -97,7 +97,7 @@ struct layer_state {
 struct layer {
 	struct object base;
 	struct layer_state pending;
-	struct list *committed_list; /* holds a reference; its committed draws show */
+	struct list *committed_list;  /* holds a reference; its committed draws show */
 	struct stage_layer committed; /* on the stage from creation to destruction */
 	bool changed;
 	struct link link; /* client.layers */
@@ -116,13 +116,13 @@ struct client {
 	struct sd_event_source *source;
 	uid_t uid;
 	gid_t gid;
-	pid_t pid; /* for logs only */
+	pid_t pid;        /* for logs only */
 	uint32_t version; /* 0 until hello */
 	struct idmap objects;
 	struct link lists, layers;
 	struct link frames_pending; /* asked for, before their commit */
 	uint64_t buffer_bytes, vertices;
-	bool admin;     /* root, the daemon's user, or in the admin group */
+	bool admin;           /* root, the daemon's user, or in the admin group */
 	uint32_t state_flags; /* the last state event sent (version 2) */
 	float state_rpm;
 	bool dead;

@@ -25,8 +25,7 @@ void config_defaults(struct config *cfg)
 	};
 	strcpy(cfg->admin_group, "spindle-admin");
 	const char *env = getenv("SPINDLE_SOCKET");
-	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s",
-		 env && *env ? env : "/run/spindle/spindle.sock");
+	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s", env && *env ? env : "/run/spindle/spindle.sock");
 	strcpy(cfg->device, "sim");
 	strcpy(cfg->sync_chip, "gpiochip0");
 	strcpy(cfg->sync_line, "ROTOR_INDEX");
@@ -112,8 +111,9 @@ int config_set(struct config *cfg, const char *key, const char *value)
 	if (!strcmp(key, "socket"))
 		return set_string(cfg->socket_path, sizeof(cfg->socket_path), value);
 	if (!strcmp(key, "device"))
-		return strcmp(value, "sim") && strcmp(value, "hw") ? -EINVAL
-								 : set_string(cfg->device, sizeof(cfg->device), value);
+		return strcmp(value, "sim") && strcmp(value, "hw")
+			       ? -EINVAL
+			       : set_string(cfg->device, sizeof(cfg->device), value);
 	if (!strcmp(key, "profile"))
 		return set_string(cfg->profile, sizeof(cfg->profile), value);
 	if (!strcmp(key, "renderer")) {

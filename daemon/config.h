@@ -19,29 +19,29 @@ enum policy {
 const char *config_policy_name(enum policy p);
 
 struct config {
-	char socket_path[108]; /* sun_path size */
-	char device[16];       /* "sim" or "hw" */
-	char profile[32];      /* "perspecta", "small" */
-	char renderer[16];     /* "auto", "cpu", "egl", "osmesa" */
-	unsigned render_threads; /* 0 = one per core */
-	unsigned projector_buffers; /* 2 or 3 */
+	char socket_path[108];           /* sun_path size */
+	char device[16];                 /* "sim" or "hw" */
+	char profile[32];                /* "perspecta", "small" */
+	char renderer[16];               /* "auto", "cpu", "egl", "osmesa" */
+	unsigned render_threads;         /* 0 = one per core */
+	unsigned projector_buffers;      /* 2 or 3 */
 	uint64_t sim_link_bytes_per_sec; /* 0 = unlimited */
-	char sim_faults[256];  /* simulated rotor faults (sim_faults_parse()), "" = none */
+	char sim_faults[256];            /* simulated rotor faults (sim_faults_parse()), "" = none */
 	/* device = hw: the index pulse's GPIO line and the USB projector. */
-	char sync_chip[64];    /* "gpiochip0", "/dev/gpiochip0", a label or a number */
-	char sync_line[64];    /* offset or line name */
+	char sync_chip[64]; /* "gpiochip0", "/dev/gpiochip0", a label or a number */
+	char sync_line[64]; /* offset or line name */
 	bool sync_active_low;
 	uint16_t projector_vid, projector_pid; /* 0 = any Spindle projector */
-	char projector_path[32]; /* USB bus path "1-2.4", "" = any */
-	bool blank_only;       /* --blank: darken the projector and exit */
+	char projector_path[32];               /* USB bus path "1-2.4", "" = any */
+	bool blank_only;                       /* --blank: darken the projector and exit */
 	uint32_t max_clients;
-	uint32_t max_objects;       /* per client */
-	uint64_t max_buffer_bytes;  /* per client */
-	uint64_t max_vertices;      /* per client */
-	uint64_t max_primitives;    /* per client, per volume */
+	uint32_t max_objects;          /* per client */
+	uint64_t max_buffer_bytes;     /* per client */
+	uint64_t max_vertices;         /* per client */
+	uint64_t max_primitives;       /* per client, per volume */
 	uint64_t max_scene_primitives; /* all clients, per volume: priority decides */
-	enum policy exclusive;      /* who may have exclusive layers */
-	char admin_group[32];       /* may capture, and be exclusive under "admin" */
+	enum policy exclusive;         /* who may have exclusive layers */
+	char admin_group[32];          /* may capture, and be exclusive under "admin" */
 	bool verbose;
 };
 

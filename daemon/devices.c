@@ -27,8 +27,8 @@ struct devices {
 	struct projector *proj;
 	sd_event_source *sync_source, *proj_source, *check_timer, *rate_timer;
 	bool blanked;
-	bool present; /* a projector is attached: gone() and arrived() say */
-	int64_t max_err_ns; /* the estimator's fit error the projector is lit at */
+	bool present;                     /* a projector is attached: gone() and arrived() say */
+	int64_t max_err_ns;               /* the estimator's fit error the projector is lit at */
 	uint64_t rate_bytes, upload_rate; /* bytes_sent at the last sample; bytes/s */
 };
 
@@ -262,8 +262,7 @@ static int open_hw(struct devices *dev)
 	dev->proj->impl->get_stats(dev->proj, &ps);
 	if (!ps.present)
 		log_warn("no projector attached yet; waiting for one");
-	snprintf(dev->name, sizeof(dev->name), "%.20s:%.20s + usb projector", cfg->sync_chip,
-		 cfg->sync_line);
+	snprintf(dev->name, sizeof(dev->name), "%.20s:%.20s + usb projector", cfg->sync_chip, cfg->sync_line);
 	return 0;
 }
 
@@ -362,8 +361,8 @@ static void log_sim_safety(struct devices *dev)
 		 "pulse, lit %.1f ms while stopped and %.1f ms without timing, %llu watchdog blanks; slice "
 		 "angle error p50 %.3f p99 %.3f max %.3f",
 		 (unsigned long long)ss.stalls, (double)ss.max_dark_delay_ns / period, ss.lit_stopped_ns / 1e6,
-		 ss.lit_untimed_ns / 1e6, (unsigned long long)ss.watchdog_blanks, ss.angle_err_p50,
-		 ss.angle_err_p99, ss.angle_err_max);
+		 ss.lit_untimed_ns / 1e6, (unsigned long long)ss.watchdog_blanks, ss.angle_err_p50, ss.angle_err_p99,
+		 ss.angle_err_max);
 }
 
 void devices_destroy(struct devices *dev)

@@ -46,9 +46,9 @@ struct devices_status {
 	bool projector_present;
 	uint64_t underruns;
 	float jitter_us;
-	uint64_t missed_pulses;  /* missed and glitch edges */
-	uint64_t upload_rate;    /* bytes/s over the last second */
-	float index_error_us;    /* RMS, predicted vs measured index */
+	uint64_t missed_pulses;                 /* missed and glitch edges */
+	uint64_t upload_rate;                   /* bytes/s over the last second */
+	float index_error_us;                   /* RMS, predicted vs measured index */
 	float angle_error_p99, angle_error_max; /* slices, < 0: unknown */
 };
 

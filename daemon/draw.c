@@ -37,9 +37,12 @@ void mat4_mul(float out[16], const float a[16], const float b[16])
 uint32_t draw_format_size(uint32_t format)
 {
 	switch (format) {
-	case DRAW_XYZ: return 12;
-	case DRAW_XYZ_RGBA8: return 16;
-	case DRAW_XYZ_RGBA_FLOAT: return 28;
+	case DRAW_XYZ:
+		return 12;
+	case DRAW_XYZ_RGBA8:
+		return 16;
+	case DRAW_XYZ_RGBA_FLOAT:
+		return 28;
 	}
 	return 0;
 }
@@ -62,8 +65,8 @@ static float unit(float x)
  * result. */
 struct staged {
 	const struct draw_source *s;
-	uint32_t *index;     /* copied indices, or NULL: vertex i is i */
-	struct vertex *vtx;  /* coloured draws: every vertex of the draw, in order */
+	uint32_t *index;    /* copied indices, or NULL: vertex i is i */
+	struct vertex *vtx; /* coloured draws: every vertex of the draw, in order */
 };
 
 static uint32_t read_index(const struct draw_source *s, uint32_t i)
@@ -115,10 +118,14 @@ static uint32_t draw_count(const struct draw_source *s)
 static bool whole_primitives(enum draw_mode mode, uint32_t n)
 {
 	switch (mode) {
-	case DRAW_POINTS: return true;
-	case DRAW_LINES: return n % 2 == 0;
-	case DRAW_TRIANGLES: return n % 3 == 0;
-	case DRAW_LINE_STRIP: return n != 1;
+	case DRAW_POINTS:
+		return true;
+	case DRAW_LINES:
+		return n % 2 == 0;
+	case DRAW_TRIANGLES:
+		return n % 3 == 0;
+	case DRAW_LINE_STRIP:
+		return n != 1;
 	}
 	return false;
 }
@@ -348,8 +355,7 @@ static enum draw_error build(const struct staged *st, uint32_t n, uint64_t max_v
 	return DRAW_OK;
 }
 
-enum draw_error draw_build(const struct draw_source *s, uint64_t max_vertices, struct vdata **out,
-			   uint32_t *bad_index)
+enum draw_error draw_build(const struct draw_source *s, uint64_t max_vertices, struct vdata **out, uint32_t *bad_index)
 {
 	*out = NULL;
 	uint32_t n = draw_count(s);

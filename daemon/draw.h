@@ -16,9 +16,9 @@
 struct vdata {
 	unsigned refs;
 	enum scene_prim prim;
-	uint32_t count;     /* vertices in xyz */
-	uint32_t prims;     /* primitives they make */
-	uint8_t *prim_rgb;  /* NULL, or 3 bytes per primitive (alpha applied) */
+	uint32_t count;    /* vertices in xyz */
+	uint32_t prims;    /* primitives they make */
+	uint8_t *prim_rgb; /* NULL, or 3 bytes per primitive (alpha applied) */
 	float xyz[];
 };
 
@@ -64,9 +64,9 @@ struct draw_source {
 /* Why a draw was refused. */
 enum draw_error {
 	DRAW_OK = 0,
-	DRAW_BAD_COUNT,   /* the vertices do not make whole primitives */
-	DRAW_BAD_INDEX,   /* an index at or past vertex_count */
-	DRAW_TOO_MANY,    /* more vertices than max_vertices */
+	DRAW_BAD_COUNT, /* the vertices do not make whole primitives */
+	DRAW_BAD_INDEX, /* an index at or past vertex_count */
+	DRAW_TOO_MANY,  /* more vertices than max_vertices */
 	DRAW_NO_MEMORY,
 };
 

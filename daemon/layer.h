@@ -16,7 +16,7 @@
 struct list_item {
 	struct vdata *data;
 	float transform[16];
-	uint8_t rgba[4];     /* used when data has no colour per primitive */
+	uint8_t rgba[4]; /* used when data has no colour per primitive */
 	uint8_t point_size;
 };
 

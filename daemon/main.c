@@ -72,11 +72,16 @@ static int apply(struct config *cfg, int opt, char *arg)
 int main(int argc, char **argv)
 {
 	static const struct option options[] = {
-		{ "config", required_argument, NULL, 'c' },   { "device", required_argument, NULL, 'd' },
-		{ "profile", required_argument, NULL, 'p' },  { "renderer", required_argument, NULL, 'r' },
-		{ "socket", required_argument, NULL, 's' },   { "set", required_argument, NULL, 'o' },
-		{ "verbose", no_argument, NULL, 'v' },        { "help", no_argument, NULL, 'h' },
-		{ "version", no_argument, NULL, 'V' },        { "blank", no_argument, NULL, 'B' },
+		{ "config", required_argument, NULL, 'c' },
+		{ "device", required_argument, NULL, 'd' },
+		{ "profile", required_argument, NULL, 'p' },
+		{ "renderer", required_argument, NULL, 'r' },
+		{ "socket", required_argument, NULL, 's' },
+		{ "set", required_argument, NULL, 'o' },
+		{ "verbose", no_argument, NULL, 'v' },
+		{ "help", no_argument, NULL, 'h' },
+		{ "version", no_argument, NULL, 'V' },
+		{ "blank", no_argument, NULL, 'B' },
 		{ 0 },
 	};
 	const char *shortopts = "c:d:p:r:s:o:vh";

@@ -606,7 +606,8 @@ bool objects_leave_stage(struct client *c)
 {
 	bool changed = false;
 	struct layer *y;
-	link_for_each(y, &c->layers, link) changed |= stage_remove(&y->committed);
+	link_for_each(y, &c->layers, link)
+		changed |= stage_remove(&y->committed);
 	return changed;
 }
 

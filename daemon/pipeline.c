@@ -30,9 +30,9 @@ struct pipeline {
 	struct volume *content[MAX_BUFFERS];
 	bool known[MAX_BUFFERS];
 	int shown, pending, uploaded; /* buffer indices, -1 for none */
-	int latest;   /* the buffer holding the newest volume sent, -1 for none */
-	int resend;   /* a buffer whose volume the device lost, to send again */
-	int failures; /* device errors since the last swap */
+	int latest;                   /* the buffer holding the newest volume sent, -1 for none */
+	int resend;                   /* a buffer whose volume the device lost, to send again */
+	int failures;                 /* device errors since the last swap */
 	/* The render target; holds a finished volume while ready is set. */
 	struct volume *work;
 	bool dirty, busy, ready;
@@ -312,8 +312,7 @@ void pipeline_mark_dirty(struct pipeline *p)
 void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns, uint64_t seq)
 {
 	if (buffer >= p->buffers || (int)buffer != p->pending || p->content[buffer]->seq != seq) {
-		log_warn("projector swapped to unexpected buffer %u (volume %llu)", buffer,
-			 (unsigned long long)seq);
+		log_warn("projector swapped to unexpected buffer %u (volume %llu)", buffer, (unsigned long long)seq);
 		return;
 	}
 	p->shown = (int)buffer;

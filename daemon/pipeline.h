@@ -19,9 +19,9 @@ struct volume;
 
 struct pipeline_stats {
 	uint64_t volumes_rendered;
-	uint64_t volumes_skipped;   /* scenes identical to the last rendered */
+	uint64_t volumes_skipped; /* scenes identical to the last rendered */
 	uint64_t volumes_shown;
-	uint32_t last_render_us;    /* wall time of the last render */
+	uint32_t last_render_us; /* wall time of the last render */
 	uint64_t volumes_uploaded;
 	uint64_t last_upload_bytes; /* wire bytes of the last upload (whole or delta) */
 	uint64_t bytes_uploaded;    /* wire bytes of every upload */

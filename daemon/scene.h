@@ -14,11 +14,11 @@ enum scene_prim {
 
 struct scene_draw {
 	enum scene_prim prim;
-	uint32_t count;        /* vertices; a multiple of 2 (lines) or 3 (triangles) */
-	const float *xyz;      /* count * 3 floats, immutable while the scene lives */
-	float transform[16];   /* column-major 4x4, model -> volume space (affine) */
-	uint8_t rgb[3];        /* colour, alpha already applied (emissive) */
-	uint8_t point_size;    /* points: each lights a point_size x point_size
+	uint32_t count;          /* vertices; a multiple of 2 (lines) or 3 (triangles) */
+	const float *xyz;        /* count * 3 floats, immutable while the scene lives */
+	float transform[16];     /* column-major 4x4, model -> volume space (affine) */
+	uint8_t rgb[3];          /* colour, alpha already applied (emissive) */
+	uint8_t point_size;      /* points: each lights a point_size x point_size
 				* pixel square around its voxel (columns
 				* u - (s-1)/2 .. u + s/2, rows likewise, clipped
 				* to the image); 0 counts as 1. At most 16. */

@@ -307,7 +307,8 @@ static uint32_t active_clients(struct server *srv)
 {
 	uint32_t n = 0;
 	struct client *c;
-	link_for_each(c, &srv->clients, link) n += c->version && !c->dead;
+	link_for_each(c, &srv->clients, link)
+		n += c->version && !c->dead;
 	return n;
 }
 
@@ -349,7 +350,8 @@ static void push_state(struct server *srv)
 	struct proto_display_status_args st;
 	server_get_status(srv, &st);
 	struct client *c;
-	link_for_each(c, &srv->clients, link) client_send_state(c, &st, false);
+	link_for_each(c, &srv->clients, link)
+		client_send_state(c, &st, false);
 }
 
 static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
@@ -377,7 +379,8 @@ static gid_t admin_gid(const char *name)
 		return (gid_t)-1;
 	struct group *g = getgrnam(name);
 	if (!g) {
-		log_debug("admin group '%s' does not exist: capture and exclusive layers for root and the daemon's user only",
+		log_debug("admin group '%s' does not exist: capture and exclusive layers for root and the daemon's "
+			  "user only",
 			  name);
 		return (gid_t)-1;
 	}

@@ -31,7 +31,9 @@ void stage_changed(struct stage *s)
 const void *stage_exclusive_owner(const struct stage *s)
 {
 	const struct stage_layer *y;
-	link_for_each(y, &s->layers, link) if (stage_layer_exclusive(y)) return y->owner;
+	link_for_each(y, &s->layers, link)
+		if (stage_layer_exclusive(y))
+			return y->owner;
 	return NULL;
 }
 

@@ -111,8 +111,7 @@ static bool volume_fits(const struct proj_sim *s, const struct volume *vol)
 	       vol->image_count == s->info.images_per_volume;
 }
 
-static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol,
-		      const struct volume *base)
+static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base)
 {
 	struct proj_sim *s = (struct proj_sim *)p;
 	struct projwire_status st;

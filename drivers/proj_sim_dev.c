@@ -40,7 +40,7 @@ struct proj_simdev {
 	bool pending_missed;  /* this swap already counted an underrun */
 	int64_t link_free;    /* when the link is done with the bytes sent so far */
 
-	int64_t rev0; /* rotor revolution at creation */
+	int64_t rev0;      /* rotor revolution at creation */
 	int64_t last_ctrl; /* when the last control request came */
 	struct proj_meter *meter;
 	uint64_t watchdog_blanks;
@@ -70,8 +70,7 @@ static void report_error(struct proj_simdev *dev, int err, uint32_t buffer)
 	queue_event(dev, &ev);
 }
 
-static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
-			      int *err)
+static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq, int *err)
 {
 	struct proj_simdev *dev = data;
 	*err = 0;
@@ -133,8 +132,8 @@ static int rearm(struct proj_simdev *dev)
 	return arm(dev, sim_rotor_next_index(dev->rotor, from));
 }
 
-struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geometry *geom,
-				       uint32_t buffers, uint64_t link_bytes_per_sec)
+struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geometry *geom, uint32_t buffers,
+				       uint64_t link_bytes_per_sec)
 {
 	if (geometry_validate(geom) < 0 || buffers < 2 || buffers > PROJWIRE_MAX_BUFFERS) {
 		errno = EINVAL;
@@ -289,8 +288,8 @@ static int handle_request(struct proj_simdev *dev, const struct projwire_ctrl *c
 	return -EOPNOTSUPP;
 }
 
-int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SETUP_SIZE],
-			const uint8_t *out, size_t out_len, uint8_t *in, size_t in_cap)
+int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t *out,
+			size_t out_len, uint8_t *in, size_t in_cap)
 {
 	struct projwire_ctrl c;
 	int64_t now = sim_rotor_now(dev->rotor);

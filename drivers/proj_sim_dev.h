@@ -24,16 +24,16 @@ struct proj_simdev;
 
 /* A device on rotor, blanked, every buffer empty. link_bytes_per_sec = 0
  * makes transfers instantaneous. NULL + errno. */
-struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geometry *geom,
-				       uint32_t buffers, uint64_t link_bytes_per_sec);
+struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geometry *geom, uint32_t buffers,
+				       uint64_t link_bytes_per_sec);
 /* Accepts NULL. */
 void proj_simdev_destroy(struct proj_simdev *dev);
 
 /* EP0: one control transfer with its OUT data stage (out, out_len); an IN
  * reply goes to in (in_cap bytes). Returns the reply length, or -EPIPE when
  * the device stalls the request (GET_STATUS.last_error says why). */
-int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SETUP_SIZE],
-			const uint8_t *out, size_t out_len, uint8_t *in, size_t in_cap);
+int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t *out,
+			size_t out_len, uint8_t *in, size_t in_cap);
 
 /* Bulk OUT: one transfer, arriving now. The link model charges its bytes;
  * a volume is ready when the transfer carrying its VOLUME_END is through. */

@@ -20,9 +20,9 @@
 struct proj_meter {
 	struct sim_rotor *rotor;
 	uint32_t n;
-	double lo, hi;       /* the band, rpm */
-	int64_t clock;       /* measured up to here */
-	bool lit;            /* over the last stretch measured */
+	double lo, hi; /* the band, rpm */
+	int64_t clock; /* measured up to here */
+	bool lit;      /* over the last stretch measured */
 	int64_t dark_since;
 	bool stalled;        /* the rotor, at clock */
 	int64_t band_change; /* when stalled next flips */
@@ -33,8 +33,7 @@ struct proj_meter {
 	struct proj_simdev_stats st;
 };
 
-struct proj_meter *proj_meter_create(struct sim_rotor *rotor, uint32_t images_per_rev, double nominal_rpm,
-				     int64_t t)
+struct proj_meter *proj_meter_create(struct sim_rotor *rotor, uint32_t images_per_rev, double nominal_rpm, int64_t t)
 {
 	if (images_per_rev == 0 || !(nominal_rpm > 0.0)) {
 		errno = EINVAL;
@@ -162,7 +161,8 @@ static double percentile(const struct proj_meter *m, double q)
 	for (size_t i = 0; i <= ERR_BINS; i++) {
 		cum += m->hist[i];
 		if (cum >= need && cum > 0)
-			return i == ERR_BINS ? m->st.angle_err_max : fmin((double)(i + 1) * ERR_BIN, m->st.angle_err_max);
+			return i == ERR_BINS ? m->st.angle_err_max
+					     : fmin((double)(i + 1) * ERR_BIN, m->st.angle_err_max);
 	}
 	return m->st.angle_err_max;
 }

@@ -30,9 +30,9 @@ struct proj_simdev_stats {
 	 * to the stall's end when it never went dark). */
 	uint64_t stalls;
 	int64_t max_dark_delay_ns, last_dark_delay_ns;
-	int64_t lit_stopped_ns;  /* time lit during stalls (detection included) */
-	int64_t lit_untimed_ns;  /* time lit before any SET_TIMING */
-	uint64_t lit_through;    /* stalls that ended with the device never dark */
+	int64_t lit_stopped_ns;   /* time lit during stalls (detection included) */
+	int64_t lit_untimed_ns;   /* time lit before any SET_TIMING */
+	uint64_t lit_through;     /* stalls that ended with the device never dark */
 	uint64_t watchdog_blanks; /* darkened for want of control requests */
 };
 
@@ -41,8 +41,7 @@ struct proj_meter;
 
 /* A meter from time t on, for N = images_per_rev slices a revolution.
  * NULL + errno. */
-struct proj_meter *proj_meter_create(struct sim_rotor *rotor, uint32_t images_per_rev, double nominal_rpm,
-				     int64_t t);
+struct proj_meter *proj_meter_create(struct sim_rotor *rotor, uint32_t images_per_rev, double nominal_rpm, int64_t t);
 /* Accepts NULL. */
 void proj_meter_destroy(struct proj_meter *m);
 

@@ -44,7 +44,7 @@ struct proj_usb {
 	uint32_t shown, pending;
 	bool swap_deferred;
 	uint64_t begin_end[PROJWIRE_MAX_BUFFERS]; /* stream position after its latest VOLUME_BEGIN */
-	uint8_t evq[EVQ_SIZE]; /* event bytes received, not yet handled */
+	uint8_t evq[EVQ_SIZE];                    /* event bytes received, not yet handled */
 	size_t evq_len;
 
 	uint64_t bytes_sent, device_errors, arrivals, gone;
@@ -137,17 +137,15 @@ static int get_info(struct proj_usb *u, const char *path)
 	if (r < 0)
 		return r;
 	if ((r = projwire_info_decode(in, (size_t)r, &u->info)) < 0) {
-		log_error("usb projector %s: bad GET_INFO reply (version %u.%u): %s", path, in[0], in[1],
-			  strerror(-r));
+		log_error("usb projector %s: bad GET_INFO reply (version %u.%u): %s", path, in[0], in[1], strerror(-r));
 		return r;
 	}
 	struct geometry g;
 	projwire_info_to_geometry(&u->info, &g);
 	if (!geometry_same(&g, &u->cfg.geom)) {
-		log_error("usb projector %s: refused: device is %ux%u, %u images/rev%s; configured %ux%u, %u%s",
-			  path, g.width, g.height, g.images_per_rev, g.mirrored ? " mirrored" : "",
-			  u->cfg.geom.width, u->cfg.geom.height, u->cfg.geom.images_per_rev,
-			  u->cfg.geom.mirrored ? " mirrored" : "");
+		log_error("usb projector %s: refused: device is %ux%u, %u images/rev%s; configured %ux%u, %u%s", path,
+			  g.width, g.height, g.images_per_rev, g.mirrored ? " mirrored" : "", u->cfg.geom.width,
+			  u->cfg.geom.height, u->cfg.geom.images_per_rev, u->cfg.geom.mirrored ? " mirrored" : "");
 		return -EMEDIUMTYPE;
 	}
 	return 0;
@@ -170,9 +168,8 @@ static void transport_opened(void *data, const char *path)
 {
 	struct proj_usb *u = data;
 	u->arrivals++;
-	log_info("usb projector %s: version %u.%u, %ux%u, %u images/rev, %u buffers", path,
-		 u->info.version_major, u->info.version_minor, u->info.width, u->info.height,
-		 u->info.images_per_rev, u->info.buffers);
+	log_info("usb projector %s: version %u.%u, %ux%u, %u images/rev, %u buffers", path, u->info.version_major,
+		 u->info.version_minor, u->info.width, u->info.height, u->info.images_per_rev, u->info.buffers);
 }
 
 static void transport_arrived(void *data)

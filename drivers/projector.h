@@ -24,8 +24,8 @@ struct projector_info {
 
 /* Counters for status; every field 0 when unknown. */
 struct projector_stats {
-	bool present;           /* a device is attached and set up */
-	uint64_t revolutions;   /* revolution starts the device saw */
+	bool present;         /* a device is attached and set up */
+	uint64_t revolutions; /* revolution starts the device saw */
 	uint64_t swaps;
 	uint64_t underruns;     /* swaps that missed a revolution start for want of data */
 	uint64_t bytes_sent;    /* bulk OUT bytes the host completed, since creation */
@@ -72,8 +72,7 @@ struct projector_impl {
 	 * sent. Returns the wire bytes queued (> 0) once queued (vol and base
 	 * need not outlive the call); -EBUSY if that buffer is not free;
 	 * -ENODEV with no device. */
-	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol,
-		      const struct volume *base);
+	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base);
 	/* Shows buffer from the next revolution start after its upload is
 	 * complete; swapped() reports it. */
 	int (*swap)(struct projector *p, uint32_t buffer);
@@ -101,8 +100,8 @@ struct sim_faults;
 
 struct proj_sim_config {
 	struct geometry geom;
-	uint32_t buffers;            /* 2 or 3 */
-	uint64_t link_bytes_per_sec; /* modelled link rate, 0 = unlimited */
+	uint32_t buffers;                /* 2 or 3 */
+	uint64_t link_bytes_per_sec;     /* modelled link rate, 0 = unlimited */
 	const struct sim_faults *faults; /* its unplug events; NULL = none */
 };
 
@@ -112,9 +111,9 @@ struct projector *proj_sim_create(struct sim_rotor *rotor, const struct proj_sim
 				  const struct projector_listener *listener, void *data);
 
 struct proj_usb_config {
-	uint16_t vid, pid;   /* 0 = any; the interface must be Spindle's (class
+	uint16_t vid, pid;    /* 0 = any; the interface must be Spindle's (class
 			      * ff, subclass 53, protocol 01) either way */
-	char bus_path[32];   /* "BUS-PORT.PORT..." as in sysfs (e.g. "1-2.4"),
+	char bus_path[32];    /* "BUS-PORT.PORT..." as in sysfs (e.g. "1-2.4"),
 			      * empty = any */
 	struct geometry geom; /* what the daemon renders: a device reporting
 			       * another geometry is refused (logged) */
@@ -123,15 +122,15 @@ struct proj_usb_config {
 /* The USB projector. Succeeds without a device attached: it is set up when
  * it arrives (hot-plug), and arrived()/gone() report it. NULL + errno when
  * libusb cannot start. */
-struct projector *proj_usb_create(const struct proj_usb_config *cfg,
-				  const struct projector_listener *listener, void *data);
+struct projector *proj_usb_create(const struct proj_usb_config *cfg, const struct projector_listener *listener,
+				  void *data);
 
 /* Counters the simulated projector keeps (for status and tests). */
 struct proj_sim_stats {
 	uint64_t revolutions; /* revolution starts seen */
 	uint64_t swaps;
-	uint64_t underruns;   /* swaps that missed a revolution start for want of data */
-	uint64_t bytes;       /* wire bytes received */
+	uint64_t underruns; /* swaps that missed a revolution start for want of data */
+	uint64_t bytes;     /* wire bytes received */
 	/* Measured by the device model against the true rotor (see
 	 * drivers/proj_sim_meter.h): slice angle error in slices (-1 until
 	 * measured), and the safety record. */

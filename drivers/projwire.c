@@ -70,8 +70,8 @@ void projwire_setup_decode(const uint8_t in[PROJWIRE_SETUP_SIZE], struct projwir
 	s->length = le_get16(in + 6);
 }
 
-size_t projwire_ctrl_encode(const struct projwire_ctrl *c, uint16_t iface,
-			    uint8_t setup[PROJWIRE_SETUP_SIZE], uint8_t data[PROJWIRE_CTRL_DATA_MAX])
+size_t projwire_ctrl_encode(const struct projwire_ctrl *c, uint16_t iface, uint8_t setup[PROJWIRE_SETUP_SIZE],
+			    uint8_t data[PROJWIRE_CTRL_DATA_MAX])
 {
 	struct projwire_setup s = { .request_type = PROJWIRE_RT_OUT, .request = (uint8_t)c->request, .index = iface };
 	size_t len = 0;
@@ -190,8 +190,8 @@ void projwire_info_to_geometry(const struct projwire_info *info, struct geometry
 	};
 }
 
-void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g,
-				 uint32_t buffers, uint64_t link_bytes_per_sec)
+void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g, uint32_t buffers,
+				 uint64_t link_bytes_per_sec)
 {
 	*info = (struct projwire_info){
 		.version_major = PROJWIRE_VERSION_MAJOR,
@@ -305,8 +305,8 @@ static void header_encode(uint8_t *out, uint8_t type, uint32_t payload)
 
 uint32_t projwire_max_image_payload(const struct geometry *geom)
 {
-	uint32_t tiles = ((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) *
-			 ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t tiles =
+		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
 	return PROJWIRE_IMAGE_HEAD + (tiles + 7) / 8 + tiles * VOLUME_TILE_BYTES;
 }
 
@@ -325,8 +325,7 @@ size_t projwire_volume_size(const struct volume *vol)
 	return n;
 }
 
-void projwire_begin_encode(uint8_t out[PROJWIRE_BEGIN_SIZE], uint32_t buffer, uint32_t image_count,
-			   uint64_t seq)
+void projwire_begin_encode(uint8_t out[PROJWIRE_BEGIN_SIZE], uint32_t buffer, uint32_t image_count, uint64_t seq)
 {
 	header_encode(out, PROJWIRE_VOLUME_BEGIN, PROJWIRE_BEGIN_SIZE - PROJWIRE_HEADER_SIZE);
 	le_put32(out + 8, buffer);
@@ -419,8 +418,8 @@ int projwire_event_decode(const uint8_t *in, size_t len, struct projwire_event *
 
 /* ---- Delta volumes (1.1) ---- */
 
-void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer,
-				 uint32_t image_count, uint64_t seq, uint64_t base_seq)
+void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer, uint32_t image_count,
+				 uint64_t seq, uint64_t base_seq)
 {
 	header_encode(out, PROJWIRE_DELTA_BEGIN, PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE);
 	le_put32(out + 8, buffer);
@@ -521,8 +520,7 @@ static size_t delta_encode(const struct volume *vol, const struct volume *base, 
 	return n + PROJWIRE_END_SIZE;
 }
 
-size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
-			      uint8_t *out)
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out)
 {
 	if (!delta_fits(vol, base))
 		return projwire_volume_encode(vol, buffer, out);

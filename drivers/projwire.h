@@ -32,8 +32,8 @@
 #define PROJWIRE_CTRL_DATA_MAX 64
 
 #define PROJWIRE_HEADER_SIZE 8
-#define PROJWIRE_MAGIC0 0x53 /* 'S' */
-#define PROJWIRE_MAGIC1 0x50 /* 'P' */
+#define PROJWIRE_MAGIC0 0x53             /* 'S' */
+#define PROJWIRE_MAGIC1 0x50             /* 'P' */
 #define PROJWIRE_MAX_PAYLOAD (64u << 20) /* absolute; devices may say less */
 #define PROJWIRE_BEGIN_SIZE (PROJWIRE_HEADER_SIZE + 16)
 #define PROJWIRE_IMAGE_HEAD 8 /* image index, tile count; then the mask */
@@ -79,7 +79,7 @@ enum projwire_error {
 	PROJWIRE_ERR_NOT_READY = 6,   /* swap to a buffer with no valid volume */
 	PROJWIRE_ERR_UNSUPPORTED = 7, /* reserved record type or request */
 	PROJWIRE_ERR_NO_MEMORY = 8,
-	PROJWIRE_ERR_ABORTED = 9,     /* volume abandoned by RESET_STREAM or a new BEGIN */
+	PROJWIRE_ERR_ABORTED = 9, /* volume abandoned by RESET_STREAM or a new BEGIN */
 };
 
 /* Negative errno <-> wire error code (both directions of one table). */
@@ -105,8 +105,8 @@ struct projwire_timing {
 struct projwire_ctrl {
 	enum projwire_request request;
 	union {
-		bool blank;                   /* SET_BLANK */
-		uint32_t buffer;              /* SWAP */
+		bool blank;                    /* SET_BLANK */
+		uint32_t buffer;               /* SWAP */
 		struct projwire_timing timing; /* SET_TIMING */
 	};
 };
@@ -114,8 +114,8 @@ struct projwire_ctrl {
 /* Host: the setup packet and OUT data stage of request c to interface iface.
  * Returns the OUT data stage length (0 for requests without one; the IN
  * requests expect setup.length bytes back). */
-size_t projwire_ctrl_encode(const struct projwire_ctrl *c, uint16_t iface,
-			    uint8_t setup[PROJWIRE_SETUP_SIZE], uint8_t data[PROJWIRE_CTRL_DATA_MAX]);
+size_t projwire_ctrl_encode(const struct projwire_ctrl *c, uint16_t iface, uint8_t setup[PROJWIRE_SETUP_SIZE],
+			    uint8_t data[PROJWIRE_CTRL_DATA_MAX]);
 
 /* Device: parses and validates a request and its OUT data stage. Returns 0,
  * -EOPNOTSUPP for an unknown request, -EINVAL for a malformed one. */
@@ -141,8 +141,8 @@ void projwire_info_encode(const struct projwire_info *info, uint8_t out[PROJWIRE
 int projwire_info_decode(const uint8_t *in, size_t len, struct projwire_info *out);
 
 /* Between device info and geometry. */
-void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g,
-				 uint32_t buffers, uint64_t link_bytes_per_sec);
+void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g, uint32_t buffers,
+				 uint64_t link_bytes_per_sec);
 void projwire_info_to_geometry(const struct projwire_info *info, struct geometry *g);
 
 #define PROJWIRE_STATUS_BLANKED 0x01
@@ -174,13 +174,12 @@ int projwire_status_decode(const uint8_t *in, size_t len, struct projwire_status
 size_t projwire_image_size(const struct volume *vol, uint32_t k);
 size_t projwire_volume_size(const struct volume *vol);
 
-void projwire_begin_encode(uint8_t out[PROJWIRE_BEGIN_SIZE], uint32_t buffer, uint32_t image_count,
-			   uint64_t seq);
+void projwire_begin_encode(uint8_t out[PROJWIRE_BEGIN_SIZE], uint32_t buffer, uint32_t image_count, uint64_t seq);
 /* Writes image k's IMAGE record (projwire_image_size() bytes). */
 size_t projwire_image_encode(const struct volume *vol, uint32_t k, uint8_t *out);
 void projwire_end_encode(uint8_t out[PROJWIRE_END_SIZE], uint32_t image_records, uint32_t crc);
-void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer,
-				 uint32_t image_count, uint64_t seq, uint64_t base_seq);
+void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_t buffer, uint32_t image_count,
+				 uint64_t seq, uint64_t base_seq);
 
 /* The whole upload of vol into buffer: VOLUME_BEGIN, an IMAGE record for
  * each non-empty image, VOLUME_END. out has projwire_volume_size() bytes.
@@ -196,8 +195,7 @@ size_t projwire_upload_size(const struct volume *vol, const struct volume *base,
 /* Writes it: a delta against base when base is given (pass it only where
  * projwire_upload_size() chose the delta: out is sized for that form),
  * else projwire_volume_encode(). Returns the bytes written. */
-size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer,
-			      uint8_t *out);
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out);
 
 /* ---- Bulk OUT decoder (device side) ---- */
 
@@ -207,8 +205,7 @@ struct projwire_sink {
 	 * (-EBUSY for a buffer shown or awaiting a swap; for a delta, -ENODATA
 	 * unless the buffer is ready and holds volume *base_seq). The decoder
 	 * clears it for a whole volume and edits it in place for a delta. */
-	struct volume *(*begin)(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
-				int *err);
+	struct volume *(*begin)(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq, int *err);
 	/* The volume begun for buffer is complete and valid (err 0), or failed
 	 * (negative errno: its contents are garbage and must never be shown).
 	 * buffer is PROJWIRE_NO_BUFFER for an error outside a volume. */
@@ -216,11 +213,11 @@ struct projwire_sink {
 };
 
 struct projwire_decoder_stats {
-	uint64_t bytes;    /* fed */
-	uint64_t records;  /* accepted */
-	uint64_t volumes;  /* completed with a good CRC */
-	uint64_t errors;   /* rejections */
-	uint64_t skipped;  /* bytes discarded while resynchronising */
+	uint64_t bytes;   /* fed */
+	uint64_t records; /* accepted */
+	uint64_t volumes; /* completed with a good CRC */
+	uint64_t errors;  /* rejections */
+	uint64_t skipped; /* bytes discarded while resynchronising */
 };
 
 struct projwire_decoder;
@@ -228,9 +225,8 @@ struct projwire_decoder;
 /* A decoder for a device of geometry geom with buffers volume buffers,
  * accepting records of at most max_record payload bytes (0: the largest
  * this geometry needs). The sink must outlive the decoder. NULL + errno. */
-struct projwire_decoder *projwire_decoder_create(const struct geometry *geom, uint32_t buffers,
-						 uint32_t max_record, const struct projwire_sink *sink,
-						 void *data);
+struct projwire_decoder *projwire_decoder_create(const struct geometry *geom, uint32_t buffers, uint32_t max_record,
+						 const struct projwire_sink *sink, void *data);
 /* Accepts NULL. */
 void projwire_decoder_destroy(struct projwire_decoder *d);
 
@@ -251,11 +247,11 @@ void projwire_decoder_get_stats(const struct projwire_decoder *d, struct projwir
 /* ---- Bulk IN events (device -> host) ---- */
 
 struct projwire_event {
-	uint8_t type;     /* PROJWIRE_EV_* */
-	uint32_t buffer;  /* PROJWIRE_NO_BUFFER when none */
-	int64_t time_ns;  /* SWAPPED: revolution start, host CLOCK_MONOTONIC */
-	uint64_t seq;     /* volume sequence number of that buffer */
-	uint32_t error;   /* ERROR: enum projwire_error */
+	uint8_t type;    /* PROJWIRE_EV_* */
+	uint32_t buffer; /* PROJWIRE_NO_BUFFER when none */
+	int64_t time_ns; /* SWAPPED: revolution start, host CLOCK_MONOTONIC */
+	uint64_t seq;    /* volume sequence number of that buffer */
+	uint32_t error;  /* ERROR: enum projwire_error */
 };
 
 /* Returns the bytes written, at most PROJWIRE_EVENT_MAX. */

@@ -45,7 +45,7 @@ struct projwire_decoder {
 	/* The volume being written. */
 	struct volume *vol;
 	bool delta;
-	struct volume *scratch; /* a delta's merged image (image 0), made on first use */
+	struct volume *scratch;        /* a delta's merged image (image 0), made on first use */
 	uint32_t base_next, base_tile; /* merge cursors: tile number, stored index */
 	uint32_t buffer;
 	uint32_t crc, images;
@@ -56,9 +56,8 @@ struct projwire_decoder {
 	int first_err;
 };
 
-struct projwire_decoder *projwire_decoder_create(const struct geometry *geom, uint32_t buffers,
-						 uint32_t max_record, const struct projwire_sink *sink,
-						 void *data)
+struct projwire_decoder *projwire_decoder_create(const struct geometry *geom, uint32_t buffers, uint32_t max_record,
+						 const struct projwire_sink *sink, void *data)
 {
 	if (geometry_validate(geom) < 0 || buffers < 1 || buffers > PROJWIRE_MAX_BUFFERS) {
 		errno = EINVAL;
@@ -343,8 +342,7 @@ static int tile_done(struct projwire_decoder *d)
 		return -EBADMSG;
 	int r = d->delta ? merge_base(d, t) : 0;
 	if (r == 0)
-		r = volume_image_append(d->delta ? d->scratch : d->vol, d->delta ? 0 : (uint32_t)d->image, t,
-					d->tile);
+		r = volume_image_append(d->delta ? d->scratch : d->vol, d->delta ? 0 : (uint32_t)d->image, t, d->tile);
 	if (r < 0)
 		return r;
 	d->tile_fill = 0;
@@ -366,12 +364,24 @@ static size_t take(uint8_t *dst, size_t *fill, size_t need, const uint8_t *src, 
 static size_t sync_step(struct projwire_decoder *d, const uint8_t *buf)
 {
 	static const uint8_t begin_hdr[PROJWIRE_HEADER_SIZE] = {
-		PROJWIRE_MAGIC0, PROJWIRE_MAGIC1, PROJWIRE_VOLUME_BEGIN, 0,
-		PROJWIRE_BEGIN_SIZE - PROJWIRE_HEADER_SIZE, 0, 0, 0,
+		PROJWIRE_MAGIC0,
+		PROJWIRE_MAGIC1,
+		PROJWIRE_VOLUME_BEGIN,
+		0,
+		PROJWIRE_BEGIN_SIZE - PROJWIRE_HEADER_SIZE,
+		0,
+		0,
+		0,
 	};
 	static const uint8_t delta_hdr[PROJWIRE_HEADER_SIZE] = {
-		PROJWIRE_MAGIC0, PROJWIRE_MAGIC1, PROJWIRE_DELTA_BEGIN, 0,
-		PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE, 0, 0, 0,
+		PROJWIRE_MAGIC0,
+		PROJWIRE_MAGIC1,
+		PROJWIRE_DELTA_BEGIN,
+		0,
+		PROJWIRE_DELTA_BEGIN_SIZE - PROJWIRE_HEADER_SIZE,
+		0,
+		0,
+		0,
 	};
 	if (d->hdr_fill == PROJWIRE_HEADER_SIZE) {
 		memmove(d->hdr, d->hdr + 1, PROJWIRE_HEADER_SIZE - 1);

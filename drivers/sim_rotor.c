@@ -245,8 +245,7 @@ void sim_rotor_set_drift(struct sim_rotor *r, double ppm_per_s)
 
 /* Within s from 'from' on, before 'end': the first time the speed meets
  * the band condition; SIM_ROTOR_NEVER if not in this segment. */
-static int64_t seg_band_cross(const struct segment *s, int64_t from, int64_t end, double wl, double wh,
-			      bool inside)
+static int64_t seg_band_cross(const struct segment *s, int64_t from, int64_t end, double wl, double wh, bool inside)
 {
 	double w = seg_speed(s, from);
 	if ((w >= wl && w <= wh) == inside)

@@ -71,8 +71,8 @@ struct sync_sim_stats {
 void sync_sim_get_stats(struct sync_source *s, struct sync_sim_stats *out);
 
 struct sync_gpiod_config {
-	char chip[64]; /* name "gpiochip0", path "/dev/gpiochip0", label, or number */
-	char line[64]; /* offset "17" or line name "ROTOR_INDEX" */
+	char chip[64];   /* name "gpiochip0", path "/dev/gpiochip0", label, or number */
+	char line[64];   /* offset "17" or line name "ROTOR_INDEX" */
 	bool active_low; /* the physical falling edge is the index */
 };
 

@@ -44,9 +44,8 @@ void sync_estimator_config_default(struct sync_estimator_config *cfg, double nom
 static bool config_valid(const struct sync_estimator_config *c)
 {
 	return c->nominal_rpm >= 1.0 && c->nominal_rpm <= 100000.0 && c->band > 0.0 && c->band < 1.0 &&
-	       c->tolerance > 0.0 && c->tolerance < 0.5 && c->lock_revs >= 1 &&
-	       c->lock_revs <= SYNC_ESTIMATOR_WINDOW && c->timeout_periods > 1.0 &&
-	       c->glitch_fraction > 0.0 && c->glitch_fraction < 1.0 && c->max_missed >= 1;
+	       c->tolerance > 0.0 && c->tolerance < 0.5 && c->lock_revs >= 1 && c->lock_revs <= SYNC_ESTIMATOR_WINDOW &&
+	       c->timeout_periods > 1.0 && c->glitch_fraction > 0.0 && c->glitch_fraction < 1.0 && c->max_missed >= 1;
 }
 
 struct sync_estimator *sync_estimator_create(const struct sync_estimator_config *cfg)
@@ -163,8 +162,7 @@ static bool update_lock(struct sync_estimator *est)
 static void take_sample(struct sync_estimator *est, int64_t sample, bool after_gap)
 {
 	int64_t mean = est->mean_period;
-	bool consistent = est->hist_len == 0 ||
-			  fabs((double)(sample - mean)) <= est->cfg.tolerance * (double)mean;
+	bool consistent = est->hist_len == 0 || fabs((double)(sample - mean)) <= est->cfg.tolerance * (double)mean;
 	if (after_gap || !consistent) {
 		if (!est->state.locked)
 			history_clear(est);

@@ -50,12 +50,12 @@ enum sync_unlock_reason {
 struct sync_state {
 	bool locked;
 	enum sync_unlock_reason unlock_reason; /* why the last unlock happened */
-	int64_t period_ns; /* fitted period, 0 until one is measured */
-	int64_t phase_ns;  /* fitted time of the latest revolution start, 0 if none */
-	int64_t edge_ns;   /* the latest accepted index edge, 0 if none */
-	double rpm;        /* from the mean of recent periods (what the band
+	int64_t period_ns;                     /* fitted period, 0 until one is measured */
+	int64_t phase_ns;                      /* fitted time of the latest revolution start, 0 if none */
+	int64_t edge_ns;                       /* the latest accepted index edge, 0 if none */
+	double rpm;                            /* from the mean of recent periods (what the band
 			    * is judged on), 0 until known */
-	int64_t jitter_ns; /* RMS deviation of recent periods from their mean */
+	int64_t jitter_ns;                     /* RMS deviation of recent periods from their mean */
 	/* How far each new edge fell from where the fit predicted it: RMS,
 	 * over about the last SYNC_ESTIMATOR_FIT edges (0 until known). Edge
 	 * noise and prediction error together, so an upper bound on how far

@@ -62,8 +62,7 @@ struct sync_gpiod {
 	char name[160];
 };
 
-static int v1_request(const struct sync_gpiod_config *cfg, struct sync_gpiod *s,
-		      const char **why);
+static int v1_request(const struct sync_gpiod_config *cfg, struct sync_gpiod *s, const char **why);
 static int v1_read(int fd, struct raw_edge *raw, int max);
 static void v1_release(struct sync_gpiod *s);
 
@@ -92,8 +91,7 @@ static void read_clocks(int64_t *mono, int64_t *real)
 	}
 }
 
-enum sync_gpiod_clock sync_gpiod_pick_clock(int64_t ts, int64_t mono_now, int64_t real_now,
-					    bool *sure)
+enum sync_gpiod_clock sync_gpiod_pick_clock(int64_t ts, int64_t mono_now, int64_t real_now, bool *sure)
 {
 	/* Ages on either clock; a negative one rules that clock out, since
 	 * an edge is stamped before it is read. */
@@ -115,8 +113,7 @@ enum sync_gpiod_clock sync_gpiod_pick_clock(int64_t ts, int64_t mono_now, int64_
 /* The clock that stamped ts: the settled one, or a pick from ts, settled on
  * when sure. Picked per edge: a garbage record beside a good one must not
  * decide for it. */
-static enum sync_gpiod_clock edge_clock(struct sync_gpiod *s, int64_t ts, int64_t mono_now,
-					int64_t real_now)
+static enum sync_gpiod_clock edge_clock(struct sync_gpiod *s, int64_t ts, int64_t mono_now, int64_t real_now)
 {
 	if (s->clock != SYNC_GPIOD_CLOCK_UNKNOWN)
 		return s->clock;
@@ -139,8 +136,7 @@ static enum sync_gpiod_clock edge_clock(struct sync_gpiod *s, int64_t ts, int64_
  * before the edge before it. -EBADMSG at the first that is not; the edges
  * before it are kept. The clocks are read after the records, so every
  * true edge lies before now. */
-static int take_edges(struct sync_gpiod *s, const struct raw_edge *raw, int count, int64_t *ts,
-		      int *n)
+static int take_edges(struct sync_gpiod *s, const struct raw_edge *raw, int count, int64_t *ts, int *n)
 {
 	int64_t mono_now, real_now;
 	read_clocks(&mono_now, &real_now);
@@ -149,8 +145,8 @@ static int take_edges(struct sync_gpiod *s, const struct raw_edge *raw, int coun
 			continue;
 		enum sync_gpiod_clock c = edge_clock(s, raw[i].ts, mono_now, real_now);
 		int64_t t = raw[i].ts + (c == SYNC_GPIOD_CLOCK_REALTIME ? mono_now - real_now : 0);
-		if (c == SYNC_GPIOD_CLOCK_UNKNOWN || raw[i].ts <= 0 || t <= 0 ||
-		    t > mono_now + CONVERT_SLACK_NS || t < s->last) {
+		if (c == SYNC_GPIOD_CLOCK_UNKNOWN || raw[i].ts <= 0 || t <= 0 || t > mono_now + CONVERT_SLACK_NS ||
+		    t < s->last) {
 			log_error("%s: edge timestamp %lld ns is no time an edge can have "
 				  "(now %lld, last edge %lld): not a GPIO event record",
 				  s->name, (long long)raw[i].ts, (long long)mono_now, (long long)s->last);
@@ -277,14 +273,12 @@ struct sync_source *sync_gpiod_create(const struct sync_gpiod_config *cfg)
 	const char *why = "";
 	int r = v1_request(cfg, s, &why);
 	if (r < 0) {
-		log_error("sync gpiod: chip %s line %s: %s: %s", cfg->chip, cfg->line, why,
-			  strerror(-r));
+		log_error("sync gpiod: chip %s line %s: %s: %s", cfg->chip, cfg->line, why, strerror(-r));
 		free(s);
 		errno = -r;
 		return NULL;
 	}
-	log_info("%s: index pulse on the %s edge", s->name,
-		 cfg->active_low ? "falling (active low)" : "rising");
+	log_info("%s: index pulse on the %s edge", s->name, cfg->active_low ? "falling (active low)" : "rising");
 	return &s->base;
 }
 
@@ -307,8 +301,7 @@ static long line_offset(const char *line)
 
 /* Opens cfg's chip, requests rising-edge events on its line into s (chip,
  * line, fd made non-blocking). 0, or -errno with *why saying which step. */
-static int v1_request(const struct sync_gpiod_config *cfg, struct sync_gpiod *s,
-		      const char **why)
+static int v1_request(const struct sync_gpiod_config *cfg, struct sync_gpiod *s, const char **why)
 {
 	int err;
 	*why = "cannot open the GPIO chip";
@@ -317,8 +310,7 @@ static int v1_request(const struct sync_gpiod_config *cfg, struct sync_gpiod *s,
 		return errno ? -errno : -ENOENT;
 	long off = line_offset(cfg->line);
 	*why = off < 0 ? "no line of that name on the chip" : "no line at that offset on the chip";
-	s->line = off < 0 ? gpiod_chip_find_line(s->chip, cfg->line)
-			  : gpiod_chip_get_line(s->chip, (unsigned int)off);
+	s->line = off < 0 ? gpiod_chip_find_line(s->chip, cfg->line) : gpiod_chip_get_line(s->chip, (unsigned int)off);
 	if (!s->line)
 		goto err_close_chip;
 	*why = "cannot request rising-edge events (is another consumer holding the line?)";

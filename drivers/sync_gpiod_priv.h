@@ -27,8 +27,7 @@ enum sync_gpiod_clock {
  * future, or the clocks are over an hour apart. When they are close (a board
  * without an RTC, before NTP) a pick that is not sure is right while the edge
  * is younger than the distance between the clocks. */
-enum sync_gpiod_clock sync_gpiod_pick_clock(int64_t ts, int64_t mono_now, int64_t real_now,
-					    bool *sure);
+enum sync_gpiod_clock sync_gpiod_pick_clock(int64_t ts, int64_t mono_now, int64_t real_now, bool *sure);
 
 /* An edge source on fd, a GPIO uAPI v1 line event fd (or anything giving
  * the same records). fd is made non-blocking and stays the caller's: destroy

@@ -29,7 +29,7 @@ struct sync_sim {
 	int fd;
 	double jitter_ns, p_missed, p_extra; /* jitter_ns: per-edge sigma */
 	uint64_t rng;
-	int64_t next_rev;        /* the next true revolution start to model */
+	int64_t next_rev;         /* the next true revolution start to model */
 	int64_t queue[QUEUE_MAX]; /* edges not yet read, oldest first */
 	int queued, head;
 	int64_t last_sent;

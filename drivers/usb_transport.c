@@ -594,8 +594,7 @@ static int add_pollfds(struct usb_transport *t)
 }
 
 /* Runs inside libusb's event handling: only notes what happened. */
-static int LIBUSB_CALL hotplug_event(libusb_context *ctx, libusb_device *dev, libusb_hotplug_event event,
-				     void *data)
+static int LIBUSB_CALL hotplug_event(libusb_context *ctx, libusb_device *dev, libusb_hotplug_event event, void *data)
 {
 	struct usb_transport *t = data;
 	if (event == LIBUSB_HOTPLUG_EVENT_DEVICE_ARRIVED) {

@@ -19,9 +19,9 @@
 struct usb_transport;
 
 struct usb_transport_config {
-	uint16_t vid, pid;  /* 0 = any */
+	uint16_t vid, pid;                                   /* 0 = any */
 	uint8_t iface_class, iface_subclass, iface_protocol; /* the interface to claim */
-	char bus_path[32];  /* "BUS-PORT.PORT..." as in sysfs, empty = any */
+	char bus_path[32];                                   /* "BUS-PORT.PORT..." as in sysfs, empty = any */
 };
 
 struct usb_transport_listener {
@@ -47,12 +47,12 @@ struct usb_transport_listener {
 
 /* What the transport's tests look at (proj_usb_priv.h). */
 struct usb_transport_debug {
-	int live_transfers;      /* submitted, callback not yet seen */
-	int allocated_transfers; /* libusb_alloc_transfer'd, not yet freed */
-	int max_out_in_flight;   /* most bulk OUT transfers in flight at once */
-	bool hotplug;            /* libusb delivers hot-plug events here */
+	int live_transfers;                          /* submitted, callback not yet seen */
+	int allocated_transfers;                     /* libusb_alloc_transfer'd, not yet freed */
+	int max_out_in_flight;                       /* most bulk OUT transfers in flight at once */
+	bool hotplug;                                /* libusb delivers hot-plug events here */
 	uint64_t hotplug_arrivals, hotplug_removals; /* events seen */
-	uint64_t rescan_opens;   /* devices found by the periodic rescan */
+	uint64_t rescan_opens;                       /* devices found by the periodic rescan */
 };
 
 /* libusb, the epoll set, the tick timer and hot-plug; no device yet (see

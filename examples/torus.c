@@ -67,7 +67,8 @@ static void torus(struct vertex *v, uint32_t *idx, int rings, int sides)
 	for (int i = 0; i < rings; i++)
 		for (int j = 0; j < sides; j++) {
 			uint32_t a = (uint32_t)(i * sides + j), b = (uint32_t)(((i + 1) % rings) * sides + j);
-			uint32_t c = (uint32_t)(i * sides + (j + 1) % sides), d = (uint32_t)(((i + 1) % rings) * sides + (j + 1) % sides);
+			uint32_t c = (uint32_t)(i * sides + (j + 1) % sides),
+				 d = (uint32_t)(((i + 1) % rings) * sides + (j + 1) % sides);
 			uint32_t *t = idx + 6 * (i * sides + j);
 			t[0] = a, t[1] = b, t[2] = c;
 			t[3] = c, t[4] = b, t[5] = d;

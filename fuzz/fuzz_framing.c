@@ -44,8 +44,8 @@ struct header {
 
 struct framing {
 	uint32_t version;
-	int sock;               /* the input's end */
-	struct proto_conn *in;  /* reads the input */
+	int sock;              /* the input's end */
+	struct proto_conn *in; /* reads the input */
 	/* Echoes of the input's messages: written to echo_out, read back
 	 * from echo_in; those echoed again go through echo2_*. */
 	struct proto_conn *echo_out, *echo_in, *echo2_out, *echo2_in;

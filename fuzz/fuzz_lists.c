@@ -146,7 +146,7 @@ static int op_buffer(struct lists *s, struct fuzz_input *in)
 	uint64_t declared = fuzz_num64(in);
 	uint8_t *buf = read_contents(in, size);
 	int fd = kind <= FUZZ_FD_MEMFD_UNSEALED ? fuzz_memfd((enum fuzz_fd_kind)kind, size, buf, size)
-						 : fuzz_fd(kind, 0);
+						: fuzz_fd(kind, 0);
 	free(buf);
 	if (fd < 0)
 		fuzz_fail("fd: %s", strerror(-fd));
@@ -365,8 +365,7 @@ static void check_client(const struct client *c, const struct config *cfg)
 			  (unsigned long long)c->buffer_bytes, (unsigned long long)bytes,
 			  (unsigned long long)cfg->max_buffer_bytes);
 	if (objects != c->objects.count || objects > cfg->max_objects)
-		fuzz_fail("client: %u objects counted, %u held, quota %u", c->objects.count, objects,
-			  cfg->max_objects);
+		fuzz_fail("client: %u objects counted, %u held, quota %u", c->objects.count, objects, cfg->max_objects);
 }
 
 /* The one client, or NULL once the server dropped it. */

@@ -11,7 +11,6 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-
 /* ---- the input ---- */
 
 static uint64_t take_le(struct fuzz_input *in, unsigned n)
@@ -74,7 +73,7 @@ int fuzz_memfd(enum fuzz_fd_kind kind, uint64_t size, const void *data, size_t l
 		len = (size_t)size;
 	if (ftruncate(fd, (off_t)size) < 0 || (len && pwrite(fd, data, len, 0) != (ssize_t)len))
 		goto fail;
-	int seals = kind == FUZZ_FD_MEMFD_SEALED	? F_SEAL_SHRINK
+	int seals = kind == FUZZ_FD_MEMFD_SEALED      ? F_SEAL_SHRINK
 		    : kind == FUZZ_FD_MEMFD_ALL_SEALS ? F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL
 						      : 0;
 	if (seals && fcntl(fd, F_ADD_SEALS, seals) < 0)
@@ -181,8 +180,7 @@ void fuzz_fail(const char *fmt, ...)
 	abort();
 }
 
-int fuzz_send(int sock, const void *data, size_t len, const int *fds, unsigned n_fds, void (*pump)(void *),
-	      void *arg)
+int fuzz_send(int sock, const void *data, size_t len, const int *fds, unsigned n_fds, void (*pump)(void *), void *arg)
 {
 	const uint8_t *p = data;
 	unsigned stuck = 0;
@@ -232,7 +230,9 @@ bool fuzz_drain(int sock)
 			struct cmsghdr align;
 		} control;
 		struct iovec iov = { buf, sizeof(buf) };
-		struct msghdr mh = { .msg_iov = &iov, .msg_iovlen = 1, .msg_control = control.buf,
+		struct msghdr mh = { .msg_iov = &iov,
+				     .msg_iovlen = 1,
+				     .msg_control = control.buf,
 				     .msg_controllen = sizeof(control.buf) };
 		ssize_t n = recvmsg(sock, &mh, MSG_DONTWAIT | MSG_CMSG_CLOEXEC);
 		if (n < 0 && errno == EINTR)

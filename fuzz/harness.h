@@ -37,10 +37,10 @@ const uint8_t *fuzz_bytes(struct fuzz_input *in, size_t max, size_t *n);
 
 /* The kinds of file descriptor an input may pass (fuzz_fd()). */
 enum fuzz_fd_kind {
-	FUZZ_FD_MEMFD_SEALED,   /* sealed against shrinking: a valid buffer */
+	FUZZ_FD_MEMFD_SEALED,    /* sealed against shrinking: a valid buffer */
 	FUZZ_FD_MEMFD_ALL_SEALS, /* shrink, grow, write and seal */
 	FUZZ_FD_MEMFD_UNSEALED,
-	FUZZ_FD_PIPE,           /* the read end of an empty pipe */
+	FUZZ_FD_PIPE, /* the read end of an empty pipe */
 	FUZZ_FD_SOCKET,
 	FUZZ_FD_DEV_NULL,
 	FUZZ_FD_KINDS
@@ -71,8 +71,7 @@ void fuzz_fail(const char *fmt, ...) __attribute__((format(printf, 1, 2), noretu
  * first byte, calling pump(arg) whenever the socket is full (pump makes the
  * peer read). 0 or -errno (-EPIPE: the peer closed it; -EAGAIN: still full
  * after many pumps). */
-int fuzz_send(int sock, const void *data, size_t len, const int *fds, unsigned n_fds, void (*pump)(void *),
-	      void *arg);
+int fuzz_send(int sock, const void *data, size_t len, const int *fds, unsigned n_fds, void (*pump)(void *), void *arg);
 /* Reads and drops what the server sent on sock; returns false once the
  * server has closed it. */
 bool fuzz_drain(int sock);

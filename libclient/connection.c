@@ -244,7 +244,8 @@ static int dispatch_one(struct spindle *sp, struct proto_message *m)
 	struct proto_error err = { 0 };
 	int r;
 	if (m->object == 1)
-		return proto_display_dispatch_event(&display_events, sp, m, sp->version ? sp->version : 1, &err) == -EPROTO
+		return proto_display_dispatch_event(&display_events, sp, m, sp->version ? sp->version : 1, &err) ==
+				       -EPROTO
 			       ? lib_set_error(sp, EPROTO, "bad event from the daemon: %s", err.text)
 			       : 0;
 	struct lib_callback *cb = *callback_slot(sp, m->object);
@@ -284,7 +285,8 @@ int spindle_dispatch(struct spindle *sp)
 	for (;;) {
 		int r = proto_conn_read(sp->conn, &err);
 		if (r == -EPIPE)
-			return dispatch_buffered(sp) < 0 ? -EPIPE : lib_set_error(sp, EPIPE, "spindled closed the connection");
+			return dispatch_buffered(sp) < 0 ? -EPIPE
+							 : lib_set_error(sp, EPIPE, "spindled closed the connection");
 		if (r < 0)
 			return lib_set_error(sp, -r, "read from spindled: %s", r == -EPROTO ? err.text : strerror(-r));
 		int n = dispatch_buffered(sp);

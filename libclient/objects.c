@@ -175,8 +175,8 @@ int spindle_list_set_transform(struct spindle_list *list, const float m[16])
 /* Version 2 requests fail locally on a version 1 connection. */
 #define SEND_V2(obj, call) ((obj)->sp->version < 2 && !(obj)->sp->dead ? -ENOTSUP : SEND(obj, call))
 
-int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf,
-		      size_t offset, uint32_t count, uint32_t stride)
+int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf, size_t offset,
+		      uint32_t count, uint32_t stride)
 {
 	if (!buf || buf->base.sp != list->base.sp)
 		return -EINVAL;
@@ -187,9 +187,8 @@ int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct 
 }
 
 int spindle_list_draw_indexed(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *vertices,
-			      size_t offset, uint32_t vertex_count, uint32_t stride,
-			      struct spindle_buffer *indices, size_t index_offset, uint32_t index_count,
-			      enum spindle_index_type index_type)
+			      size_t offset, uint32_t vertex_count, uint32_t stride, struct spindle_buffer *indices,
+			      size_t index_offset, uint32_t index_count, enum spindle_index_type index_type)
 {
 	if (!vertices || !indices || vertices->base.sp != list->base.sp || indices->base.sp != list->base.sp)
 		return -EINVAL;
@@ -244,8 +243,8 @@ int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, si
 	return spindle_list_draw(list, SPINDLE_LINES, buf, offset, count, stride);
 }
 
-int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
-			   uint32_t count, uint32_t stride)
+int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
+			   uint32_t stride)
 {
 	return spindle_list_draw(list, SPINDLE_TRIANGLES, buf, offset, count, stride);
 }
@@ -267,8 +266,8 @@ int spindle_layer_set_list(struct spindle_layer *layer, struct spindle_list *lis
 {
 	if (list && list->base.sp != layer->base.sp)
 		return -EINVAL;
-	return SEND(&layer->base, proto_req_layer_set_list(layer->base.sp->conn, layer->base.id,
-							    list ? list->base.id : 0));
+	return SEND(&layer->base,
+		    proto_req_layer_set_list(layer->base.sp->conn, layer->base.id, list ? list->base.id : 0));
 }
 
 int spindle_layer_set_transform(struct spindle_layer *layer, const float m[16])
@@ -335,9 +334,12 @@ static bool frame_arrived(struct spindle *sp, void *data)
 static int refusal_errno(uint32_t code)
 {
 	switch (code) {
-	case SPINDLE_REFUSED_QUOTA: return -EDQUOT;
-	case SPINDLE_REFUSED_DENIED: return -EACCES;
-	case SPINDLE_REFUSED_BUSY: return -EBUSY;
+	case SPINDLE_REFUSED_QUOTA:
+		return -EDQUOT;
+	case SPINDLE_REFUSED_DENIED:
+		return -EACCES;
+	case SPINDLE_REFUSED_BUSY:
+		return -EBUSY;
 	}
 	return -EPERM;
 }

@@ -46,12 +46,12 @@ struct spindle {
 	struct spindle_device_info info;
 	struct spindle_status status;
 	uint64_t status_serial;
-	struct spindle_state state;  /* version 2: the last state event */
-	uint64_t refusals;           /* refused events received */
-	uint32_t last_refusal;       /* the code of the last one */
+	struct spindle_state state; /* version 2: the last state event */
+	uint64_t refusals;          /* refused events received */
+	uint32_t last_refusal;      /* the code of the last one */
 	const struct spindle_listener *listener;
 	void *listener_data;
-	uint32_t error_code;         /* the daemon's fatal error code */
+	uint32_t error_code; /* the daemon's fatal error code */
 	struct lib_callback *callbacks;
 	struct link objects;
 	spindle_log_func log;

@@ -116,7 +116,9 @@ int proto_conn_read(struct proto_conn *conn, struct proto_error *err)
 		struct cmsghdr align;
 	} control;
 	struct iovec iov = { conn->in + conn->tail, IN_CAP - conn->tail };
-	struct msghdr mh = { .msg_iov = &iov, .msg_iovlen = 1, .msg_control = control.buf,
+	struct msghdr mh = { .msg_iov = &iov,
+			     .msg_iovlen = 1,
+			     .msg_control = control.buf,
 			     .msg_controllen = sizeof(control.buf) };
 	ssize_t n;
 	do
@@ -554,7 +556,7 @@ int proto_reader_finish(struct proto_reader *r, struct proto_error *err, const c
 		return proto_fail(err, PROTO_ERR_MESSAGE, "%s: %u bytes of arguments, expected %u", what,
 				  r->msg->body_size, r->pos);
 	if (r->fd_index != r->msg->fd_count)
-		return proto_fail(err, PROTO_ERR_FD, "%s: %u file descriptors, expected %u", what,
-				  r->msg->fd_count, r->fd_index);
+		return proto_fail(err, PROTO_ERR_FD, "%s: %u file descriptors, expected %u", what, r->msg->fd_count,
+				  r->fd_index);
 	return 0;
 }

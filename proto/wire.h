@@ -120,8 +120,7 @@ int proto_get_fd(struct proto_reader *r);
 int proto_reader_finish(struct proto_reader *r, struct proto_error *err, const char *what);
 
 /* Fills err (printf-style) and returns -EPROTO. */
-int proto_fail(struct proto_error *err, uint32_t code, const char *fmt, ...)
-	__attribute__((format(printf, 3, 4)));
+int proto_fail(struct proto_error *err, uint32_t code, const char *fmt, ...) __attribute__((format(printf, 3, 4)));
 
 /* The handler now owns the message's fds (the connection won't close them). */
 void proto_message_take_fds(struct proto_message *msg);

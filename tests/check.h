@@ -11,24 +11,23 @@
 
 static int check_passed;
 
-#define CHECK_MSG(cond, ...)                                                                      \
-	do {                                                                                      \
-		if (cond) {                                                                       \
-			check_passed++;                                                           \
-		} else {                                                                          \
-			fprintf(stderr, "%s:%d: %s: CHECK(%s) failed: ", __FILE__, __LINE__,     \
-				__func__, #cond);                                                 \
-			fprintf(stderr, __VA_ARGS__);                                             \
-			fprintf(stderr, "\n%d passed, 1 failed\n", check_passed);                \
-			exit(1);                                                                  \
-		}                                                                                 \
+#define CHECK_MSG(cond, ...)                                                                                   \
+	do {                                                                                                   \
+		if (cond) {                                                                                    \
+			check_passed++;                                                                        \
+		} else {                                                                                       \
+			fprintf(stderr, "%s:%d: %s: CHECK(%s) failed: ", __FILE__, __LINE__, __func__, #cond); \
+			fprintf(stderr, __VA_ARGS__);                                                          \
+			fprintf(stderr, "\n%d passed, 1 failed\n", check_passed);                              \
+			exit(1);                                                                               \
+		}                                                                                              \
 	} while (0)
 
 #define CHECK(cond) CHECK_MSG(cond, "%s", "")
 
-#define CHECK_EQ(a, b)                                                                             \
-	do {                                                                                       \
-		long long check_a_ = (long long)(a), check_b_ = (long long)(b);                    \
+#define CHECK_EQ(a, b)                                                                                 \
+	do {                                                                                           \
+		long long check_a_ = (long long)(a), check_b_ = (long long)(b);                        \
 		CHECK_MSG(check_a_ == check_b_, "%s == %s: %lld != %lld", #a, #b, check_a_, check_b_); \
 	} while (0)
 

@@ -47,8 +47,8 @@ static void emit_point(struct model_walk *w, const struct aiMatrix4x4 *xf, struc
 	w->m->point_count++;
 }
 
-static void emit_line(struct model_walk *w, const struct aiMatrix4x4 *xf, const struct aiMesh *mesh,
-		      unsigned a, unsigned b)
+static void emit_line(struct model_walk *w, const struct aiMatrix4x4 *xf, const struct aiMesh *mesh, unsigned a,
+		      unsigned b)
 {
 	if (w->fill) {
 		float *dst = &w->m->lines[6 * w->m->line_count];
@@ -58,8 +58,8 @@ static void emit_line(struct model_walk *w, const struct aiMatrix4x4 *xf, const 
 	w->m->line_count++;
 }
 
-static void emit_triangle(struct model_walk *w, const struct aiMatrix4x4 *xf,
-			  const struct aiMesh *mesh, unsigned a, unsigned b, unsigned c)
+static void emit_triangle(struct model_walk *w, const struct aiMatrix4x4 *xf, const struct aiMesh *mesh, unsigned a,
+			  unsigned b, unsigned c)
 {
 	if (w->fill) {
 		float *dst = &w->m->triangles[9 * w->m->triangle_count];
@@ -98,8 +98,8 @@ static void walk_mesh(struct model_walk *w, const struct aiMatrix4x4 *xf, const 
 		walk_face(w, xf, mesh, &mesh->mFaces[i]);
 }
 
-static void walk_node(struct model_walk *w, const struct aiScene *scene,
-		      const struct aiNode *node, const struct aiMatrix4x4 *parent)
+static void walk_node(struct model_walk *w, const struct aiScene *scene, const struct aiNode *node,
+		      const struct aiMatrix4x4 *parent)
 {
 	/* world = parent * local (column vectors, as assimp applies them) */
 	struct aiMatrix4x4 xf = *parent;
@@ -239,8 +239,7 @@ static void grow_radius(float *v, void *data)
 	r->r2 = fmax(r->r2, dx * dx + dz * dz);
 }
 
-int model_compute_fit(const struct model *m, float half_height, float margin,
-		      struct model_fit *out)
+int model_compute_fit(const struct model *m, float half_height, float margin, struct model_fit *out)
 {
 	float min[3], max[3];
 

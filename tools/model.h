@@ -47,8 +47,7 @@ int model_bounds(const struct model *m, float min[3], float max[3]);
  * axis ends at radius <= margin, the highest/lowest at |y| <= margin * h.
  * A model that is a single point gets scale 1. 0, -EINVAL for a bad
  * margin or half_height, or -ENODATA for an empty model. */
-int model_compute_fit(const struct model *m, float half_height, float margin,
-		      struct model_fit *out);
+int model_compute_fit(const struct model *m, float half_height, float margin, struct model_fit *out);
 
 /* Applies a fit to every vertex in place. */
 void model_apply_fit(struct model *m, const struct model_fit *fit);

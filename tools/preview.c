@@ -114,8 +114,7 @@ static void camera_frame(struct camera *cam, const struct preview_options *opt, 
 
 /* Adds weight * rgb at (x, y) with a tent filter of radius r >= 1 pixels,
  * so sparse voxels of coarse profiles join up instead of showing as dots. */
-static void splat(struct canvas *cv, double x, double y, double r, const float *rgb, float *dst_base,
-		  int channels)
+static void splat(struct canvas *cv, double x, double y, double r, const float *rgb, float *dst_base, int channels)
 {
 	x -= 0.5; /* pixel i covers [i, i + 1): its centre is at i + 0.5 */
 	y -= 0.5;
@@ -205,8 +204,8 @@ static void paint_voxel(struct voxel_painter *vp, uint32_t k, uint32_t u, uint32
 }
 
 /* Visits the set pixels of one row of one tile (4 bytes per plane). */
-static void paint_tile_row(struct voxel_painter *vp, uint32_t k, const uint8_t *tile, uint32_t row,
-			   uint32_t x0, uint32_t v)
+static void paint_tile_row(struct voxel_painter *vp, uint32_t k, const uint8_t *tile, uint32_t row, uint32_t x0,
+			   uint32_t v)
 {
 	for (uint32_t b = 0; b < VOLUME_TILE / 8; b++) {
 		uint8_t p[3];
@@ -272,13 +271,11 @@ static void plot_outline_point(struct canvas *cv, const struct camera *cam, cons
 	camera_coords(cam, p, c);
 	if (c[2] <= 1e-6)
 		return;
-	splat(cv, cam->cx + cam->focal * c[0] / c[2], cam->cy - cam->focal * c[1] / c[2], 1.0, &one,
-	      cv->outline, 1);
+	splat(cv, cam->cx + cam->focal * c[0] / c[2], cam->cy - cam->focal * c[1] / c[2], 1.0, &one, cv->outline, 1);
 }
 
 /* Rims at y = +-h and the two vertical silhouette lines. */
-static void paint_outline(struct canvas *cv, const struct camera *cam, const struct preview_options *opt,
-			  double h)
+static void paint_outline(struct canvas *cv, const struct camera *cam, const struct preview_options *opt, double h)
 {
 	int n = 4 * (int)(cv->w + cv->h);
 	for (int i = 0; i < n; i++) {
@@ -350,8 +347,7 @@ static int tone_map(const struct canvas *cv, uint8_t *rgb)
 
 static int check_options(double h, const struct preview_options *opt)
 {
-	if (opt->width == 0 || opt->height == 0 || opt->width > PREVIEW_MAX_SIZE ||
-	    opt->height > PREVIEW_MAX_SIZE)
+	if (opt->width == 0 || opt->height == 0 || opt->width > PREVIEW_MAX_SIZE || opt->height > PREVIEW_MAX_SIZE)
 		return -EINVAL;
 	/* Outside the bounding sphere, every voxel is in front of the eye. */
 	if (!(opt->distance > sqrt(1.0 + h * h)) || !isfinite(opt->distance))
@@ -389,8 +385,7 @@ out_free:
 	return ret;
 }
 
-int preview_project(const struct preview_options *opt, double h, const double p[3], double *x,
-		    double *y)
+int preview_project(const struct preview_options *opt, double h, const double p[3], double *x, double *y)
 {
 	struct camera cam;
 	double c[3];
@@ -423,8 +418,7 @@ int preview_write_png(const char *path, const uint8_t *rgb, uint32_t width, uint
 	return 0;
 }
 
-int preview_volume_to_png(const struct volume *vol, const struct preview_options *opt,
-			  const char *path)
+int preview_volume_to_png(const struct volume *vol, const struct preview_options *opt, const char *path)
 {
 	struct preview_options defaults;
 	if (!opt) {

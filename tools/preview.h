@@ -39,14 +39,12 @@ int preview_render(const struct volume *vol, const struct preview_options *opt, 
 /* Where volume-space point p lands in the picture preview_render() makes of
  * a volume with half height h: pixel coordinates (x right, y down, pixel
  * centres at +0.5). 0, or -EINVAL for bad options or a point behind the eye. */
-int preview_project(const struct preview_options *opt, double h, const double p[3], double *x,
-		    double *y);
+int preview_project(const struct preview_options *opt, double h, const double p[3], double *x, double *y);
 
 /* Writes an 8-bit RGB PNG. 0 or negative errno (-EIO for a libpng error). */
 int preview_write_png(const char *path, const uint8_t *rgb, uint32_t width, uint32_t height);
 
 /* preview_render() + preview_write_png(). opt NULL means defaults. */
-int preview_volume_to_png(const struct volume *vol, const struct preview_options *opt,
-			  const char *path);
+int preview_volume_to_png(const struct volume *vol, const struct preview_options *opt, const char *path);
 
 #endif

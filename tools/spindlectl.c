@@ -150,10 +150,8 @@ static int cmd_status(const struct ctl_args *a)
 
 /* Adds one kind of primitive to the list from its own buffer; the buffer
  * may be destroyed right away, the list keeps its copy. */
-static int draw_array(struct spindle *sp, struct spindle_list *list, const float *data,
-		      size_t vertices,
-		      int (*draw)(struct spindle_list *, struct spindle_buffer *, size_t, uint32_t,
-				  uint32_t))
+static int draw_array(struct spindle *sp, struct spindle_list *list, const float *data, size_t vertices,
+		      int (*draw)(struct spindle_list *, struct spindle_buffer *, size_t, uint32_t, uint32_t))
 {
 	if (vertices == 0)
 		return 0;
@@ -167,8 +165,8 @@ static int draw_array(struct spindle *sp, struct spindle_list *list, const float
 	return ret;
 }
 
-static int build_scene(struct spindle *sp, const struct model *m, const uint8_t rgb[3],
-		       struct spindle_list **list_out, struct spindle_layer **layer_out)
+static int build_scene(struct spindle *sp, const struct model *m, const uint8_t rgb[3], struct spindle_list **list_out,
+		       struct spindle_layer **layer_out)
 {
 	struct spindle_list *list = spindle_list_create(sp);
 	struct spindle_layer *layer = spindle_layer_create(sp);
@@ -376,8 +374,8 @@ static int cmd_capture(const struct ctl_args *a)
 	}
 	status = save_capture(fd, size, a->operand[0]);
 	if (status == 0)
-		printf("captured volume %llu: %ux%u, %u images -> %s\n", (unsigned long long)hdr.seq,
-		       hdr.width, hdr.height, hdr.image_count, a->operand[0]);
+		printf("captured volume %llu: %ux%u, %u images -> %s\n", (unsigned long long)hdr.seq, hdr.width,
+		       hdr.height, hdr.image_count, a->operand[0]);
 out_close:
 	close(fd);
 out_disconnect:

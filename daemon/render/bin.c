@@ -39,7 +39,7 @@ struct bin_work {
 	size_t stage_prims_cap;
 	struct stage_point *stage_points;
 	size_t stage_points_cap;
-	uint32_t *hist;      /* threads x (prim keys + point keys) */
+	uint32_t *hist; /* threads x (prim keys + point keys) */
 	size_t hist_cap;
 	size_t prim_cap, point_cap; /* of the sorted arrays */
 };
@@ -104,9 +104,12 @@ void bin_finish(struct bin_set *b)
 static int draw_verts(const struct scene_draw *d)
 {
 	switch (d->prim) {
-	case SCENE_POINTS: return 1;
-	case SCENE_LINES: return 2;
-	case SCENE_TRIANGLES: return 3;
+	case SCENE_POINTS:
+		return 1;
+	case SCENE_LINES:
+		return 2;
+	case SCENE_TRIANGLES:
+		return 3;
 	}
 	return 0;
 }
@@ -127,8 +130,7 @@ static bool transform(const float m[16], const float *xyz, double out[3])
 /* The closed arc of slots [*first, *first + *len) (mod N) holding the
  * xz projection of the n vertices (negated when neg: the s < 0 lobe).
  * False when the projection may touch the axis: every slot. */
-static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool neg, uint32_t *first,
-		     uint32_t *len)
+static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool neg, uint32_t *first, uint32_t *len)
 {
 	uint32_t s[3], N = b->slots.n;
 	bool near = false;
@@ -194,11 +196,11 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 	p->nverts = (uint8_t)n;
 	memcpy(p->rgb, rgb, 3);
 	uint32_t M = b->images, first, len, bf, bl;
-	if (!prim_arc(b, (const float (*)[3])p->v, n, false, &first, &len)) {
+	if (!prim_arc(b, (const float(*)[3])p->v, n, false, &first, &len)) {
 		prim_key(b, &out[0], 0, M);
 	} else if (b->geom.mirrored) {
 		prim_key(b, &out[0], first % M, len); /* both lobes fold onto M images */
-	} else if (!prim_arc(b, (const float (*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
+	} else if (!prim_arc(b, (const float(*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
 		prim_key(b, &out[0], 0, M);
 	} else {
 		out[1].rec = *p;
@@ -231,8 +233,8 @@ static uint8_t point_size(const struct scene_draw *d)
  * onto one volume image and then give one record: the square is placed in
  * the volume image's own columns, which the mirrored half turn shows
  * mirrored. */
-static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz,
-			  const uint8_t rgb[3], struct stage_point *out)
+static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz, const uint8_t rgb[3],
+			  struct stage_point *out)
 {
 	double p[3];
 	out[0].key = out[1].key = KEY_NONE;
@@ -271,25 +273,26 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
  * with d its draw, nv its vertex count, xyz_ its vertices and rgb_ its
  * colour (the draw's, or the item's own from prim_rgb). */
 #define BASE_(db, points) ((points) ? (db).point : (db).prim)
-#define FOR_ITEMS(b, points, c, d, nv, i, body)                                                  \
-	do {                                                                                     \
-		const struct bin_work *w_ = (b)->work;                                            \
-		const struct draw_base *base_ = w_->base;                                          \
-		for (uint32_t di_ = 0; di_ < w_->scene->draw_count; di_++) {                      \
-			const struct scene_draw *d = &w_->scene->draws[di_];                       \
-			int nv = draw_verts(d);                                                    \
-			if (nv == 0 || !d->xyz || (nv == 1) != (points))                           \
-				continue;                                                          \
-			uint64_t n_ = d->count / (uint32_t)nv;                                     \
-			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;                   \
-			uint64_t hi_ = BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi;         \
-			for (uint64_t i = lo_; i < hi_; i++) {                                     \
-				uint64_t j_ = i - BASE_(base_[di_], points);                               \
-				const float *xyz_ = d->xyz + j_ * (uint64_t)nv * 3;                        \
-				const uint8_t *rgb_ = d->prim_rgb ? d->prim_rgb + j_ * 3 : d->rgb;         \
-				body                                                               \
-			}                                                                          \
-		}                                                                                  \
+#define FOR_ITEMS(b, points, c, d, nv, i, body)                                                                    \
+	do {                                                                                                       \
+		const struct bin_work *w_ = (b)->work;                                                             \
+		const struct draw_base *base_ = w_->base;                                                          \
+		for (uint32_t di_ = 0; di_ < w_->scene->draw_count; di_++) {                                       \
+			const struct scene_draw *d = &w_->scene->draws[di_];                                       \
+			int nv = draw_verts(d);                                                                    \
+			if (nv == 0 || !d->xyz || (nv == 1) != (points))                                           \
+				continue;                                                                          \
+			uint64_t n_ = d->count / (uint32_t)nv;                                                     \
+			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;    \
+			uint64_t hi_ =                                                                             \
+				BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi; \
+			for (uint64_t i = lo_; i < hi_; i++) {                                                     \
+				uint64_t j_ = i - BASE_(base_[di_], points);                                       \
+				const float *xyz_ = d->xyz + j_ * (uint64_t)nv * 3;                                \
+				const uint8_t *rgb_ = d->prim_rgb ? d->prim_rgb + j_ * 3 : d->rgb;                 \
+				body                                                                               \
+			}                                                                                          \
+		}                                                                                                  \
 	} while (0)
 
 /* Adds the keys of a staged pair to a histogram. */
@@ -381,10 +384,9 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
 		return -E2BIG;
 	size_t keys = prim_keys(b) + b->images;
-	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, 2 * w->prim_items,
-		      sizeof(*w->stage_prims))) < 0 ||
-	    (r = grow((void **)&w->stage_points, &w->stage_points_cap, 2 * w->point_items,
-		      sizeof(*w->stage_points))) < 0 ||
+	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, 2 * w->prim_items, sizeof(*w->stage_prims))) < 0 ||
+	    (r = grow((void **)&w->stage_points, &w->stage_points_cap, 2 * w->point_items, sizeof(*w->stage_points))) <
+		    0 ||
 	    (r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
 		return r;
 	memset(w->hist, 0, threads * keys * sizeof(uint32_t));

@@ -59,14 +59,14 @@ struct bin_run {
 /* Storage is kept between builds and only grows. */
 struct bin_set {
 	struct geometry geom;
-	uint32_t images;       /* M: images per volume */
-	unsigned classes;      /* length classes: 0 .. classes - 1 */
+	uint32_t images;  /* M: images per volume */
+	unsigned classes; /* length classes: 0 .. classes - 1 */
 	struct slot_table slots;
-	double *dir;           /* per volume image: cos, sin of its angle */
+	double *dir; /* per volume image: cos, sin of its angle */
 
 	uint32_t prim_count;
-	struct bin_prim *prims;   /* sorted by (class, first) */
-	uint32_t *prim_start;     /* classes * M + 1 offsets into prims */
+	struct bin_prim *prims; /* sorted by (class, first) */
+	uint32_t *prim_start;   /* classes * M + 1 offsets into prims */
 	uint32_t point_count;
 	struct bin_point *points; /* sorted by image */
 	uint32_t *point_start;    /* M + 1 offsets into points */

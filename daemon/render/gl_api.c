@@ -3,11 +3,11 @@
 #include <errno.h>
 #include <stddef.h>
 
-#define GL_API_LOAD(ret, name, params)                                       \
-	api->name = (ret(GL_APIENTRY *) params)getproc("gl" #name);          \
-	if (!api->name) {                                                    \
-		*missing = "gl" #name;                                       \
-		return -ENOSYS;                                              \
+#define GL_API_LOAD(ret, name, params)                              \
+	api->name = (ret(GL_APIENTRY *) params)getproc("gl" #name); \
+	if (!api->name) {                                           \
+		*missing = "gl" #name;                              \
+		return -ENOSYS;                                     \
 	}
 
 int gl_api_load(struct gl_api *api, gl_proc (*getproc)(const char *name), const char **missing)

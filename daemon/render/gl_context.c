@@ -101,8 +101,12 @@ static EGLContext create_egl_context(EGLDisplay d, bool *robust)
 	}
 	if (!eglBindAPI(EGL_OPENGL_ES_API))
 		return EGL_NO_CONTEXT;
-	EGLint attrs[] = { EGL_CONTEXT_MAJOR_VERSION, 3, EGL_CONTEXT_MINOR_VERSION, 1,
-			   EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY_EXT, EGL_LOSE_CONTEXT_ON_RESET_EXT,
+	EGLint attrs[] = { EGL_CONTEXT_MAJOR_VERSION,
+			   3,
+			   EGL_CONTEXT_MINOR_VERSION,
+			   1,
+			   EGL_CONTEXT_OPENGL_RESET_NOTIFICATION_STRATEGY_EXT,
+			   EGL_LOSE_CONTEXT_ON_RESET_EXT,
 			   EGL_NONE };
 	*robust = has_word(ext, "EGL_EXT_create_context_robustness");
 	if (!*robust)
@@ -161,9 +165,21 @@ static int create_osmesa(struct gl_context *c)
 {
 	struct gl_context_priv *p = c->priv;
 	/* 4.5 core carries ARB_ES3_1_compatibility: "#version 310 es" shaders. */
-	const int attrs[] = { OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 0, OSMESA_STENCIL_BITS, 0,
-			      OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 4,
-			      OSMESA_CONTEXT_MINOR_VERSION, 5, 0 };
+	const int attrs[] = {
+		OSMESA_FORMAT,
+		OSMESA_RGBA,
+		OSMESA_DEPTH_BITS,
+		0,
+		OSMESA_STENCIL_BITS,
+		0,
+		OSMESA_PROFILE,
+		OSMESA_CORE_PROFILE,
+		OSMESA_CONTEXT_MAJOR_VERSION,
+		4,
+		OSMESA_CONTEXT_MINOR_VERSION,
+		5,
+		0
+	};
 	p->osmesa = OSMesaCreateContextAttribs(attrs, NULL);
 	if (!p->osmesa) {
 		log_warn("GL renderer: OSMesa gives no OpenGL 4.5 core context");

@@ -18,10 +18,10 @@ enum gl_backend {
 struct gl_context {
 	enum gl_backend backend;
 	struct gl_api gl;
-	char renderer[128];   /* GL_RENDERER */
-	char version[128];    /* GL_VERSION */
-	bool hardware;        /* not a software rasterizer (llvmpipe, softpipe, swrast) */
-	bool robust;          /* reset notification was granted: GetGraphicsResetStatus means something */
+	char renderer[128]; /* GL_RENDERER */
+	char version[128];  /* GL_VERSION */
+	bool hardware;      /* not a software rasterizer (llvmpipe, softpipe, swrast) */
+	bool robust;        /* reset notification was granted: GetGraphicsResetStatus means something */
 	struct gl_context_priv *priv;
 };
 

@@ -84,7 +84,8 @@ static int map_slots(struct render_gl *r, const struct gl_batch *out)
 	const struct gl_api *gl = r->gl;
 	uint32_t tiles = out->n * r->tiles_per_image;
 	gl->BindBuffer(GL_COPY_READ_BUFFER, out->ids);
-	const uint32_t *ids = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
+	const uint32_t *ids =
+		gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((tiles + 1) * 4), GL_MAP_READ_BIT);
 	if (!ids)
 		return -EIO;
 	uint32_t count = ids[0];
@@ -126,8 +127,8 @@ int gl_pack_collect(struct render_gl *r, struct gl_batch *out)
 		return count;
 	int err = 0;
 	gl->BindBuffer(GL_COPY_READ_BUFFER, out->tiles);
-	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0, (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES),
-						 GL_MAP_READ_BIT);
+	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0,
+						 (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES), GL_MAP_READ_BIT);
 	if (!data)
 		return -EIO;
 	for (uint32_t i = 0; err == 0 && i < out->n; i++) {

@@ -21,47 +21,47 @@
  * u_eye:   De (eye distance), T (slab half thickness), jitter x, y (NDC);
  * u_frame: 1 / h, 2 / W, 2 / H, and for the section program which slots
  *          it draws (0 or 1). */
-#define GL_SHADER_COMMON                                                                          \
-	"precision highp float;\n"                                                                \
-	"precision highp int;\n"                                                                  \
-	"precision highp usampler2D;\n"                                                           \
-	"uniform uvec4 u_image;\n"                                                                \
-	"uniform vec4 u_slice;\n"                                                                 \
-	"uniform vec4 u_eye;\n"                                                                   \
-	"uniform vec4 u_frame;\n"                                                                 \
-	"uniform usampler2D u_prims;\n"                                                           \
-	"const vec4 OFF = vec4(2.0, 2.0, 2.0, 1.0); /* outside the clip volume */\n"              \
-	"uvec4 texel(uint i) {\n"                                                                 \
-	"	uint mask = (1u << u_image.w) - 1u;\n"                                            \
-	"	return texelFetch(u_prims, ivec2(int(i & mask), int(i >> u_image.w)), 0);\n"      \
-	"}\n"                                                                                     \
-	"vec3 syt(uvec4 t) { /* (s, y, t) of the vertex in texel t */\n"                          \
-	"	vec3 p = uintBitsToFloat(t.xyz);\n"                                               \
+#define GL_SHADER_COMMON                                                                             \
+	"precision highp float;\n"                                                                   \
+	"precision highp int;\n"                                                                     \
+	"precision highp usampler2D;\n"                                                              \
+	"uniform uvec4 u_image;\n"                                                                   \
+	"uniform vec4 u_slice;\n"                                                                    \
+	"uniform vec4 u_eye;\n"                                                                      \
+	"uniform vec4 u_frame;\n"                                                                    \
+	"uniform usampler2D u_prims;\n"                                                              \
+	"const vec4 OFF = vec4(2.0, 2.0, 2.0, 1.0); /* outside the clip volume */\n"                 \
+	"uvec4 texel(uint i) {\n"                                                                    \
+	"	uint mask = (1u << u_image.w) - 1u;\n"                                                     \
+	"	return texelFetch(u_prims, ivec2(int(i & mask), int(i >> u_image.w)), 0);\n"               \
+	"}\n"                                                                                        \
+	"vec3 syt(uvec4 t) { /* (s, y, t) of the vertex in texel t */\n"                             \
+	"	vec3 p = uintBitsToFloat(t.xyz);\n"                                                        \
 	"	return vec3(p.x * u_slice.x + p.z * u_slice.y, p.y, p.z * u_slice.x - p.x * u_slice.y);\n" \
-	"}\n"                                                                                     \
-	"bool in_image(uint w10) { /* the binned range holds image k */\n"                        \
-	"	uint first = w10 & 0xffffu, k = u_image.x;\n"                                     \
-	"	uint off = k >= first ? k - first : k + u_image.y - first;\n"                     \
-	"	return u_image.z != 0u || off < (w10 >> 16);\n"                                   \
-	"}\n"                                                                                     \
-	"/* Perspective from the eye at De n_k, image plane t = 0, so points on the slice\n"     \
-	" * plane map exactly; z spans the slab |t| <= T; jit shifts the sample grid. */\n"      \
-	"vec4 project(vec3 syt, vec2 jit) {\n"                                                    \
-	"	float de = u_eye.x, t = syt.z, w = de - t;\n"                                     \
-	"	return vec4(syt.x * de + jit.x * w, -syt.y * de * u_frame.x + jit.y * w,\n"      \
-	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                  \
+	"}\n"                                                                                        \
+	"bool in_image(uint w10) { /* the binned range holds image k */\n"                           \
+	"	uint first = w10 & 0xffffu, k = u_image.x;\n"                                              \
+	"	uint off = k >= first ? k - first : k + u_image.y - first;\n"                              \
+	"	return u_image.z != 0u || off < (w10 >> 16);\n"                                            \
+	"}\n"                                                                                        \
+	"/* Perspective from the eye at De n_k, image plane t = 0, so points on the slice\n"         \
+	" * plane map exactly; z spans the slab |t| <= T; jit shifts the sample grid. */\n"          \
+	"vec4 project(vec3 syt, vec2 jit) {\n"                                                       \
+	"	float de = u_eye.x, t = syt.z, w = de - t;\n"                                              \
+	"	return vec4(syt.x * de + jit.x * w, -syt.y * de * u_frame.x + jit.y * w,\n"                \
+	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                                  \
 	"}\n"
 
 /* Fragment shaders mark the row of the 32x32 tile their pixel lies in (bit
  * y % 32 of the tile's word), so that only touched rows of touched tiles
  * are packed (and cleared again). u_tile: tiles across, tiles per image,
  * this image's slot in the batch, H. */
-#define GL_SHADER_MARK                                                                            \
-	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"                      \
-	"uniform uvec4 u_tile;\n"                                                                 \
-	"void mark() {\n"                                                                         \
-	"	uvec2 p = uvec2(gl_FragCoord.xy);\n"                                              \
-	"	p.y -= u_tile.z * u_tile.w;\n"                                                    \
+#define GL_SHADER_MARK                                                                                       \
+	"layout(std430, binding = 2) buffer Touched { uint touched[]; };\n"                                  \
+	"uniform uvec4 u_tile;\n"                                                                            \
+	"void mark() {\n"                                                                                    \
+	"	uvec2 p = uvec2(gl_FragCoord.xy);\n"                                                               \
+	"	p.y -= u_tile.z * u_tile.w;\n"                                                                     \
 	"	atomicOr(touched[u_tile.z * u_tile.y + (p.y >> 5) * u_tile.x + (p.x >> 5)], 1u << (p.y & 31u));\n" \
 	"}\n"
 
@@ -87,9 +87,7 @@ static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 
 static const char gl_face_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n"
-	GL_SHADER_MARK
-	"uniform vec4 u_slice;\n"
+	"precision highp int;\n" GL_SHADER_MARK "uniform vec4 u_slice;\n"
 	"in vec2 v_st;\n"
 	"flat in uint v_rgb;\n"
 	"out vec4 o_colour;\n"
@@ -209,9 +207,7 @@ static const char gl_point_vs[] = GL_SHADER_VERSION
 
 static const char gl_flat_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n"
-	GL_SHADER_MARK
-	"flat in uint v_rgb;\n"
+	"precision highp int;\n" GL_SHADER_MARK "flat in uint v_rgb;\n"
 	"out vec4 o_colour;\n"
 	"void main() {\n"
 	"	mark();\n"

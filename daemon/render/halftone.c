@@ -1,7 +1,7 @@
 #include "halftone.h"
 
-#include <stddef.h>
 #include <pthread.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "volume.h"
@@ -58,22 +58,21 @@ static inline void put_row(uint8_t *out, uint32_t word)
 /* One variant: every row set in rows, in all three planes, through
  * row_word (the packed word of a 32-byte canvas row against its 32
  * thresholds); everything else comes out zero. */
-#define HALFTONE_BY_ROWS(name, attrs, row_word)                                                   \
-	attrs static int name(const uint8_t *canvas, uint32_t rows, const struct halftone_table *t, \
-			      uint8_t *out)                                                       \
-	{                                                                                         \
-		uint32_t any = 0;                                                                 \
-		memset(out, 0, VOLUME_TILE_BYTES);                                                \
-		for (; rows; rows &= rows - 1) {                                                  \
-			uint32_t y = (uint32_t)__builtin_ctz(rows);                               \
-			for (int c = 0; c < 3; c++) {                                             \
-				uint32_t word = row_word(canvas + c * HALFTONE_PLANE_BYTES +      \
-							 y * HALFTONE_ROW_BYTES, t->thr[y & 15]); \
-				put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);         \
-				any |= word;                                                      \
-			}                                                                         \
-		}                                                                                 \
-		return any != 0;                                                                  \
+#define HALFTONE_BY_ROWS(name, attrs, row_word)                                                                      \
+	attrs static int name(const uint8_t *canvas, uint32_t rows, const struct halftone_table *t, uint8_t *out)    \
+	{                                                                                                            \
+		uint32_t any = 0;                                                                                    \
+		memset(out, 0, VOLUME_TILE_BYTES);                                                                   \
+		for (; rows; rows &= rows - 1) {                                                                     \
+			uint32_t y = (uint32_t)__builtin_ctz(rows);                                                  \
+			for (int c = 0; c < 3; c++) {                                                                \
+				uint32_t word = row_word(canvas + c * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES, \
+							 t->thr[y & 15]);                                            \
+				put_row(out + c * VOLUME_TILE_PLANE_BYTES + y * 4, word);                            \
+				any |= word;                                                                         \
+			}                                                                                            \
+		}                                                                                                    \
+		return any != 0;                                                                                     \
 	}
 
 static inline uint32_t row_scalar(const uint8_t *row, const uint8_t *thr)
@@ -114,7 +113,7 @@ HALFTONE_BY_ROWS(halftone_avx2, __attribute__((target("avx2"))), row_avx2)
 /* Two rows at a time: rows y and y + 1 (y even) are 64 contiguous bytes in
  * the canvas and in the table. */
 __attribute__((target("avx512f,avx512bw"))) static int halftone_avx512(const uint8_t *canvas, uint32_t rows,
-									 const struct halftone_table *t, uint8_t *out)
+								       const struct halftone_table *t, uint8_t *out)
 {
 	uint64_t any = 0;
 	/* Pairs of rows with something set: bit p for rows 2p, 2p + 1. */
@@ -186,7 +185,8 @@ int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
 				uint8_t thr = halftone_threshold(k, u0 + x, v0 + y);
 				for (int c = 0; c < 3; c++)
 					if (px[c] > thr)
-						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |= (uint8_t)(0x80u >> (x % 8));
+						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |=
+							(uint8_t)(0x80u >> (x % 8));
 			}
 		}
 		int e = volume_image_append(vol, k, t, tile);

@@ -15,8 +15,8 @@
 #include <stdint.h>
 
 #define HALFTONE_ROW_BYTES 32
-#define HALFTONE_PLANE_BYTES (32 * HALFTONE_ROW_BYTES)   /* 1024 */
-#define HALFTONE_TILE_BYTES (3 * HALFTONE_PLANE_BYTES)   /* 3072 */
+#define HALFTONE_PLANE_BYTES (32 * HALFTONE_ROW_BYTES) /* 1024 */
+#define HALFTONE_TILE_BYTES (3 * HALFTONE_PLANE_BYTES) /* 3072 */
 
 static inline uint32_t halftone_pos(uint32_t x)
 {
@@ -40,8 +40,7 @@ void halftone_table_init(struct halftone_table *t, uint32_t k);
  * in rows (bit y = row y, in every plane); rows not set are zero in the
  * canvas and come out zero. Writes all VOLUME_TILE_BYTES of out. Returns
  * nonzero iff some output bit is set. */
-typedef int (*halftone_fn)(const uint8_t *canvas, uint32_t rows,
-			   const struct halftone_table *t, uint8_t *out);
+typedef int (*halftone_fn)(const uint8_t *canvas, uint32_t rows, const struct halftone_table *t, uint8_t *out);
 
 struct halftone_variant {
 	const char *name;

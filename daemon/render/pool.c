@@ -16,8 +16,8 @@ struct pool {
 	struct pool_thread *threads; /* workers - 1 */
 	pthread_mutex_t lock;
 	pthread_cond_t wake, done;
-	unsigned long generation;    /* bumped per job */
-	unsigned running;            /* threads still in the current job */
+	unsigned long generation; /* bumped per job */
+	unsigned running;         /* threads still in the current job */
 	bool quit;
 	pool_job job;
 	void *arg;

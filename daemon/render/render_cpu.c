@@ -99,7 +99,7 @@ static void raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 			for (int a = 0; a < p->nverts; a++)
 				for (int e = 0; e < 3; e++)
 					v[a][e] = p->v[a][e];
-			section_prim(c, &wedge, (const double (*)[3])v, p->nverts, p->rgb);
+			section_prim(c, &wedge, (const double(*)[3])v, p->nverts, p->rgb);
 			w->prim_images++;
 		}
 	}
@@ -129,9 +129,8 @@ static void image_job(void *arg, unsigned index)
 static int check_output(const struct render_cpu *r, const struct volume *out)
 {
 	const struct geometry *a = &r->base.geom, *b = &out->geom;
-	if (a->width != b->width || a->height != b->height ||
-	    a->images_per_rev != b->images_per_rev || a->mirrored != b->mirrored ||
-	    a->half_height != b->half_height)
+	if (a->width != b->width || a->height != b->height || a->images_per_rev != b->images_per_rev ||
+	    a->mirrored != b->mirrored || a->half_height != b->half_height)
 		return -EINVAL;
 	return 0;
 }
@@ -216,8 +215,7 @@ struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads
 	return render_cpu_create_opts(geom, &o);
 }
 
-struct renderer *render_cpu_create_opts(const struct geometry *geom,
-					const struct render_cpu_options *opts)
+struct renderer *render_cpu_create_opts(const struct geometry *geom, const struct render_cpu_options *opts)
 {
 	halftone_fn halftone = halftone_pick(opts->simd);
 	if (!halftone) {

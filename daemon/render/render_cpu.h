@@ -9,7 +9,6 @@
 struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads);
 /* The same with explicit options (ENOENT: simd variant unknown or not
  * runnable on this CPU). */
-struct renderer *render_cpu_create_opts(const struct geometry *geom,
-					const struct render_cpu_options *opts);
+struct renderer *render_cpu_create_opts(const struct geometry *geom, const struct render_cpu_options *opts);
 
 #endif

@@ -37,8 +37,7 @@
 
 static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims", "u_tile" };
 
-static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs,
-			const char *what)
+static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs, const char *what)
 {
 	bool bad = r->fault == GL_FAULT_SHADER;
 	GLuint sh[2] = { gl_shader_compile(r->gl, GL_VERTEX_SHADER, vs, what, bad),
@@ -233,7 +232,7 @@ static void stage_worker(void *arg, unsigned worker)
 	struct stage_job *j = arg;
 	uint64_t n = j->bins->prim_count;
 	uint32_t t = stage_prims(j->bins->prims, j->dst, (uint32_t)(n * worker / j->workers),
-				(uint32_t)(n * (worker + 1) / j->workers));
+				 (uint32_t)(n * (worker + 1) / j->workers));
 	atomic_fetch_add(&j->triangles, t);
 }
 
@@ -332,7 +331,8 @@ static void draw_runs(struct render_gl *r, const struct bin_run *runs, unsigned 
 {
 	for (unsigned i = 0; i < n; i++)
 		if (runs[i].end > runs[i].begin)
-			r->gl->DrawArrays(mode, (GLint)(runs[i].begin * verts), (GLsizei)((runs[i].end - runs[i].begin) * verts));
+			r->gl->DrawArrays(mode, (GLint)(runs[i].begin * verts),
+					  (GLsizei)((runs[i].end - runs[i].begin) * verts));
 }
 
 static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
@@ -576,8 +576,7 @@ static int open_gl(struct render_gl *r, enum gl_backend backend)
 	if (err == 0) {
 		snprintf(r->description, sizeof(r->description), "%s, %s%s", r->ctx.renderer, r->ctx.version,
 			 r->ctx.hardware ? "" : " (software)");
-		log_info("GL renderer %s: %s, %u images per batch", gl_backend_name(backend), r->description,
-			 r->batch);
+		log_info("GL renderer %s: %s, %u images per batch", gl_backend_name(backend), r->description, r->batch);
 	}
 	gl_context_unbind(&r->ctx);
 	return err;
@@ -608,8 +607,8 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 	r->fault = gl_fault_from_env();
 	r->images = geometry_images_per_volume(geom);
 	int err = bin_init(&r->bins, geom);
-	r->tiles_per_image = ((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) *
-			     ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	r->tiles_per_image =
+		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	unsigned threads = opts->threads ? opts->threads : cores > 0 ? (unsigned)cores : 1;
 	r->pool = err == 0 ? pool_create(threads) : NULL;

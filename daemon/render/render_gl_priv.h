@@ -75,13 +75,13 @@ struct render_gl {
 	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
 	size_t staging_cap; /* primitives */
 	struct gl_batch out[2];
-	int32_t *slot_of;   /* per tile of a batch: its slot in the output, or -1 */
-	uint8_t *rgba;      /* naive: one image read back */
+	int32_t *slot_of; /* per tile of a batch: its slot in the output, or -1 */
+	uint8_t *rgba;    /* naive: one image read back */
 	uint64_t volumes;
 
-	struct renderer *cpu; /* renders what GL cannot, created when first needed */
-	bool gl_dead;         /* GL failed: every volume renders on the CPU */
-	bool told_too_big;    /* logged that a scene exceeds the texture */
+	struct renderer *cpu;  /* renders what GL cannot, created when first needed */
+	bool gl_dead;          /* GL failed: every volume renders on the CPU */
+	bool told_too_big;     /* logged that a scene exceeds the texture */
 	char description[300]; /* GL_RENDERER, GL_VERSION */
 	/* Per render: */
 	struct volume *vol;

@@ -31,8 +31,8 @@ struct render_stats {
 /* CPU renderer variants, for tests and benchmarks: every variant gives
  * bit-identical output. */
 struct render_cpu_options {
-	unsigned threads;    /* worker threads; 0 = one per core */
-	const char *simd;    /* halftone+pack variant: NULL or "auto" (best this
+	unsigned threads; /* worker threads; 0 = one per core */
+	const char *simd; /* halftone+pack variant: NULL or "auto" (best this
 			      * CPU runs), "scalar", "sse2", "avx2", "avx512" */
 };
 

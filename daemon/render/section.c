@@ -70,8 +70,7 @@ static inline void max_bytes(uint8_t *row, uint32_t a, uint32_t b, uint8_t value
 		row[j] = row[j] < value ? value : row[j];
 }
 
-void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1,
-		  const uint8_t rgb[3])
+void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3])
 {
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
 	for (uint32_t u = u0; u <= u1;) {
@@ -133,7 +132,7 @@ static int clip_plane(const double (*in)[3], int n, double (*out)[3], double nx,
 /* The polygon's edges, for crossing horizontal lines without dividing. */
 struct edges {
 	int n;
-	double y0[SECTION_MAX_VERTS], y1[SECTION_MAX_VERTS]; /* y0 <= y1 */
+	double y0[SECTION_MAX_VERTS], y1[SECTION_MAX_VERTS];   /* y0 <= y1 */
 	double s0[SECTION_MAX_VERTS], dsdy[SECTION_MAX_VERTS]; /* s at y0 */
 };
 
@@ -171,8 +170,7 @@ static void edges_cross(const struct edges *e, double y, double *lo, double *hi)
  * rows' slabs extend to infinity: that is the clamp to the image. */
 /* Widens [*lo, *hi] by coordinate axis (0 s, 1 y) of the vertices whose y
  * lies in [ylo, yhi]. */
-static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi, int axis, double *lo,
-			     double *hi)
+static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi, int axis, double *lo, double *hi)
 {
 	for (int i = 0; i < n; i++) {
 		if (q[i][1] >= ylo && q[i][1] <= yhi) {
@@ -182,8 +180,7 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 	}
 }
 
-static void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
-			  const uint8_t rgb[3])
+static void raster_convex(struct section_canvas *c, const double (*q)[2], int n, const uint8_t rgb[3])
 {
 	const struct geometry *g = &c->geom;
 	double ymin = INFINITY, ymax = -INFINITY;
@@ -217,23 +214,22 @@ static void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
 
 /* Sections the convex polygon v (already inside the lobe's wedge) and
  * rasterises its projection. */
-static void project_raster(struct section_canvas *c, const struct section_wedge *w,
-			   const double (*v)[3], int n, const uint8_t rgb[3])
+static void project_raster(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			   const uint8_t rgb[3])
 {
 	double q[SECTION_MAX_VERTS][2];
 	for (int i = 0; i < n; i++) {
 		q[i][0] = v[i][0] * w->dx + v[i][2] * w->dz;
 		q[i][1] = v[i][1];
 	}
-	raster_convex(c, (const double (*)[2])q, n, rgb);
+	raster_convex(c, (const double(*)[2])q, n, rgb);
 }
 
 /* One lobe: sign 1 keeps n1.p >= 0 and n2.p >= 0, sign -1 the opposite
  * side. d1, d2 are the vertices' n1.p and n2.p: a primitive wholly inside
  * needs no clipping, one wholly outside either plane nothing. */
-static void section_lobe(struct section_canvas *c, const struct section_wedge *w,
-			 const double (*v)[3], int n, const double *d1, const double *d2, double sign,
-			 const uint8_t rgb[3])
+static void section_lobe(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			 const double *d1, const double *d2, double sign, const uint8_t rgb[3])
 {
 	int in1 = 0, in2 = 0;
 	for (int i = 0; i < n; i++) {
@@ -250,13 +246,13 @@ static void section_lobe(struct section_canvas *c, const struct section_wedge *w
 	int m = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
 	if (m == 0)
 		return;
-	m = clip_plane((const double (*)[3])a, m, b, sign * w->n2x, sign * w->n2z);
+	m = clip_plane((const double(*)[3])a, m, b, sign * w->n2x, sign * w->n2z);
 	if (m > 0)
-		project_raster(c, w, (const double (*)[3])b, m, rgb);
+		project_raster(c, w, (const double(*)[3])b, m, rgb);
 }
 
-void section_prim(struct section_canvas *c, const struct section_wedge *w,
-		  const double (*v)[3], int n, const uint8_t rgb[3])
+void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+		  const uint8_t rgb[3])
 {
 	double d1[3], d2[3];
 	for (int i = 0; i < n; i++) {
@@ -266,4 +262,3 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w,
 	section_lobe(c, w, v, n, d1, d2, 1.0, rgb);
 	section_lobe(c, w, v, n, d1, d2, -1.0, rgb);
 }
-

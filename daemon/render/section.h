@@ -31,10 +31,10 @@ struct section_canvas {
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz
  * plane; the s < 0 lobe is their negation. */
 struct section_wedge {
-	uint32_t image;    /* k, in volume images */
-	double dx, dz;     /* d_k */
-	double n1x, n1z;   /* plane at theta_k - D/2 */
-	double n2x, n2z;   /* plane at theta_k + D/2 */
+	uint32_t image;  /* k, in volume images */
+	double dx, dz;   /* d_k */
+	double n1x, n1z; /* plane at theta_k - D/2 */
+	double n2x, n2z; /* plane at theta_k + D/2 */
 };
 
 /* Allocates a zeroed canvas. Returns 0 or -ENOMEM. */
@@ -59,13 +59,12 @@ static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t 
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k);
 
 /* Lights columns u0..u1 of row v by per-channel MAX with rgb. */
-void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1,
-		  const uint8_t rgb[3]);
+void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3]);
 
 /* Sections a segment (n = 2) or triangle (n = 3), vertices in volume space
  * and finite, by both lobes of the wedge's image and lights what it touches,
  * clamped to the image. Degenerate primitives light their section too. */
-void section_prim(struct section_canvas *c, const struct section_wedge *w,
-		  const double (*v)[3], int n, const uint8_t rgb[3]);
+void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+		  const uint8_t rgb[3]);
 
 #endif

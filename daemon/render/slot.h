@@ -17,16 +17,16 @@
 #define SLOT_AXIS UINT32_MAX /* the point is on the axis: no azimuth */
 
 struct slot_bucket {
-	float edge;      /* slope of the boundary in this bucket, or 4 (none) */
-	float near;      /* slope of the closest boundary in this or a
+	float edge;     /* slope of the boundary in this bucket, or 4 (none) */
+	float near;     /* slope of the closest boundary in this or a
 			  * neighbouring bucket, or 4 */
-	uint16_t below;  /* slot for slopes < edge */
-	uint16_t above;  /* slot for slopes >= edge */
+	uint16_t below; /* slot for slopes < edge */
+	uint16_t above; /* slot for slopes >= edge */
 };
 
 struct slot_table {
-	uint32_t n;        /* slots per revolution N */
-	uint32_t buckets;  /* per octant; bucket i covers [i, i+1) / buckets */
+	uint32_t n;            /* slots per revolution N */
+	uint32_t buckets;      /* per octant; bucket i covers [i, i+1) / buckets */
 	struct slot_bucket *b; /* 8 * (buckets + 1) */
 };
 

@@ -11,8 +11,8 @@
 
 /* Faults from spec (sim_faults_parse), applied before the pulse source
  * exists, as the daemon does; *now is the rotor's clock, set to its start. */
-static inline void pulse_rig_open(const char *spec, double rpm, struct sim_rotor **rotor,
-				  struct sync_source **src, struct sync_estimator **est, int64_t *now)
+static inline void pulse_rig_open(const char *spec, double rpm, struct sim_rotor **rotor, struct sync_source **src,
+				  struct sync_estimator **est, int64_t *now)
 {
 	struct sim_faults f;
 	CHECK_EQ(sim_faults_parse(spec, &f), 0);

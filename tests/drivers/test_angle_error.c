@@ -9,8 +9,8 @@
 #include <math.h>
 
 #include "check.h"
-#include "sim_rig.h"
 #include "projector.h"
+#include "sim_rig.h"
 #include "sim_rotor.h"
 #include "sync.h"
 #include "sync_estimator.h"
@@ -21,7 +21,12 @@
 #define SEC 1000000000LL
 
 static const struct geometry geom = {
-	.width = 64, .height = 64, .images_per_rev = 396, .mirrored = true, .half_height = 1.0f, .rpm = 730.0f,
+	.width = 64,
+	.height = 64,
+	.images_per_rev = 396,
+	.mirrored = true,
+	.half_height = 1.0f,
+	.rpm = 730.0f,
 };
 
 struct rig {

@@ -14,7 +14,12 @@
 #include "volume_util.h"
 
 static const struct geometry geom = {
-	.width = 96, .height = 64, .images_per_rev = 16, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+	.width = 96,
+	.height = 64,
+	.images_per_rev = 16,
+	.mirrored = true,
+	.half_height = 1.0f,
+	.rpm = 1800.0f,
 };
 
 struct events {
@@ -133,7 +138,7 @@ static void test_upload_swap(void)
 	wait_swapped(p, &r.ev);
 	CHECK_EQ(r.ev.buffer, 1);
 	CHECK(volumes_equal(p->impl->shown(p), r.vol));
-	CHECK_EQ(p->impl->swap(p, 1), -EBUSY); /* already shown */
+	CHECK_EQ(p->impl->swap(p, 1), -EBUSY);         /* already shown */
 	CHECK(p->impl->upload(p, 0, r.vol, NULL) > 0); /* free again */
 
 	struct proj_sim_stats st;
@@ -178,7 +183,7 @@ static void test_underrun(void)
 	CHECK_EQ(r.ev.buffer, 2);
 	CHECK_EQ(sim_rotor_next_index(r.rotor, r.ev.time_ns), r.ev.time_ns);
 	CHECK(r.ev.time_ns >= t0 + 4 * period - 1000000); /* not before the data */
-	CHECK(r.ev.time_ns >= first_start + period);       /* a revolution late at least */
+	CHECK(r.ev.time_ns >= first_start + period);      /* a revolution late at least */
 	CHECK(r.ev.time_ns <= now_ns());
 	struct proj_sim_stats st;
 	proj_sim_get_stats(p, &st);

@@ -17,12 +17,22 @@
 #include "volume_util.h"
 
 static const struct geometry geom = {
-	.width = 96, .height = 64, .images_per_rev = 16, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+	.width = 96,
+	.height = 64,
+	.images_per_rev = 16,
+	.mirrored = true,
+	.half_height = 1.0f,
+	.rpm = 1800.0f,
 };
 
 /* Large enough that one volume takes several 256 KiB bulk transfers. */
 static const struct geometry big = {
-	.width = 512, .height = 512, .images_per_rev = 64, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+	.width = 512,
+	.height = 512,
+	.images_per_rev = 64,
+	.mirrored = true,
+	.half_height = 1.0f,
+	.rpm = 1800.0f,
 };
 
 struct events {
@@ -63,7 +73,10 @@ static void on_arrived(void *data)
 }
 
 static const struct projector_listener listener = {
-	.swapped = on_swapped, .error = on_error, .gone = on_gone, .arrived = on_arrived,
+	.swapped = on_swapped,
+	.error = on_error,
+	.gone = on_gone,
+	.arrived = on_arrived,
 };
 
 struct rig {
@@ -209,7 +222,7 @@ static void test_upload_swap(void)
 	CHECK_EQ(r.ev.seq, 12);
 	CHECK(usb_emul_shows(r.emul, vol));
 	CHECK(p->impl->upload(p, 0, vol, NULL) > 0); /* free again */
-	run_for(p, 1100);                              /* a keepalive GET_STATUS refreshes the stats */
+	run_for(p, 1100);                            /* a keepalive GET_STATUS refreshes the stats */
 	struct projector_stats st;
 	struct usb_emul_stats es;
 	p->impl->get_stats(p, &st);
@@ -331,7 +344,8 @@ static void test_keepalive(void)
 	usb_emul_get_stats(r.emul, &es);
 	CHECK(usb_emul_lit(r.emul));
 	CHECK_EQ(es.watchdog_darkened, 0);
-	CHECK_MSG(es.max_ctrl_gap_ns <= 1000000000LL, "EP0 silent for %lld ms", (long long)es.max_ctrl_gap_ns / 1000000);
+	CHECK_MSG(es.max_ctrl_gap_ns <= 1000000000LL, "EP0 silent for %lld ms",
+		  (long long)es.max_ctrl_gap_ns / 1000000);
 	struct projector_stats st;
 	p->impl->get_stats(p, &st);
 	CHECK(st.revolutions >= 60); /* 1800 rpm for 3 s, from GET_STATUS */

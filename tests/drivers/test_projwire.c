@@ -13,7 +13,12 @@
 
 /* W and H not multiples of 32: edge tiles and spare mask bits get tested. */
 static const struct geometry geom = {
-	.width = 100, .height = 70, .images_per_rev = 16, .mirrored = true, .half_height = 1.0f, .rpm = 1800.0f,
+	.width = 100,
+	.height = 70,
+	.images_per_rev = 16,
+	.mirrored = true,
+	.half_height = 1.0f,
+	.rpm = 1800.0f,
 };
 
 struct test_sink {
@@ -23,8 +28,7 @@ struct test_sink {
 	int begins, ends, stray_errors, last_err;
 };
 
-static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq,
-			      int *err)
+static struct volume *sink_begin(void *data, uint32_t buffer, uint64_t seq, const uint64_t *base_seq, int *err)
 {
 	struct test_sink *s = data;
 	CHECK(buffer < BUFFERS);
@@ -479,10 +483,10 @@ static void test_control(void)
 /* Field by field: struct padding is not part of the value. */
 static bool info_equal(const struct projwire_info *a, const struct projwire_info *b)
 {
-	return a->version_major == b->version_major && a->version_minor == b->version_minor &&
-	       a->width == b->width && a->height == b->height && a->images_per_rev == b->images_per_rev &&
-	       a->flags == b->flags && a->half_height == b->half_height && a->nominal_rpm == b->nominal_rpm &&
-	       a->buffers == b->buffers && a->tile_size == b->tile_size && a->max_record == b->max_record &&
+	return a->version_major == b->version_major && a->version_minor == b->version_minor && a->width == b->width &&
+	       a->height == b->height && a->images_per_rev == b->images_per_rev && a->flags == b->flags &&
+	       a->half_height == b->half_height && a->nominal_rpm == b->nominal_rpm && a->buffers == b->buffers &&
+	       a->tile_size == b->tile_size && a->max_record == b->max_record &&
 	       a->images_per_volume == b->images_per_volume && a->link_bytes_per_sec == b->link_bytes_per_sec;
 }
 
@@ -535,7 +539,9 @@ static void test_info_status_events(void)
 	struct projwire_event ev = { .type = PROJWIRE_EV_SWAPPED, .buffer = 2, .time_ns = 987654321, .seq = 42 }, ev2;
 	uint8_t eb[PROJWIRE_EVENT_MAX * 2];
 	size_t n = projwire_event_encode(&ev, eb);
-	struct projwire_event err = { .type = PROJWIRE_EV_ERROR, .buffer = PROJWIRE_NO_BUFFER, .error = PROJWIRE_ERR_CRC };
+	struct projwire_event err = { .type = PROJWIRE_EV_ERROR,
+				      .buffer = PROJWIRE_NO_BUFFER,
+				      .error = PROJWIRE_ERR_CRC };
 	size_t m = projwire_event_encode(&err, eb + n);
 	CHECK_EQ(projwire_event_decode(eb, n - 1, &ev2), -EAGAIN);
 	CHECK_EQ(projwire_event_decode(eb, n + m, &ev2), (int)n);

@@ -46,13 +46,47 @@ static void test_parse_good(void)
 static void test_parse_bad(void)
 {
 	static const char *const bad[] = {
-		"jitter", "jitter=", "jitter=x", "jitter=0.2", "jitter=-0.001", "jitter=0.001,", ",jitter=0.001",
-		"jitter=0.001,,missed=0.1", "jitter=0.001,jitter=0.002", "missed=1.5", "extra=nan", "extra=inf",
-		"jitter=0x1p-10", "jitter= 0.001", "drift=200", "drift=200ppm", "drift=200ppm/sx",
-		"drift=1e9ppm/s", "seed=-1", "seed=1.5", "seed=99999999999999999999", "speed=5.0:800",
-		"speed=5.0@1.0", "speed=-1:800@1", "speed=5:0@1", "speed=5:800@1:2", "stall=", "stall=3+",
-		"stall=3/", "stall=3+2/", "stall=3+2+1", "stall=-3", "stall=3x", "JITTER=0.001", "wobble=1",
-		"none,jitter=0.001", "unplug=", "unplug=1+", "unplug=1/2", "unplug=-1", "unplug=1+2+3",
+		"jitter",
+		"jitter=",
+		"jitter=x",
+		"jitter=0.2",
+		"jitter=-0.001",
+		"jitter=0.001,",
+		",jitter=0.001",
+		"jitter=0.001,,missed=0.1",
+		"jitter=0.001,jitter=0.002",
+		"missed=1.5",
+		"extra=nan",
+		"extra=inf",
+		"jitter=0x1p-10",
+		"jitter= 0.001",
+		"drift=200",
+		"drift=200ppm",
+		"drift=200ppm/sx",
+		"drift=1e9ppm/s",
+		"seed=-1",
+		"seed=1.5",
+		"seed=99999999999999999999",
+		"speed=5.0:800",
+		"speed=5.0@1.0",
+		"speed=-1:800@1",
+		"speed=5:0@1",
+		"speed=5:800@1:2",
+		"stall=",
+		"stall=3+",
+		"stall=3/",
+		"stall=3+2/",
+		"stall=3+2+1",
+		"stall=-3",
+		"stall=3x",
+		"JITTER=0.001",
+		"wobble=1",
+		"none,jitter=0.001",
+		"unplug=",
+		"unplug=1+",
+		"unplug=1/2",
+		"unplug=-1",
+		"unplug=1+2+3",
 		"stall=1,stall=2,stall=3,stall=4,stall=5,stall=6,stall=7,stall=8,stall=9",
 	};
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
@@ -188,8 +222,8 @@ static void test_fit_prediction(void)
 	double rms = sqrt(sq / SAMPLES);
 	printf("predicted index error, slices of %d: rms %.3f p99 %.3f max %.3f (fit's own estimate %.3f; "
 	       "last edge as phase: rms %.3f); phase_err %.1f us\n",
-	       N_SLICES, rms, err[SAMPLES * 99 / 100], err[SAMPLES - 1], fit_err / SAMPLES,
-	       sqrt(sq_last / SAMPLES), (double)sync_estimator_state(r.est)->phase_err_ns / 1e3);
+	       N_SLICES, rms, err[SAMPLES * 99 / 100], err[SAMPLES - 1], fit_err / SAMPLES, sqrt(sq_last / SAMPLES),
+	       (double)sync_estimator_state(r.est)->phase_err_ns / 1e3);
 	CHECK(rms < 0.1);
 	CHECK(err[SAMPLES * 99 / 100] < 0.25);
 	CHECK(fabs(fit_err / SAMPLES / rms - 1.0) < 0.3); /* the fit knows its error */

@@ -179,7 +179,7 @@ static void test_bad_input(void)
 	CHECK_EQ(sync_read_edges(s, ts, 8), 1);
 	CHECK_EQ(ts[0], now - 3 * PERIOD_NS);
 	CHECK_EQ(sync_read_edges(s, ts, 8), -EBADMSG); /* the error, next */
-	put_rising(p[1], now - 4 * PERIOD_NS); /* before the last edge */
+	put_rising(p[1], now - 4 * PERIOD_NS);         /* before the last edge */
 	CHECK_EQ(sync_read_edges(s, ts, 8), -EBADMSG);
 	put_rising(p[1], now + 10 * NSEC); /* ahead of now */
 	CHECK_EQ(sync_read_edges(s, ts, 8), -EBADMSG);
@@ -211,8 +211,7 @@ static void test_realtime(void)
 	CHECK_EQ(sync_gpiod_clock(s), SYNC_GPIOD_CLOCK_REALTIME);
 	for (int i = 0; i < 5; i++) {
 		int64_t want = mono - (5 - i) * PERIOD_NS;
-		CHECK_MSG(llabs(ts[i] - want) < 1000000, "edge %d off by %lld ns", i,
-			  (long long)(ts[i] - want));
+		CHECK_MSG(llabs(ts[i] - want) < 1000000, "edge %d off by %lld ns", i, (long long)(ts[i] - want));
 		if (i)
 			CHECK_EQ(ts[i] - ts[i - 1], PERIOD_NS);
 	}

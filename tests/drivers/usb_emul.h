@@ -20,12 +20,12 @@
 struct usb_emul;
 
 struct usb_emul_stats {
-	int max_out_in_flight; /* bulk OUT URBs submitted and not yet completed, at most */
-	int urbs_outstanding;  /* submitted and not yet reaped, now */
-	uint64_t bulk_bytes;   /* bulk OUT bytes the device took since plugged */
-	uint64_t controls;     /* control requests since plugged */
+	int max_out_in_flight;   /* bulk OUT URBs submitted and not yet completed, at most */
+	int urbs_outstanding;    /* submitted and not yet reaped, now */
+	uint64_t bulk_bytes;     /* bulk OUT bytes the device took since plugged */
+	uint64_t controls;       /* control requests since plugged */
 	int64_t max_ctrl_gap_ns; /* longest silence on EP0 while lit */
-	int watchdog_darkened; /* times the 2 s watchdog darkened the device */
+	int watchdog_darkened;   /* times the 2 s watchdog darkened the device */
 	int unknown_ioctls;
 };
 

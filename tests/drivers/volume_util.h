@@ -37,7 +37,8 @@ static inline void random_tile(const struct volume *vol, uint32_t t, uint8_t *ti
 			for (uint32_t v = 0; v < VOLUME_TILE && v < rows; v++)
 				for (uint32_t u = 0; u < VOLUME_TILE && u < cols; u++)
 					if (rnd_below(8) == 0) {
-						tile[c * VOLUME_TILE_PLANE_BYTES + v * 4 + u / 8] |= (uint8_t)(0x80 >> (u % 8));
+						tile[c * VOLUME_TILE_PLANE_BYTES + v * 4 + u / 8] |=
+							(uint8_t)(0x80 >> (u % 8));
 						any = true;
 					}
 		if (any)

@@ -95,8 +95,21 @@ static void spawn(struct daemon *d, const char *renderer, const char *config)
 			dup2(log, 2);
 		unsetenv("LISTEN_FDS");
 		unsetenv("LISTEN_PID");
-		const char *argv[] = { exe, "--device", "sim", "--profile", "small", "--socket", d->socket, "--config",
-				       conf, "--verbose", renderer ? "--renderer" : NULL, renderer, NULL };
+		const char *argv[] = {
+			exe,
+			"--device",
+			"sim",
+			"--profile",
+			"small",
+			"--socket",
+			d->socket,
+			"--config",
+			conf,
+			"--verbose",
+			renderer ? "--renderer" : NULL,
+			renderer,
+			NULL
+		};
 		execv(exe, (char *const *)argv);
 		_exit(127);
 	}
@@ -273,8 +286,7 @@ struct volume *capture_volume(struct spindle *sp)
 	return vol;
 }
 
-void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g,
-		   uint8_t b)
+void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g, uint8_t b)
 {
 	struct spindle_buffer *buf = spindle_buffer_create(sp, xyz, (size_t)count * 12);
 	struct spindle_list *list = spindle_list_create(sp);

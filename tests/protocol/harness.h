@@ -16,7 +16,6 @@
 #include "spindle/spindle.h"
 #include "volume.h"
 
-
 struct daemon {
 	pid_t pid;
 	char dir[64];
@@ -70,8 +69,7 @@ struct volume *capture_volume(struct spindle *sp);
 
 /* Draws vertices as one list on one layer with a colour, commits and waits
  * until shown. The objects stay alive until the connection is closed. */
-void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g,
-		   uint8_t b);
+void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g, uint8_t b);
 
 /* Expectations from DESIGN.md section 3 (computed here, not by spindled):
  * the volume image, column and row a point lights. */

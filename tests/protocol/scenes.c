@@ -40,8 +40,15 @@ uint32_t disk(float *v, double r, double y, int segs)
 	uint32_t n = 0;
 	for (int i = 0; i < segs; i++) {
 		double a0 = 2 * M_PI * i / segs, a1 = 2 * M_PI * (i + 1) / segs;
-		float t[] = { 0, (float)y, 0, (float)(r * cos(a0)), (float)y, (float)(r * sin(a0)),
-			      (float)(r * cos(a1)), (float)y, (float)(r * sin(a1)) };
+		float t[] = { 0,
+			      (float)y,
+			      0,
+			      (float)(r * cos(a0)),
+			      (float)y,
+			      (float)(r * sin(a0)),
+			      (float)(r * cos(a1)),
+			      (float)y,
+			      (float)(r * sin(a1)) };
 		memcpy(v + 3 * n, t, sizeof(t));
 		n += 3;
 	}
@@ -110,8 +117,8 @@ void shift_x(float m[16], float dx)
 	m[12] = dx;
 }
 
-struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *frame, const float *v,
-				     uint32_t n, uint8_t r, uint8_t g, uint8_t b)
+struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *frame, const float *v, uint32_t n,
+				     uint8_t r, uint8_t g, uint8_t b)
 {
 	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)n * 12);
 	struct spindle_list *list = spindle_list_create(sp);
@@ -131,7 +138,6 @@ struct spindle_status status_of(struct spindle *sp)
 	CHECK(spindle_get_status(sp, &st) == 0);
 	return st;
 }
-
 
 int run_named_tests(const struct named_test *tests, size_t count, int argc, char **argv)
 {

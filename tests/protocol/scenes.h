@@ -35,8 +35,8 @@ void shift_x(float m[16], float dx);
 
 /* n triangle vertices v in one colour on a layer of their own, committed
  * and shown; frame says by which volume. */
-struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *frame, const float *v,
-				     uint32_t n, uint8_t r, uint8_t g, uint8_t b);
+struct spindle_layer *show_triangles(struct spindle *sp, struct spindle_frame *frame, const float *v, uint32_t n,
+				     uint8_t r, uint8_t g, uint8_t b);
 
 struct spindle_status status_of(struct spindle *sp);
 

@@ -201,8 +201,7 @@ static void test_jitter(void)
 	struct geometry g = small();
 	double period_us = 60e6 / g.rpm;
 	printf("jitter %.1f us (%.3f%% of a period), index error %.1f us, slice angle error p99 %.3f max %.3f\n",
-	       st.jitter_us, 100 * st.jitter_us / period_us, st.index_error_us, st.angle_error_p99,
-	       st.angle_error_max);
+	       st.jitter_us, 100 * st.jitter_us / period_us, st.index_error_us, st.angle_error_p99, st.angle_error_max);
 	CHECK(st.locked && !st.blanked);
 	/* RMS over the last 16 periods: a small sample of a 0.1 % spread. */
 	CHECK(st.jitter_us > 0.0002 * period_us && st.jitter_us < 0.003 * period_us);
@@ -276,12 +275,8 @@ static void test_late_projector(void)
 }
 
 static const struct named_test tests[] = {
-	{ "delta", test_delta },
-	{ "underrun", test_underrun },
-	{ "stall", test_stall },
-	{ "jitter", test_jitter },
-	{ "unplug", test_unplug },
-	{ "late-projector", test_late_projector },
+	{ "delta", test_delta },   { "underrun", test_underrun }, { "stall", test_stall },
+	{ "jitter", test_jitter }, { "unplug", test_unplug },     { "late-projector", test_late_projector },
 };
 
 int main(int argc, char **argv)

@@ -298,7 +298,7 @@ static void test_garbage(void)
 	close(fd);
 
 	fd = raw_connect(&d);
-	CHECK(raw_send(fd, 1, 6, NULL, 0) == 0); /* commit before hello */
+	CHECK(raw_send(fd, 1, 6, NULL, 0) == 0);  /* commit before hello */
 	CHECK(raw_expect_error_and_close(fd, 7)); /* version */
 	close(fd);
 
@@ -352,7 +352,9 @@ static void test_unsealed_memfd(void)
 		struct cmsghdr align;
 	} ctl;
 	struct iovec iov = { msg, sizeof(msg) };
-	struct msghdr mh = { .msg_iov = &iov, .msg_iovlen = 1, .msg_control = ctl.buf,
+	struct msghdr mh = { .msg_iov = &iov,
+			     .msg_iovlen = 1,
+			     .msg_control = ctl.buf,
 			     .msg_controllen = sizeof(ctl.buf) };
 	struct cmsghdr *c = CMSG_FIRSTHDR(&mh);
 	c->cmsg_level = SOL_SOCKET, c->cmsg_type = SCM_RIGHTS, c->cmsg_len = CMSG_LEN(sizeof(int));

@@ -4,9 +4,9 @@
  * exclusive layers, priority, state events) by what is shown. */
 #include <errno.h>
 #include <fcntl.h>
-#include <sys/mman.h>
 #include <math.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include "scenes.h"
@@ -264,7 +264,8 @@ static void test_point_size(void)
 				if (!volume_pixel(v, k, u, row_, 0))
 					continue;
 				lit++;
-				inside += k == x.k % NV && abs((int)u - (int)x.u) <= 1 && abs((int)row_ - (int)x.v) <= 1;
+				inside += k == x.k % NV && abs((int)u - (int)x.u) <= 1 &&
+					  abs((int)row_ - (int)x.v) <= 1;
 			}
 	CHECK_EQ(lit, 9);
 	CHECK_EQ(inside, 9);

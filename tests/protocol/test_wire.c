@@ -12,7 +12,6 @@
 #include "check.h"
 #include "spindle-protocol.h"
 
-
 static struct proto_conn *a, *b;
 
 static void pair(size_t max_out)
@@ -225,7 +224,10 @@ static void test_strings(void)
 		uint32_t len;
 		char text[4];
 		bool ok;
-	} cases[] = { { 4, "abc", true }, { 4, { 'a', 'b', 'c', 'd' }, false }, { 0, "", false }, { 4, { 'a', 0, 'b', 0 }, false },
+	} cases[] = { { 4, "abc", true },
+		      { 4, { 'a', 'b', 'c', 'd' }, false },
+		      { 0, "", false },
+		      { 4, { 'a', 0, 'b', 0 }, false },
 		      { 200, "abc", false } };
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
 		int sv[2];

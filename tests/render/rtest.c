@@ -119,11 +119,11 @@ static double target_y(const struct geometry *g, int v)
 uint32_t rtest_edge_points(const struct geometry *g, struct rtest_mesh *m)
 {
 	static const int at[][2] = {
-		{ 0, 0 }, { -1, 0 }, { 0, -1 }, { -1, -1 }, /* the corners */
-		{ OUT_LO, OUT_LO }, { OUT_HI, OUT_HI }, { OUT_LO, OUT_HI }, { OUT_HI, OUT_LO },
-		{ 1, 1 }, { 2, -2 }, { -2, 2 }, { 3, -3 }, { -3, 3 }, { 6, 7 }, { 7, -8 }, { -7, 8 },
-		{ -8, -7 }, { 8, -9 }, { -9, 6 },
-		{ MID, MID }, { MID, 0 }, { 0, MID }, { -1, MID }, { MID, -1 },
+		{ 0, 0 },           { -1, 0 },          { 0, -1 },          { -1, -1 }, /* the corners */
+		{ OUT_LO, OUT_LO }, { OUT_HI, OUT_HI }, { OUT_LO, OUT_HI }, { OUT_HI, OUT_LO }, { 1, 1 },
+		{ 2, -2 },          { -2, 2 },          { 3, -3 },          { -3, 3 },          { 6, 7 },
+		{ 7, -8 },          { -7, 8 },          { -8, -7 },         { 8, -9 },          { -9, 6 },
+		{ MID, MID },       { MID, 0 },         { 0, MID },         { -1, MID },        { MID, -1 },
 	};
 	uint32_t n = sizeof(at) / sizeof(at[0]);
 	if (n > g->images_per_rev / 2)
@@ -183,8 +183,7 @@ void rtest_identity(float t[16])
 	t[0] = t[5] = t[10] = t[15] = 1.0f;
 }
 
-struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
-			     uint8_t g, uint8_t b)
+struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r, uint8_t g, uint8_t b)
 {
 	struct scene_draw d = { .prim = prim, .count = m->count, .xyz = m->xyz };
 	rtest_identity(d.transform);
@@ -194,8 +193,7 @@ struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, u
 	return d;
 }
 
-struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws,
-			    uint32_t n, unsigned threads)
+struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws, uint32_t n, unsigned threads)
 {
 	struct scene s = { .draw_count = n, .draws = draws };
 	struct renderer *r = render_cpu_create(g, threads);
@@ -241,8 +239,7 @@ bool rtest_same(const struct volume *a, const struct volume *b)
 		const struct volume_image *x = &a->images[k], *y = &b->images[k];
 		if (x->tile_count != y->tile_count || memcmp(x->mask, y->mask, a->mask_bytes) != 0)
 			return false;
-		if (x->tile_count &&
-		    memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES) != 0)
+		if (x->tile_count && memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES) != 0)
 			return false;
 	}
 	return true;

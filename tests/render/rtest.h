@@ -58,13 +58,11 @@ void rtest_colour(uint32_t i, uint8_t out[3]);
 void rtest_saturated(uint32_t i, uint8_t out[3]);
 
 /* A draw of m with the identity transform. */
-struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r,
-			     uint8_t g, uint8_t b);
+struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r, uint8_t g, uint8_t b);
 void rtest_identity(float t[16]);
 
 /* Renders draws with a fresh CPU renderer; aborts on failure. */
-struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws,
-			    uint32_t n, unsigned threads);
+struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws, uint32_t n, unsigned threads);
 
 /* Pixel (u, v) of channel c of image k, and whether any channel is lit. */
 bool rtest_lit(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int c);

@@ -42,8 +42,8 @@ static void check_slot_at(const struct slot_table *t, double phi, double r)
 	uint32_t s = slot_of(t, x, z, &near), want = exact_slot(t->n, x, z);
 	uint32_t diff = (s + t->n - want) % t->n;
 	if (near)
-		CHECK_MSG(diff == 0 || diff == 1 || diff == t->n - 1, "N=%u phi=%.17g: slot %u, atan2 %u",
-			  t->n, phi, s, want);
+		CHECK_MSG(diff == 0 || diff == 1 || diff == t->n - 1, "N=%u phi=%.17g: slot %u, atan2 %u", t->n, phi, s,
+			  want);
 	else
 		CHECK_MSG(diff == 0, "N=%u phi=%.17g: slot %u, atan2 %u (not near)", t->n, phi, s, want);
 }
@@ -72,8 +72,8 @@ static void check_slots(uint32_t n)
 static void place(const float m[16], const float *in, double out[3])
 {
 	for (int i = 0; i < 3; i++)
-		out[i] = (float)((double)m[i] * in[0] + (double)m[4 + i] * in[1] + (double)m[8 + i] * in[2] +
-				 m[12 + i]);
+		out[i] =
+			(float)((double)m[i] * in[0] + (double)m[4 + i] * in[1] + (double)m[8 + i] * in[2] + m[12 + i]);
 }
 
 /* Every primitive sectioned in every image, halftoned with the scalar
@@ -93,7 +93,7 @@ static struct volume *brute_force(const struct geometry *g, const struct scene_d
 				double v[3][3];
 				for (int a = 0; a < nv; a++)
 					place(draws[i].transform, draws[i].xyz + 3 * (p + a), v[a]);
-				section_prim(&c, &w, (const double (*)[3])v, nv, draws[i].rgb);
+				section_prim(&c, &w, (const double(*)[3])v, nv, draws[i].rgb);
 			}
 		}
 		struct halftone_table thr;

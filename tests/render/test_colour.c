@@ -36,14 +36,13 @@ static void check_threshold_matrix(void)
 			pat[k][i] = halftone_threshold(k + 11, i % 16, i / 16);
 	for (uint32_t a = 0; a < 256; a++)
 		for (uint32_t b = a + 1; b < 256; b++)
-			CHECK_MSG(memcmp(pat[a], pat[b], 256) != 0, "images %u and %u share a phase", a + 11,
-				  b + 11);
+			CHECK_MSG(memcmp(pat[a], pat[b], 256) != 0, "images %u and %u share a phase", a + 11, b + 11);
 }
 
 /* Pixels of rectangle [u0, u1] x [v0, v1] of image k: channel c lit exactly
  * where value > threshold. */
-static void check_dithered(const struct volume *vol, uint32_t k, uint32_t u0, uint32_t u1,
-			   uint32_t v0, uint32_t v1, const uint8_t rgb[3])
+static void check_dithered(const struct volume *vol, uint32_t k, uint32_t u0, uint32_t u1, uint32_t v0, uint32_t v1,
+			   const uint8_t rgb[3])
 {
 	for (uint32_t v = v0; v <= v1; v++)
 		for (uint32_t u = u0; u <= u1; u++)

@@ -37,7 +37,7 @@ struct tscene {
 	struct scene_draw draws[MAX_DRAWS];
 	struct rtest_mesh mesh[MAX_DRAWS];
 	struct bench_scene bench;
-	bool centred;   /* on the axis: every image lights its whole section */
+	bool centred; /* on the axis: every image lights its whole section */
 };
 
 static void tscene_free(struct tscene *s)
@@ -69,8 +69,7 @@ static void random_point(struct rng *rng, const struct geometry *g, double rmax,
 /* p + size * (a random direction), pulled back inside r <= 0.95, |y| <= 0.95 h
  * (the renderers clamp what lies outside to the image edges; that is not
  * what this test compares). */
-static void random_near(struct rng *rng, const struct geometry *g, const double p[3], double size,
-			struct rtest_mesh *m)
+static void random_near(struct rng *rng, const struct geometry *g, const double p[3], double size, struct rtest_mesh *m)
 {
 	double z = rng_range(rng, -1, 1), a = rng_range(rng, 0, 2 * M_PI), c = sqrt(1 - z * z);
 	double q[3] = { p[0] + size * c * cos(a), p[1] + size * z, p[2] + size * c * sin(a) };
@@ -84,8 +83,16 @@ static void random_near(struct rng *rng, const struct geometry *g, const double 
 }
 
 enum scene_id {
-	SC_SPHERE_AXIS, SC_SPHERE_OFF, SC_DISK, SC_WALL, SC_AXIS_LINE, SC_SEGMENTS, SC_TRIANGLES,
-	SC_POINTS, SC_BUNNY, SC_COUNT
+	SC_SPHERE_AXIS,
+	SC_SPHERE_OFF,
+	SC_DISK,
+	SC_WALL,
+	SC_AXIS_LINE,
+	SC_SEGMENTS,
+	SC_TRIANGLES,
+	SC_POINTS,
+	SC_BUNNY,
+	SC_COUNT
 };
 
 /* Builds scene id for g. */
@@ -223,8 +230,8 @@ static void check_agreement(const char *what, const struct volume *ref, const st
 	double cov = coverage_score(&c), stray = coverage_stray(&c);
 	uint64_t ref_lit = c.ref_lit[0] + c.ref_lit[1] + c.ref_lit[2];
 	uint64_t test_lit = c.test_lit[0] + c.test_lit[1] + c.test_lit[2];
-	printf("  %-32s coverage %7.3f%%  stray %6.3f%%  (lit: cpu %llu, gl %llu)\n", what, 100 * cov,
-	       100 * stray, (unsigned long long)ref_lit, (unsigned long long)test_lit);
+	printf("  %-32s coverage %7.3f%%  stray %6.3f%%  (lit: cpu %llu, gl %llu)\n", what, 100 * cov, 100 * stray,
+	       (unsigned long long)ref_lit, (unsigned long long)test_lit);
 	CHECK_MSG(ref_lit > 0, "%s: the reference lights nothing", what);
 	if (cov < MIN_COVERAGE)
 		disagree(what, "coverage %.3f%% < 99.5%%", 100 * cov);
@@ -267,9 +274,10 @@ static void check_every_image(const char *what, const struct volume *ref, const 
 		}
 	}
 	if (bad_images)
-		disagree(what, "%u images miss part of their section; worst, image %u: %llu of its %llu "
-			 "reference voxels have no lit voxel within one", bad_images, worst,
-			 (unsigned long long)worst_missed, (unsigned long long)worst_lit);
+		disagree(what,
+			 "%u images miss part of their section; worst, image %u: %llu of its %llu "
+			 "reference voxels have no lit voxel within one",
+			 bad_images, worst, (unsigned long long)worst_missed, (unsigned long long)worst_lit);
 }
 
 static struct renderer *gl_create(const struct geometry *g, const char *backend, bool naive)

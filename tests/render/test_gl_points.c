@@ -44,8 +44,8 @@ static void check_exact(const struct pair *p, const struct scene_draw *draws, ui
 {
 	struct volume *ref = render_with(p->cpu, draws, n), *test = render_with(p->gl, draws, n);
 	CHECK_MSG(rtest_count(ref, 0) > 0, "%s %s: the reference lights nothing", p->name, what);
-	CHECK_MSG(rtest_same(ref, test), "%s %s: GL lights %llu/%llu/%llu voxels, the CPU %llu/%llu/%llu",
-		  p->name, what, (unsigned long long)rtest_count(test, 0), (unsigned long long)rtest_count(test, 1),
+	CHECK_MSG(rtest_same(ref, test), "%s %s: GL lights %llu/%llu/%llu voxels, the CPU %llu/%llu/%llu", p->name,
+		  what, (unsigned long long)rtest_count(test, 0), (unsigned long long)rtest_count(test, 1),
 		  (unsigned long long)rtest_count(test, 2), (unsigned long long)rtest_count(ref, 0),
 		  (unsigned long long)rtest_count(ref, 1), (unsigned long long)rtest_count(ref, 2));
 	volume_destroy(ref);

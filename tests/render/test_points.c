@@ -22,8 +22,7 @@ static int expect_voxels(const struct geometry *g, const double p[3], struct vox
 	for (int i = 0; i < 2; i++) {
 		uint32_t k = j[i] % m;
 		double th = geometry_image_angle(g, k);
-		struct voxel vx = { k, geometry_column(g, p[0] * cos(th) + p[2] * sin(th)),
-				    geometry_row(g, p[1]) };
+		struct voxel vx = { k, geometry_column(g, p[0] * cos(th) + p[2] * sin(th)), geometry_row(g, p[1]) };
 		if (n == 1 && out[0].k == vx.k && out[0].u == vx.u && out[0].v == vx.v)
 			continue;
 		out[n++] = vx;
@@ -43,12 +42,12 @@ static int check_point(const struct geometry *g, double x, double y, double z)
 	struct voxel want[2];
 	int n = expect_voxels(g, p, want);
 	for (int c = 0; c < 3; c++) {
-		CHECK_MSG(rtest_count(vol, c) == (uint64_t)n, "point (%g,%g,%g) c%d: %llu lit, want %d",
-			  x, y, z, c, (unsigned long long)rtest_count(vol, c), n);
+		CHECK_MSG(rtest_count(vol, c) == (uint64_t)n, "point (%g,%g,%g) c%d: %llu lit, want %d", x, y, z, c,
+			  (unsigned long long)rtest_count(vol, c), n);
 		for (int i = 0; i < n; i++)
 			CHECK_MSG(rtest_lit(vol, want[i].k, want[i].u, want[i].v, c),
-				  "point (%g,%g,%g): voxel k%u u%u v%u not lit", x, y, z, want[i].k,
-				  want[i].u, want[i].v);
+				  "point (%g,%g,%g): voxel k%u u%u v%u not lit", x, y, z, want[i].k, want[i].u,
+				  want[i].v);
 	}
 	volume_destroy(vol);
 	rtest_mesh_free(&m);
@@ -58,8 +57,8 @@ static int check_point(const struct geometry *g, double x, double y, double z)
 static void check_azimuths(const struct geometry *g)
 {
 	double dd = 2 * M_PI / g->images_per_rev;
-	const double az[] = { 0.0, 0.3, 1.0, M_PI / 2, 2.5, M_PI, M_PI + 0.1, 4.0, -0.2, -M_PI / 2,
-			      5.9, dd / 2, -dd / 2, 3 * dd / 2, M_PI + dd / 2, 7 * dd + 0.49 * dd };
+	const double az[] = { 0.0,  0.3,       1.0, M_PI / 2, 2.5,     M_PI,       M_PI + 0.1,    4.0,
+			      -0.2, -M_PI / 2, 5.9, dd / 2,   -dd / 2, 3 * dd / 2, M_PI + dd / 2, 7 * dd + 0.49 * dd };
 	const double radii[] = { 0.05, 0.5, 0.97, 1.4 };
 	const double ys[] = { 0.0, 0.33, -0.71 * g->half_height, 1.2 * g->half_height };
 	for (size_t a = 0; a < sizeof(az) / sizeof(az[0]); a++) {

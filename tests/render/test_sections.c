@@ -36,8 +36,8 @@ static void check_axis_line(const struct geometry *g)
 
 /* Every image lights row over s in [-r_in, r_in] with no hole, and nothing
  * outside that row or beyond s = +-r_out. */
-static void check_flat_section(const struct geometry *g, const struct rtest_mesh *m,
-			       double r_in, double r_out, uint32_t row)
+static void check_flat_section(const struct geometry *g, const struct rtest_mesh *m, double r_in, double r_out,
+			       uint32_t row)
 {
 	struct scene_draw d = rtest_draw(SCENE_TRIANGLES, m, 255, 255, 255);
 	struct volume *vol = rtest_render(g, &d, 1, 2);
@@ -176,8 +176,8 @@ static void check_wall(const struct geometry *g, double a, double b)
 		}
 		CHECK(inside == rtest_count_image(vol, k, 0));
 		if (in_plane)
-			CHECK_MSG(inside == want, "wall image %u: %llu of %llu", k,
-				  (unsigned long long)inside, (unsigned long long)want);
+			CHECK_MSG(inside == want, "wall image %u: %llu of %llu", k, (unsigned long long)inside,
+				  (unsigned long long)want);
 	}
 	volume_destroy(vol);
 	rtest_mesh_free(&m);

@@ -24,8 +24,7 @@ static struct model *load(const char *name)
 static void check_counts(const char *name, size_t tris, size_t lines, size_t points)
 {
 	struct model *m = load(name);
-	printf("%s: %zu triangles, %zu lines, %zu points\n", name, m->triangle_count,
-	       m->line_count, m->point_count);
+	printf("%s: %zu triangles, %zu lines, %zu points\n", name, m->triangle_count, m->line_count, m->point_count);
 	CHECK(m->triangle_count == tris);
 	CHECK(m->line_count == lines);
 	CHECK(m->point_count == points);

@@ -51,7 +51,8 @@ static int peak(const uint8_t *rgb, uint32_t w, uint32_t h, double x, double y, 
 		for (int dx = -2; dx <= 2; dx++) {
 			int px = (int)x + dx, py = (int)y + dy;
 			if (px >= 0 && py >= 0 && px < (int)w && py < (int)h)
-				best = rgb[3 * ((size_t)py * w + px) + c] > best ? rgb[3 * ((size_t)py * w + px) + c] : best;
+				best = rgb[3 * ((size_t)py * w + px) + c] > best ? rgb[3 * ((size_t)py * w + px) + c]
+										 : best;
 		}
 	}
 	return best;

@@ -81,7 +81,8 @@ static void check_azimuths(void)
 	CHECK(geometry_image_of_azimuth_back(&g, M_PI) == 0);
 	CHECK(geometry_image_of_azimuth_back(&g, 0.0) == 25);
 	CHECK(geometry_image_of_azimuth_back(&g, 3.2 * d) == 28);
-	CHECK(geometry_image_of_azimuth_back(&g, -M_PI / 2) == 12 || geometry_image_of_azimuth_back(&g, -M_PI / 2) == 13);
+	CHECK(geometry_image_of_azimuth_back(&g, -M_PI / 2) == 12 ||
+	      geometry_image_of_azimuth_back(&g, -M_PI / 2) == 13);
 	/* Every azimuth has its two lobes half a turn apart (N even). */
 	for (int i = 0; i < 1000; i++) {
 		double phi = -M_PI + 2 * M_PI * (i + 0.37) / 1000;

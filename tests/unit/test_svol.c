@@ -28,10 +28,17 @@ static bool zero(const uint8_t *p, size_t n)
 
 static void check_header_layout(void)
 {
-	struct svol_header h = { .width = 0x01020304, .height = 0x0a0b0c0d, .image_count = 198,
-				 .images_per_rev = 396, .planes = 3, .flags = SVOL_FLAG_MIRRORED,
-				 .half_height = 0.75f, .seq = 0x1122334455667788ull,
-				 .shown_ns = 0x99aabbccddeeff00ull };
+	struct svol_header h = {
+		.width = 0x01020304,
+		.height = 0x0a0b0c0d,
+		.image_count = 198,
+		.images_per_rev = 396,
+		.planes = 3,
+		.flags = SVOL_FLAG_MIRRORED,
+		.half_height = 0.75f,
+		.seq = 0x1122334455667788ull,
+		.shown_ns = 0x99aabbccddeeff00ull
+	};
 	uint8_t b[SVOL_HEADER_SIZE];
 	memset(b, 0xff, sizeof(b));
 	svol_header_encode(&h, b);
@@ -51,9 +58,8 @@ static void check_header_layout(void)
 	CHECK(zero(b + 48, 16));
 	struct svol_header d;
 	CHECK(svol_header_decode(b, &d) == 0);
-	CHECK(d.width == h.width && d.height == h.height && d.image_count == 198 &&
-	      d.images_per_rev == 396 && d.planes == 3 && d.flags == 1 && d.half_height == 0.75f &&
-	      d.seq == h.seq && d.shown_ns == h.shown_ns);
+	CHECK(d.width == h.width && d.height == h.height && d.image_count == 198 && d.images_per_rev == 396 &&
+	      d.planes == 3 && d.flags == 1 && d.half_height == 0.75f && d.seq == h.seq && d.shown_ns == h.shown_ns);
 	CHECK(svol_file_size(&h) == 64 + 198ull * 3 * 0x0a0b0c0d * ((0x01020304ull + 7) / 8));
 	const int bad_at[] = { 0, 3, 4, 5, 6, 7, 24, 16, 25 };
 	for (size_t i = 0; i < sizeof(bad_at) / sizeof(bad_at[0]); i++) {
@@ -104,8 +110,8 @@ static void check_round_trip(const struct geometry *g)
 	rewind(f);
 	struct volume *r = svol_read(f);
 	CHECK(r && r->seq == 42 && r->shown_ns == 123456789 && r->image_count == v->image_count);
-	CHECK(r && r->geom.width == g->width && r->geom.height == g->height &&
-	      r->geom.mirrored == g->mirrored && r->geom.half_height == g->half_height);
+	CHECK(r && r->geom.width == g->width && r->geom.height == g->height && r->geom.mirrored == g->mirrored &&
+	      r->geom.half_height == g->half_height);
 	for (uint32_t k = 0; r && k < v->image_count; k++) {
 		volume_image_to_dense(v, k, want);
 		volume_image_to_dense(r, k, got);

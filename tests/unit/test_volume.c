@@ -52,8 +52,8 @@ static void check_append(void)
 	CHECK(volume_image_append(v, 3, 9, tile) == 0);
 	CHECK(v->images[3].tile_count == 1 && v->images[3].mask[1] == 0x02 && v->images[3].mask[0] == 0);
 	CHECK(volume_tile_present(&v->images[3], 9));
-	CHECK(volume_image_append(v, 3, 5, tile) == -EINVAL); /* out of order */
-	CHECK(volume_image_append(v, 3, 9, tile) == -EINVAL); /* repeated */
+	CHECK(volume_image_append(v, 3, 5, tile) == -EINVAL);  /* out of order */
+	CHECK(volume_image_append(v, 3, 9, tile) == -EINVAL);  /* repeated */
 	CHECK(volume_image_append(v, 3, 12, tile) == -EINVAL); /* past the image */
 	CHECK(volume_image_append(v, 50, 0, tile) == -EINVAL);
 	CHECK(volume_image_append(v, 3, 11, tile) == 0);

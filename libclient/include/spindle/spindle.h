@@ -56,9 +56,9 @@ struct spindle_device_info {
  * and uploads nothing: volumes_skipped counts such scenes (commits made
  * while a render runs, or waits to start, are taken together, as one scene). */
 struct spindle_status {
-	float rpm;                 /* measured rotor speed, 0 when not turning */
-	bool locked;               /* sync estimator locked to the rotor */
-	bool blanked;              /* projector dark */
+	float rpm;    /* measured rotor speed, 0 when not turning */
+	bool locked;  /* sync estimator locked to the rotor */
+	bool blanked; /* projector dark */
 	bool projector_present;
 	uint64_t volumes_shown;    /* volumes swapped in on the projector */
 	uint32_t clients;          /* connected clients past the handshake, this one included */
@@ -188,12 +188,12 @@ int spindle_list_set_transform(struct spindle_list *list, const float m[16]);
 /* Draws count vertices from buf starting at byte offset, each stride
  * bytes apart (0 = tightly packed, 12): count points, count/2 line
  * segments, count/3 triangles. */
-int spindle_list_points(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
-			uint32_t count, uint32_t stride);
-int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
-		       uint32_t count, uint32_t stride);
-int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset,
-			   uint32_t count, uint32_t stride);
+int spindle_list_points(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
+			uint32_t stride);
+int spindle_list_lines(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
+		       uint32_t stride);
+int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf, size_t offset, uint32_t count,
+			   uint32_t stride);
 
 /* Primitive modes of spindle_list_draw() and spindle_list_draw_indexed(). */
 enum spindle_mode {
@@ -216,15 +216,14 @@ enum spindle_index_type {
 };
 
 /* Any mode; stride 0 = the vertex format's size. */
-int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf,
-		      size_t offset, uint32_t count, uint32_t stride);
+int spindle_list_draw(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *buf, size_t offset,
+		      uint32_t count, uint32_t stride);
 /* Version 2: index_count vertices picked by the indices (each below
  * vertex_count) at index_offset of indices, from the vertices at offset
  * of vertices, stride bytes apart. */
 int spindle_list_draw_indexed(struct spindle_list *list, enum spindle_mode mode, struct spindle_buffer *vertices,
-			      size_t offset, uint32_t vertex_count, uint32_t stride,
-			      struct spindle_buffer *indices, size_t index_offset, uint32_t index_count,
-			      enum spindle_index_type index_type);
+			      size_t offset, uint32_t vertex_count, uint32_t stride, struct spindle_buffer *indices,
+			      size_t index_offset, uint32_t index_count, enum spindle_index_type index_type);
 /* Version 2: layout of the vertices of the draws that follow. With a
  * colour per vertex, set_color does not apply; colours are interpolated
  * along lines and across triangles (in steps of at most 16 of 255). */
