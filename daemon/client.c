@@ -147,7 +147,7 @@ void client_frame_done(struct waiter *w, uint64_t seq, int64_t time_ns)
 	struct client *c = cb->base.client;
 	if (!c->dead) {
 		client_sent(c, proto_ev_callback_done(c->conn, cb->base.id, seq, (uint64_t)time_ns));
-		client_flush(c);
+		c->answered = true;
 	}
 	object_destroy(&cb->base);
 }
@@ -162,9 +162,17 @@ void client_capture_done(struct waiter *w, int fd, uint64_t size)
 		else
 			client_sent(c, proto_ev_capture_failed(c->conn, cb->base.id, PROTO_CAPTURE_FAILURE_ERROR,
 							       strerror(-fd)));
-		client_flush(c);
+		c->answered = true;
 	}
 	object_destroy(&cb->base);
+}
+
+void client_flush_answered(struct client *c)
+{
+	if (!c->answered)
+		return;
+	c->answered = false;
+	client_flush(c);
 }
 
 static int display_sync(void *target, const struct proto_display_sync_args *a)

@@ -126,6 +126,7 @@ struct client {
 	uint32_t state_flags; /* the last state event sent (version 2) */
 	float state_rpm;
 	bool dead;
+	bool answered;   /* answers queued, not yet flushed */
 	bool left_scene; /* its layers, taken off the stage when it died, showed */
 };
 
@@ -143,9 +144,12 @@ int client_fail(struct client *c, uint32_t object, uint32_t code, const char *fm
 void client_flush(struct client *c);
 
 /* A frame callback or capture of a client is answered (frames.h): what
- * the daemon's frames listener calls. A dead client's is just freed. */
+ * the daemon's frames listener calls. A dead client's is just freed. The
+ * event is queued; client_flush_answered() sends it. */
 void client_frame_done(struct waiter *w, uint64_t seq, int64_t time_ns);
 void client_capture_done(struct waiter *w, int fd, uint64_t size);
+/* Flushes c if answers were queued since its last flush. */
+void client_flush_answered(struct client *c);
 
 /* Request handlers of buffer, list and layer objects (objects.c). */
 extern const struct proto_buffer_requests buffer_requests;

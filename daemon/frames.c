@@ -59,7 +59,7 @@ void frames_wait_revolution(struct frames *f)
  * commits made after time_ns wait. Returns whether any waits so. */
 static bool frames_done(struct frames *f, uint64_t seq, int64_t time_ns)
 {
-	bool later = false;
+	bool later = false, answered = false;
 	struct waiter *w, *tmp;
 	link_for_each_safe(w, tmp, &f->frames, link) {
 		if (!w->volume_seq || w->volume_seq > seq)
@@ -70,7 +70,10 @@ static bool frames_done(struct frames *f, uint64_t seq, int64_t time_ns)
 		}
 		link_remove(&w->link);
 		f->listener->frame_done(f->data, w, seq, time_ns);
+		answered = true;
 	}
+	if (answered)
+		f->listener->answered(f->data);
 	return later;
 }
 
@@ -144,6 +147,7 @@ void frames_serve_captures(struct frames *f, const struct volume *shown)
 		link_remove(&w->link);
 		f->listener->capture_done(f->data, w, fd, size);
 	}
+	f->listener->answered(f->data);
 	if (fd >= 0)
 		close(fd);
 }

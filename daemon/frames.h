@@ -38,6 +38,9 @@ struct frames_listener {
 	 * size bytes, valid during the call (the listener sends a copy), or
 	 * a negative errno. w is off the queue; the listener frees it. */
 	void (*capture_done)(void *data, struct waiter *w, int fd, uint64_t size);
+	/* The frames or captures of one volume were answered: the events
+	 * may go out now, one write per client. */
+	void (*answered)(void *data);
 };
 
 struct frames {

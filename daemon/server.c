@@ -193,10 +193,19 @@ static void capture_done(void *data, struct waiter *w, int fd, uint64_t size)
 	client_capture_done(w, fd, size);
 }
 
+static void answered(void *data)
+{
+	struct server *srv = data;
+	struct client *c;
+	link_for_each(c, &srv->clients, link)
+		client_flush_answered(c);
+}
+
 static const struct frames_listener frames_listener = {
 	.version = FRAMES_LISTENER_VERSION,
 	.frame_done = frame_done,
 	.capture_done = capture_done,
+	.answered = answered,
 };
 
 /* Waiting captures get the volume on display: as the projector holds it
