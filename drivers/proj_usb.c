@@ -492,16 +492,6 @@ void proj_usb_get_debug(struct projector *p, struct proj_usb_debug *out)
 	if (p->impl != &usb_impl)
 		return;
 	struct proj_usb *u = (struct proj_usb *)p;
-	struct usb_transport_debug t;
-	usbt_get_debug(u->t, &t);
-	*out = (struct proj_usb_debug){
-		.live_transfers = t.live_transfers,
-		.allocated_transfers = t.allocated_transfers,
-		.max_out_in_flight = t.max_out_in_flight,
-		.hotplug = t.hotplug,
-		.hotplug_arrivals = t.hotplug_arrivals,
-		.hotplug_removals = t.hotplug_removals,
-		.rescan_opens = t.rescan_opens,
-		.gone = u->gone,
-	};
+	usbt_get_debug(u->t, &out->usb);
+	out->gone = u->gone;
 }

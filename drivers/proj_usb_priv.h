@@ -6,16 +6,13 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "usb_transport.h"
+
 struct projector;
 
 struct proj_usb_debug {
-	int live_transfers;                          /* submitted, callback not yet seen */
-	int allocated_transfers;                     /* libusb_alloc_transfer'd, not yet freed */
-	int max_out_in_flight;                       /* most bulk OUT transfers in flight at once */
-	bool hotplug;                                /* libusb delivers hot-plug events here */
-	uint64_t hotplug_arrivals, hotplug_removals; /* events seen */
-	uint64_t rescan_opens;                       /* devices found by the periodic rescan */
-	uint64_t gone;                               /* gone() reports */
+	struct usb_transport_debug usb; /* the transport's transfers and hot-plug */
+	uint64_t gone;                  /* gone() reports */
 };
 
 /* Fills out for a projector made by proj_usb_create(). */

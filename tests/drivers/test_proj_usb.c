@@ -248,7 +248,7 @@ static void test_in_flight(struct volume *large)
 	struct usb_emul_stats es;
 	proj_usb_get_debug(p, &dbg);
 	usb_emul_get_stats(r.emul, &es);
-	CHECK(dbg.max_out_in_flight >= 2);
+	CHECK(dbg.usb.max_out_in_flight >= 2);
 	CHECK(es.max_out_in_flight >= 2); /* the device saw them at once too */
 	CHECK_EQ(es.bulk_bytes, size);
 	rig_finish(&r);
@@ -323,7 +323,7 @@ static void test_error_events(void)
 	wait_for(p, &r.ev.arrived, 0, 2000);
 	struct proj_usb_debug dbg;
 	proj_usb_get_debug(p, &dbg);
-	CHECK_EQ(dbg.rescan_opens, 1); /* no uevent: the periodic rescan found it */
+	CHECK_EQ(dbg.usb.rescan_opens, 1); /* no uevent: the periodic rescan found it */
 	struct volume *vol = volume_create(&geom);
 	CHECK(vol);
 	random_volume(vol, 2, 31);
@@ -367,8 +367,8 @@ static void unplug_mid_upload(struct rig *r, const struct volume *vol)
 	CHECK_EQ(r->ev.gone_err, -ENODEV);
 	struct proj_usb_debug dbg;
 	proj_usb_get_debug(p, &dbg);
-	CHECK_EQ(dbg.live_transfers, 0);
-	CHECK_EQ(dbg.allocated_transfers, 0);
+	CHECK_EQ(dbg.usb.live_transfers, 0);
+	CHECK_EQ(dbg.usb.allocated_transfers, 0);
 	struct usb_emul_stats es;
 	usb_emul_get_stats(r->emul, &es);
 	CHECK_EQ(es.urbs_outstanding, 0); /* every URB reaped */
@@ -409,8 +409,8 @@ static void test_hotplug(struct volume *large)
 	proj_usb_get_debug(p, &dbg);
 	printf("hot-plug: libusb events %s; re-plug found in %lld ms; arrivals seen %llu, removals %llu, "
 	       "found by rescan %llu\n",
-	       dbg.hotplug ? "on" : "off", (long long)ms, (unsigned long long)dbg.hotplug_arrivals,
-	       (unsigned long long)dbg.hotplug_removals, (unsigned long long)dbg.rescan_opens);
+	       dbg.usb.hotplug ? "on" : "off", (long long)ms, (unsigned long long)dbg.usb.hotplug_arrivals,
+	       (unsigned long long)dbg.usb.hotplug_removals, (unsigned long long)dbg.usb.rescan_opens);
 	struct projector_stats st;
 	p->impl->get_stats(p, &st);
 	CHECK_EQ(st.arrivals, 2);
@@ -431,7 +431,7 @@ static void test_duplicate_arrival(void)
 	}
 	proj_usb_get_debug(r.p, &after);
 	printf("duplicate arrivals: %llu hot-plug events reached the driver\n",
-	       (unsigned long long)(after.hotplug_arrivals - before.hotplug_arrivals));
+	       (unsigned long long)(after.usb.hotplug_arrivals - before.usb.hotplug_arrivals));
 	CHECK_EQ(r.ev.arrived, 0);
 	CHECK_EQ(r.ev.gone, 0);
 	struct projector_stats st;
