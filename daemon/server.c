@@ -171,7 +171,7 @@ static const struct client_listener client_listener = {
 
 /* ---- the stage, frames and captures ---- */
 
-static void stage_changed_(void *data)
+static void scene_changed(void *data)
 {
 	struct server *srv = data;
 	if (srv->pipe)
@@ -180,7 +180,7 @@ static void stage_changed_(void *data)
 
 static const struct stage_listener stage_listener = {
 	.version = STAGE_LISTENER_VERSION,
-	.changed = stage_changed_,
+	.changed = scene_changed,
 };
 
 static void frame_done(void *data, struct waiter *w, uint64_t seq, int64_t time_ns)
@@ -215,7 +215,9 @@ static void serve_captures(struct server *srv)
 	if (!frames_capture_waiting(&srv->frames))
 		return;
 	const struct volume *v = devices_shown(srv->dev);
-	frames_serve_captures(&srv->frames, v ? v : pipeline_shown(srv->pipe));
+	if (!v && srv->pipe)
+		v = pipeline_shown(srv->pipe);
+	frames_serve_captures(&srv->frames, v);
 }
 
 /* ---- the pipeline ---- */
