@@ -163,6 +163,7 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 {
 	if (!strcmp(key, "max-clients"))
 		return set_u32(&cfg->max_clients, value, 1, 65536);
+
 	if (!strcmp(key, "max-objects"))
 		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
 	if (!strcmp(key, "max-buffer-bytes"))
@@ -190,6 +191,44 @@ static char *trim(char *s)
 	return s;
 }
 
+/* The longest line a config file may have, in bytes, not counting its "\n"
+ * or "\r\n" ending (docs/man/spindled.8). A longer one is an error, not
+ * read as two lines: its tail could pass for a key of its own. */
+#define CONFIG_LINE_MAX 511
+
+enum line_status {
+	LINE_OK,
+	LINE_EOF,
+	LINE_TOO_LONG, /* the rest of it was read and dropped */
+	LINE_NUL,
+};
+
+/* Reads one line of f into buf (CONFIG_LINE_MAX + 2 bytes: the line, a
+ * '\r' before its '\n', the terminating NUL) without its line ending. The
+ * last line may lack a '\n'. LINE_EOF at the end of the file, or on a read
+ * error (ferror() tells). */
+static enum line_status read_line(FILE *f, char *buf)
+{
+	size_t len = 0;
+	bool nul = false, too_long = false;
+	int c;
+	while ((c = getc(f)) != EOF && c != '\n') {
+		if (len < CONFIG_LINE_MAX + 1)
+			buf[len++] = (char)c;
+		else
+			too_long = true;
+		nul |= c == '\0';
+	}
+	if (c == EOF && (len == 0 || ferror(f)) && !too_long)
+		return LINE_EOF;
+	if (!too_long && len > 0 && buf[len - 1] == '\r')
+		len--;
+	buf[len] = '\0';
+	if (too_long || len > CONFIG_LINE_MAX)
+		return LINE_TOO_LONG;
+	return nul ? LINE_NUL : LINE_OK;
+}
+
 int config_load(struct config *cfg, const char *path, bool required)
 {
 	FILE *f = fopen(path, "re");
@@ -199,9 +238,20 @@ int config_load(struct config *cfg, const char *path, bool required)
 		log_error("cannot read %s: %s", path, strerror(errno));
 		return -errno;
 	}
-	char line[512];
+	char line[CONFIG_LINE_MAX + 2];
 	int r = 0;
-	for (unsigned n = 1; fgets(line, sizeof(line), f); n++) {
+	enum line_status st;
+	for (unsigned n = 1; (st = read_line(f, line)) != LINE_EOF; n++) {
+		if (st == LINE_TOO_LONG) {
+			log_error("%s:%u: longer than %d bytes", path, n, CONFIG_LINE_MAX);
+			r = -EINVAL;
+			continue;
+		}
+		if (st == LINE_NUL) {
+			log_error("%s:%u: NUL byte", path, n);
+			r = -EINVAL;
+			continue;
+		}
 		char *hash = strchr(line, '#');
 		if (hash)
 			*hash = '\0';
@@ -221,6 +271,10 @@ int config_load(struct config *cfg, const char *path, bool required)
 			log_error("%s:%u: %s '%s'", path, n, e == -ENOENT ? "unknown key" : "bad value for", key);
 			r = -EINVAL;
 		}
+	}
+	if (ferror(f)) {
+		log_error("cannot read %s: %s", path, strerror(errno));
+		r = -EIO;
 	}
 	fclose(f);
 	return r;
