@@ -364,9 +364,7 @@ static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data
 	return 0;
 }
 
-/* Root, the daemon's own user, or a member of the admin group: by the
- * peer's credentials at connect (SO_PEERCRED, SO_PEERGROUPS), never pid. */
-static bool peer_is_admin(gid_t admin_gid, int fd, const struct ucred *cred)
+bool client_peer_is_admin(gid_t admin_gid, int fd, const struct ucred *cred)
 {
 	if (cred->uid == 0 || cred->uid == geteuid())
 		return true;
@@ -401,7 +399,8 @@ struct client *client_create(const struct client_env *env, int fd)
 	c->uid = cred.uid;
 	c->gid = cred.gid;
 	c->pid = cred.pid;
-	c->admin = peer_is_admin(env->admin_gid, fd, &cred);
+	c->admin = client_peer_is_admin(env->admin_gid, fd, &cred);
+	c->connected_ns = now_ns();
 	c->env = env;
 	link_init(&c->link);
 	link_init(&c->lists);

@@ -20,6 +20,7 @@ struct geometry;
 struct sd_event;
 struct sd_event_source;
 struct stage;
+struct ucred;
 struct client;
 
 #define CLIENT_LISTENER_VERSION 1
@@ -116,8 +117,9 @@ struct client {
 	struct sd_event_source *source;
 	uid_t uid;
 	gid_t gid;
-	pid_t pid;        /* for logs only */
-	uint32_t version; /* 0 until hello */
+	pid_t pid;            /* for logs only */
+	int64_t connected_ns; /* the handshake has handshake-timeout-ms from then */
+	uint32_t version;     /* 0 until hello */
 	struct idmap objects;
 	struct link lists, layers;
 	struct link frames_pending; /* asked for, before their commit */
@@ -129,6 +131,11 @@ struct client {
 	bool answered;   /* answers queued, not yet flushed */
 	bool left_scene; /* its layers, taken off the stage when it died, showed */
 };
+
+/* Root, the daemon's own user, or a member of the admin group (admin_gid,
+ * or (gid_t)-1 for none): by the peer's credentials (SO_PEERCRED, and
+ * SO_PEERGROUPS on fd), never its pid. */
+bool client_peer_is_admin(gid_t admin_gid, int fd, const struct ucred *cred);
 
 /* Takes over a connected socket. NULL + errno. */
 struct client *client_create(const struct client_env *env, int fd);

@@ -16,6 +16,9 @@ void config_defaults(struct config *cfg)
 		.projector_buffers = 3,
 		.sim_link_bytes_per_sec = 400u * 1000 * 1000, /* ~USB 3 sustained */
 		.max_clients = 64,
+		.max_clients_per_user = 16,
+		.max_incomplete_clients = 16,
+		.handshake_timeout_ms = 5000,
 		.max_objects = 4096,
 		.max_buffer_bytes = 1ull << 30,
 		.max_vertices = 32u << 20,
@@ -163,7 +166,12 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 {
 	if (!strcmp(key, "max-clients"))
 		return set_u32(&cfg->max_clients, value, 1, 65536);
-
+	if (!strcmp(key, "max-clients-per-user"))
+		return set_u32(&cfg->max_clients_per_user, value, 1, 65536);
+	if (!strcmp(key, "max-incomplete-clients"))
+		return set_u32(&cfg->max_incomplete_clients, value, 1, 65536);
+	if (!strcmp(key, "handshake-timeout-ms"))
+		return set_u32(&cfg->handshake_timeout_ms, value, 10, 600000);
 	if (!strcmp(key, "max-objects"))
 		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
 	if (!strcmp(key, "max-buffer-bytes"))

@@ -34,14 +34,17 @@ struct config {
 	uint16_t projector_vid, projector_pid; /* 0 = any Spindle projector */
 	char projector_path[32];               /* USB bus path "1-2.4", "" = any */
 	bool blank_only;                       /* --blank: darken the projector and exit */
-	uint32_t max_clients;
-	uint32_t max_objects;          /* per client */
-	uint64_t max_buffer_bytes;     /* per client */
-	uint64_t max_vertices;         /* per client */
-	uint64_t max_primitives;       /* per client, per volume */
-	uint64_t max_scene_primitives; /* all clients, per volume: priority decides */
-	enum policy exclusive;         /* who may have exclusive layers */
-	char admin_group[32];          /* may capture, and be exclusive under "admin" */
+	uint32_t max_clients;                  /* one kept for an admin (admission.h) */
+	uint32_t max_clients_per_user;         /* connections of one non-admin uid */
+	uint32_t max_incomplete_clients;       /* non-admin connections before hello */
+	uint32_t handshake_timeout_ms;         /* no hello by then: closed */
+	uint32_t max_objects;                  /* per client */
+	uint64_t max_buffer_bytes;             /* per client */
+	uint64_t max_vertices;                 /* per client */
+	uint64_t max_primitives;               /* per client, per volume */
+	uint64_t max_scene_primitives;         /* all clients, per volume: priority decides */
+	enum policy exclusive;                 /* who may have exclusive layers */
+	char admin_group[32];                  /* may capture, and be exclusive under "admin" */
 	bool verbose;
 };
 

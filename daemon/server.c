@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/socket.h>
 #include <sys/stat.h>
 #include <sys/un.h>
@@ -14,6 +15,7 @@
 #include <systemd/sd-event.h>
 #include <unistd.h>
 
+#include "admission.h"
 #include "client.h"
 #include "devices.h"
 #include "log.h"
@@ -93,18 +95,94 @@ static int open_socket(struct server *srv)
 	return r;
 }
 
-/* Tells a client over the limit why, as far as its socket takes it
+/* Tells a client over a limit why, as far as its socket takes it
  * without waiting, and closes it. */
-static void refuse_client(int fd, uint32_t clients)
+static void refuse_client(int fd, const char *why, uint32_t clients)
 {
 	struct proto_conn *conn = proto_conn_create(fd, 4096);
 	if (!conn)
 		return; /* fd closed */
-	char text[80];
-	snprintf(text, sizeof(text), "too many clients: %u connected", clients);
+	char text[120];
+	snprintf(text, sizeof(text), "%s: %u connected", why, clients);
 	proto_ev_display_error(conn, 1, 1, PROTO_ERR_TOO_MANY_CLIENTS, text);
 	proto_conn_flush(conn);
 	proto_conn_destroy(conn);
+}
+
+/* At most one line a second about refused clients. */
+static void log_refusal(struct server *srv, enum admission_verdict v, uid_t uid)
+{
+	int64_t now = now_ns();
+	if (srv->refusal_logged_ns && now - srv->refusal_logged_ns < 1000000000) {
+		srv->refusals_unlogged++;
+		return;
+	}
+	log_warn("refusing a client (uid %u): %s; %u connected; %llu more refused since the last message",
+		 (unsigned)uid, admission_reason(v), srv->client_count, (unsigned long long)srv->refusals_unlogged);
+	srv->refusal_logged_ns = now;
+	srv->refusals_unlogged = 0;
+}
+
+/* What is connected, as a new peer of uid sees it. */
+static void admission_load(struct server *srv, uid_t uid, struct admission_load *out)
+{
+	*out = (struct admission_load){ .clients = srv->client_count };
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		if (c->dead)
+			continue;
+		out->incomplete += !c->version && !c->admin;
+		out->same_user += c->uid == uid && !c->admin;
+	}
+}
+
+/* 0 to serve cfd; else it was refused, and is closed. */
+static int admit(struct server *srv, int cfd)
+{
+	struct ucred cred;
+	socklen_t len = sizeof(cred);
+	if (getsockopt(cfd, SOL_SOCKET, SO_PEERCRED, &cred, &len) < 0) {
+		close(cfd);
+		return -1;
+	}
+	struct admission_load load;
+	admission_load(srv, cred.uid, &load);
+	bool admin = client_peer_is_admin(srv->client_env.admin_gid, cfd, &cred);
+	enum admission_verdict v = admission_check(&srv->cfg, admin, &load);
+	if (v == ADMISSION_OK)
+		return 0;
+	srv->admission.refused[v]++;
+	log_refusal(srv, v, cred.uid);
+	refuse_client(cfd, admission_reason(v), srv->client_count);
+	return -1;
+}
+
+/* Out of fds (or memory) to accept with: the socket rests a while, the
+ * rest of the loop (reaping the clients that left among it) goes on, and
+ * accepting starts again by itself: after 50 ms, doubling while it
+ * recurs, at most 1.6 s. */
+static void pause_accept(struct server *srv, int err)
+{
+	srv->admission.accept_pauses++;
+	srv->accept_backoff_ms = srv->accept_backoff_ms ? srv->accept_backoff_ms * 2 : 50;
+	if (srv->accept_backoff_ms > 1600)
+		srv->accept_backoff_ms = 1600;
+	int64_t now = now_ns();
+	if (!srv->pause_logged_ns || now - srv->pause_logged_ns >= 10000000000LL) {
+		log_warn("accept: %s: not accepting clients for %u ms (%llu pauses so far; said at most every 10 s)",
+			 strerror(err), srv->accept_backoff_ms, (unsigned long long)srv->admission.accept_pauses);
+		srv->pause_logged_ns = now;
+	}
+	sd_event_source_set_enabled(srv->listen_source, SD_EVENT_OFF);
+	sd_event_source_set_time_relative(srv->accept_timer, (uint64_t)srv->accept_backoff_ms * 1000);
+	sd_event_source_set_enabled(srv->accept_timer, SD_EVENT_ONESHOT);
+}
+
+static int on_accept_timer(sd_event_source *s, uint64_t usec, void *data)
+{
+	struct server *srv = data;
+	sd_event_source_set_enabled(srv->listen_source, SD_EVENT_ON);
+	return 0;
 }
 
 static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
@@ -113,20 +191,34 @@ static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
 	for (;;) {
 		int cfd = accept4(fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
 		if (cfd < 0) {
-			if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
+			if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM)
+				pause_accept(srv, errno);
+			else if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
 				log_warn("accept: %s", strerror(errno));
 			return 0;
 		}
-		if (srv->client_count >= srv->cfg.max_clients) {
-			log_warn("refusing a client: %u clients already", srv->client_count);
-			refuse_client(cfd, srv->client_count);
+		srv->accept_backoff_ms = 0;
+		if (admit(srv, cfd) < 0)
 			continue;
-		}
 		int r = server_add_client(srv, cfd);
 		if (r < 0)
 			log_warn("cannot set up a client: %s", strerror(-r));
 		else
 			log_debug("client %d connected", cfd);
+	}
+}
+
+/* Connections that have not said hello within handshake-timeout-ms are
+ * closed (checked with the state events, 20 times a second). */
+static void expire_handshakes(struct server *srv)
+{
+	int64_t limit = now_ns() - (int64_t)srv->cfg.handshake_timeout_ms * 1000000;
+	struct client *c;
+	link_for_each(c, &srv->clients, link) {
+		if (c->version || c->dead || c->connected_ns > limit)
+			continue;
+		srv->admission.handshake_timeouts++;
+		client_fail(c, 1, PROTO_ERR_VERSION, "no hello within %u ms", srv->cfg.handshake_timeout_ms);
 	}
 }
 
@@ -367,6 +459,7 @@ static void push_state(struct server *srv)
 
 static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
 {
+	expire_handshakes(data);
 	push_state(data);
 	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
 	return 0;
@@ -402,24 +495,47 @@ static gid_t admin_gid(const char *name)
 
 static int on_signal(sd_event_source *s, const struct signalfd_siginfo *si, void *data)
 {
-	log_info("signal %u: shutting down", si->ssi_signo);
+	log_info("signal %u (%s): shutting down", si->ssi_signo, strsignal((int)si->ssi_signo));
 	return sd_event_exit(sd_event_source_get_event(s), 0);
+}
+
+/* The configuration is read at start only: a reload would have to move
+ * the socket, the devices and the renderer under running clients. */
+static int on_hangup(sd_event_source *s, const struct signalfd_siginfo *si, void *data)
+{
+	log_info("SIGHUP: ignored (spindled does not reload its configuration; restart it)");
+	return 0;
+}
+
+/* Signals whose default would kill the daemon without its shutdown path
+ * (projector dark, socket removed, STOPPING=1) take that path instead. */
+static const int shutdown_signals[] = { SIGINT, SIGTERM, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM };
+
+static int setup_signals(struct server *srv)
+{
+	sigset_t mask;
+	sigemptyset(&mask);
+	for (size_t i = 0; i < sizeof(shutdown_signals) / sizeof(shutdown_signals[0]); i++)
+		sigaddset(&mask, shutdown_signals[i]);
+	sigaddset(&mask, SIGHUP);
+	sigprocmask(SIG_BLOCK, &mask, NULL);
+	signal(SIGPIPE, SIG_IGN);
+	int r;
+	for (size_t i = 0; i < sizeof(shutdown_signals) / sizeof(shutdown_signals[0]); i++)
+		if ((r = sd_event_add_signal(srv->event, NULL, shutdown_signals[i], on_signal, srv)) < 0)
+			return r;
+	return sd_event_add_signal(srv->event, NULL, SIGHUP, on_hangup, srv);
 }
 
 static int setup_loop(struct server *srv)
 {
-	sigset_t mask;
-	sigemptyset(&mask);
-	sigaddset(&mask, SIGINT);
-	sigaddset(&mask, SIGTERM);
-	sigprocmask(SIG_BLOCK, &mask, NULL);
-	signal(SIGPIPE, SIG_IGN);
 	int r = sd_event_new(&srv->event);
 	if (r < 0)
 		return r;
-	if ((r = sd_event_add_signal(srv->event, NULL, SIGINT, on_signal, srv)) < 0 ||
-	    (r = sd_event_add_signal(srv->event, NULL, SIGTERM, on_signal, srv)) < 0 ||
-	    (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
+	if ((r = setup_signals(srv)) < 0 || (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
+		return r;
+	r = sd_event_add_time(srv->event, &srv->accept_timer, CLOCK_MONOTONIC, 0, 1000, on_accept_timer, srv);
+	if (r < 0 || (r = sd_event_source_set_enabled(srv->accept_timer, SD_EVENT_OFF)) < 0)
 		return r;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
 	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_NORMAL + 10);
@@ -460,6 +576,7 @@ void server_finish(struct server *srv)
 	sd_event_source_disable_unref(srv->listen_source);
 	sd_event_source_disable_unref(srv->reap_source);
 	sd_event_source_disable_unref(srv->state_timer);
+	sd_event_source_disable_unref(srv->accept_timer);
 	if (srv->listen_fd >= 0)
 		close(srv->listen_fd);
 	if (srv->socket_path) {
@@ -525,9 +642,39 @@ int server_add_client(struct server *srv, int fd)
 	return 0;
 }
 
+/* As many fds as the hard limit allows (systemd's default soft limit is
+ * 1024): clients hold fds while their messages wait, and running out only
+ * pauses accepting (pause_accept()). The daemon polls with epoll only. */
+static void raise_fd_limit(void)
+{
+	struct rlimit rl;
+	if (getrlimit(RLIMIT_NOFILE, &rl) < 0 || rl.rlim_cur >= rl.rlim_max)
+		return;
+	rlim_t was = rl.rlim_cur;
+	rl.rlim_cur = rl.rlim_max;
+	if (setrlimit(RLIMIT_NOFILE, &rl) < 0)
+		log_warn("cannot raise the fd limit from %llu to %llu: %s", (unsigned long long)was,
+			 (unsigned long long)rl.rlim_max, strerror(errno));
+	else
+		log_debug("fd limit raised from %llu to %llu", (unsigned long long)was,
+			  (unsigned long long)rl.rlim_max);
+}
+
+/* What the limits did, for the log at exit. */
+static void log_admission(const struct server *srv)
+{
+	const struct admission_counters *a = &srv->admission;
+	log_info("clients refused: %llu over max-clients, %llu over max-clients-per-user, %llu over "
+		 "max-incomplete-clients; %llu closed for no hello in time; accepting paused %llu times (out of fds)",
+		 (unsigned long long)a->refused[ADMISSION_FULL], (unsigned long long)a->refused[ADMISSION_USER],
+		 (unsigned long long)a->refused[ADMISSION_INCOMPLETE], (unsigned long long)a->handshake_timeouts,
+		 (unsigned long long)a->accept_pauses);
+}
+
 int server_run(const struct config *cfg)
 {
 	struct server srv;
+	raise_fd_limit();
 	int r = server_init(&srv, cfg, true);
 	if (r < 0)
 		goto out;
@@ -536,6 +683,7 @@ int server_run(const struct config *cfg)
 	sd_notify(0, "READY=1\nSTATUS=Serving clients");
 	r = sd_event_loop(srv.event);
 	sd_notify(0, "STOPPING=1");
+	log_admission(&srv);
 out:
 	server_finish(&srv);
 	return r < 0 ? 1 : 0;

@@ -1,0 +1,243 @@
+#!/usr/bin/env python3
+"""The daemon as a service no local user can lock out: the client limits
+(one slot kept for an admin, per user, connections still in their
+handshake, the handshake timeout), running out of fds (accepting pauses,
+serving goes on, it recovers by itself) and the signals that must take the
+shutdown path. The unprivileged attacker is uid 65534, connected by a child
+that dropped to it and handed its sockets back (the daemon knows a peer by
+its credentials at connect); those cases need root and are skipped
+without it."""
+import os
+import resource
+import signal
+import socket
+import time
+
+from harness import Abuse, Daemon, ERR, Witness, case, check, run, with_daemon
+from spindlewire import Closed, Conn
+
+NOBODY = 65534
+
+
+def connect_as(uid, path, n):
+    """n sockets connected to path by uid (a forked child that dropped to
+    it, connected, and passed them back over a socketpair)."""
+    a, b = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
+    pid = os.fork()
+    if pid == 0:
+        a.close()
+        code = 0
+        try:
+            os.setgroups([])
+            os.setresgid(uid, uid, uid)
+            os.setresuid(uid, uid, uid)
+            socks = []
+            for _ in range(n):
+                s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                s.connect(path)
+                socks.append(s)
+            socket.send_fds(b, [b'x'], [s.fileno() for s in socks])
+        except BaseException:
+            code = 1
+        os._exit(code)
+    b.close()
+    _, fds, _, _ = socket.recv_fds(a, 1, n)
+    a.close()
+    _, status = os.waitpid(pid, 0)
+    check(status == 0 and len(fds) == n, f'child connecting as uid {uid} failed')
+    return [Conn(path, sock=socket.socket(fileno=fd)) for fd in fds]
+
+
+def refused(c, timeout=3.0):
+    """Whether the daemon refused c (too_many_clients, then EOF) rather than
+    serving it (nothing within timeout)."""
+    try:
+        c.expect_fatal(ERR['too_many_clients'], timeout=timeout)
+        return True
+    except AssertionError as e:
+        if 'expected display.error' in str(e) and not c.eof:
+            return False
+        raise
+
+
+def privileged():
+    if os.geteuid() != 0:
+        print('  skipped: needs root to connect as another user')
+        return False
+    return True
+
+
+@with_daemon('max-clients=8', 'handshake-timeout-ms=60000')
+def idle_lockout(d):
+    """Idle connections of a user fill all but the admin's slot;
+    `spindlectl status` (an admin) still gets in."""
+    if not privileged():
+        return
+    wit = Witness(d)                      # client 1 (root)
+    idle = connect_as(NOBODY, d.sock, 10)  # room for 6: one slot is kept
+    verdicts = [refused(c, 0.5) for c in idle]
+    check(verdicts.count(False) == 6 and verdicts.count(True) == 4, f'admitted/refused: {verdicts}')
+    admin = d.conn()                      # client 8: the kept slot
+    st = admin.status()
+    check(st['clients'] >= 2, f'status answered: {st}')
+    over = Conn(d.sock)                   # a ninth: nobody's slot left
+    check(refused(over), 'the ninth connection is refused')
+    over.close()
+    for c in idle:
+        c.close()
+    admin.close()
+    wit.check()
+    check('over max-clients' in d.logtext() or 'too many clients' in d.logtext(), 'refusals are logged')
+
+
+@with_daemon('max-clients-per-user=3', 'max-incomplete-clients=100', 'handshake-timeout-ms=60000')
+def per_user_cap(d):
+    if not privileged():
+        return
+    wit = Witness(d)
+    mine = connect_as(NOBODY, d.sock, 5)
+    verdicts = [refused(c, 0.5) for c in mine]
+    check(verdicts == [False, False, False, True, True], f'per user: {verdicts}')
+    for c in mine[:3]:
+        c.hello()
+        c.sync()
+    other = connect_as(NOBODY - 1, d.sock, 1)[0]   # another user is not affected
+    other.hello()
+    other.sync()
+    for c in mine + [other]:
+        c.close()
+    wit.check()
+
+
+@with_daemon('max-incomplete-clients=3', 'max-clients-per-user=100', 'handshake-timeout-ms=60000')
+def incomplete_cap(d):
+    if not privileged():
+        return
+    wit = Witness(d)
+    first = connect_as(NOBODY, d.sock, 4)
+    verdicts = [refused(c, 0.5) for c in first]
+    check(verdicts == [False, False, False, True], f'in handshake: {verdicts}')
+    first[0].hello()                    # one completes: room for another
+    late = connect_as(NOBODY, d.sock, 1)[0]
+    check(not refused(late, 0.5), 'admitted once one completed its handshake')
+    late.hello()
+    late.sync()
+    for c in first + [late]:
+        c.close()
+    wit.check()
+
+
+@with_daemon('handshake-timeout-ms=300')
+def handshake_timeout(d):
+    """No hello in time: the version error, then closed; whoever it is."""
+    wit = Witness(d)
+    with Abuse(d, wit) as a:
+        quiet = a.conn(hello=False)
+        t0 = time.monotonic()
+        ev = quiet.expect_fatal(ERR['version'], obj=1, timeout=3.0)
+        took = time.monotonic() - t0
+        check(0.25 <= took <= 2.0, f'closed after {took:.2f} s')
+        check('hello' in ev['message'], f'says why: {ev}')
+        prompt = a.conn()                 # a client that said hello stays
+        time.sleep(0.6)
+        prompt.sync()
+    if privileged():
+        other = connect_as(NOBODY, d.sock, 1)[0]
+        other.expect_fatal(ERR['version'], obj=1, timeout=3.0)
+        other.close()
+
+
+def daemon_cpu_s(d):
+    with open(f'/proc/{d.pid}/stat') as f:
+        fields = f.read().rsplit(')', 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
+
+
+def small_fd_limit():
+    resource.setrlimit(resource.RLIMIT_NOFILE, (96, 96))
+
+
+@case
+def fd_exhaustion():
+    """Out of fds: the daemon stops accepting for a while instead of
+    spinning on accept(), reaps and serves meanwhile, and accepts again by
+    itself once fds are free (EMFILE forced with RLIMIT_NOFILE = 96)."""
+    d = Daemon('max-clients=1000', 'max-clients-per-user=1000', 'max-incomplete-clients=1000',
+               'handshake-timeout-ms=60000', preexec=small_fd_limit)
+    try:
+        wit = Witness(d)
+        socks = []
+        last = time.monotonic()
+        while len(socks) < 300 and time.monotonic() - last < 1.0:   # until the backlog stays full
+            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+            s.setblocking(False)
+            try:
+                s.connect(d.sock)
+            except BlockingIOError:
+                s.close()
+                time.sleep(0.01)
+                continue
+            socks.append(s)
+            last = time.monotonic()
+        check(len(socks) > 96, f'{len(socks)} connections: more than the daemon has fds for')
+        time.sleep(0.5)
+        cpu0 = daemon_cpu_s(d)
+        time.sleep(2.0)
+        cpu = (daemon_cpu_s(d) - cpu0) / 2.0
+        log = d.logtext()
+        check('not accepting clients' in log, 'the pause is logged')
+        check(log.count('accept:') <= 10, f'logged {log.count("accept:")} times: no flood')
+        check(cpu < 0.5, f'daemon at {cpu:.0%} of a core while out of fds: no busy loop')
+        wit.c.sync()                        # served meanwhile
+        for s in socks:
+            s.close()
+        end = time.monotonic() + 5
+        while True:                         # it recovers by itself
+            try:
+                c = Conn(d.sock)
+                c.hello(timeout=1.0)
+                c.sync()
+                c.close()
+                break
+            except (OSError, Closed, TimeoutError, AssertionError):
+                check(time.monotonic() < end, 'accepting again within 5 s of the fds coming free')
+                time.sleep(0.1)
+        wit.check()
+        print(f'  daemon CPU {cpu:.1%} of a core while out of fds')
+        d.proc.send_signal(signal.SIGTERM)
+        d.proc.wait(timeout=20)
+        check('accepting paused' in d.logtext(), 'the pauses are counted in the log at exit')
+    finally:
+        d.stop()
+
+
+@with_daemon()
+def sighup_ignored(d):
+    d.proc.send_signal(signal.SIGHUP)
+    time.sleep(0.3)
+    check(d.alive(), 'alive after SIGHUP')
+    c = d.conn()
+    c.sync()
+    c.close()
+    check('SIGHUP: ignored' in d.logtext(), 'SIGHUP is logged')
+
+
+@case
+def signals():
+    """Each signal whose default would kill the daemon takes the shutdown
+    path: exit 0, the socket removed, the reason logged."""
+    for sig in (signal.SIGQUIT, signal.SIGUSR1, signal.SIGUSR2, signal.SIGALRM, signal.SIGVTALRM):
+        d = Daemon()
+        c = d.conn()
+        c.sync()
+        d.proc.send_signal(sig)
+        rc = d.proc.wait(timeout=20)
+        check(rc == 0, f'{sig.name}: exit status {rc}')
+        check(not os.path.exists(d.sock), f'{sig.name}: the socket is removed')
+        check('shutting down' in d.logtext(), f'{sig.name}: logged')
+        c.close()
+        d.stop()   # checks the log for sanitizer reports, cleans up
+
+
+if __name__ == '__main__':
+    run()
