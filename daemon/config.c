@@ -27,6 +27,7 @@ void config_defaults(struct config *cfg)
 		.exclusive = POLICY_ADMIN,
 	};
 	strcpy(cfg->admin_group, "spindle-admin");
+	strcpy(cfg->user, "spindle");
 	const char *env = getenv("SPINDLE_SOCKET");
 	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s", env && *env ? env : "/run/spindle/spindle.sock");
 	strcpy(cfg->device, "sim");
@@ -166,6 +167,8 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 {
 	if (!strcmp(key, "max-clients"))
 		return set_u32(&cfg->max_clients, value, 1, 65536);
+	if (!strcmp(key, "user"))
+		return set_string(cfg->user, sizeof(cfg->user), value);
 	if (!strcmp(key, "max-clients-per-user"))
 		return set_u32(&cfg->max_clients_per_user, value, 1, 65536);
 	if (!strcmp(key, "max-incomplete-clients"))

@@ -45,6 +45,7 @@ struct config {
 	uint64_t max_scene_primitives;         /* all clients, per volume: priority decides */
 	enum policy exclusive;                 /* who may have exclusive layers */
 	char admin_group[32];                  /* may capture, and be exclusive under "admin" */
+	char user[32]; /* started as root: run as this user after opening the devices ("root": stay root) */
 	bool verbose;
 };
 
