@@ -250,6 +250,11 @@ static int display_commit(void *target)
 static int display_get_status(void *target)
 {
 	struct client *c = target;
+	if (c->version >= 3) {
+		struct proto_display_limits_args lim;
+		c->env->listener->limits(c->env->data, &lim);
+		client_sent(c, proto_ev_display_limits(c->conn, 1, &lim));
+	}
 	struct proto_display_status_args st;
 	c->env->listener->status(c->env->data, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, &st));

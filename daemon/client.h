@@ -33,6 +33,22 @@ struct client_listener {
 	void (*dead)(void *data, struct client *c);
 	/* The daemon's status now, for display.get_status and state events. */
 	void (*status)(void *data, struct proto_display_status_args *out);
+	/* The daemon's limits and what they did, for display.get_status
+	 * (version 3). */
+	void (*limits)(void *data, struct proto_display_limits_args *out);
+};
+
+/* The daemon-wide budget counts this much for a vertex a list holds
+ * (12 bytes of position and the copy's overhead). */
+#define CLIENT_VERTEX_BYTES 16
+
+/* What every client holds together, against the daemon-wide budgets
+ * (memory-budget, max-mappings), and what those refused. */
+struct client_totals {
+	uint64_t buffer_bytes; /* every client's buffers, mapped or inline */
+	uint64_t vertices;     /* every client's vertices held (as c->vertices counts them) */
+	uint32_t mappings;     /* memfd buffers mapped */
+	uint64_t refused_memory, refused_mappings;
 };
 
 /* What every client shares, set up by the daemon and outliving them. */
@@ -44,6 +60,7 @@ struct client_env {
 	gid_t admin_gid;       /* admin-group's gid, or (gid_t)-1 */
 	struct stage *stage;   /* where committed layers go */
 	struct frames *frames; /* where committed frames and captures wait */
+	struct client_totals *totals;
 	const struct client_listener *listener;
 	void *data;
 };

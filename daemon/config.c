@@ -16,6 +16,8 @@ void config_defaults(struct config *cfg)
 		.projector_buffers = 3,
 		.sim_link_bytes_per_sec = 400u * 1000 * 1000, /* ~USB 3 sustained */
 		.max_clients = 64,
+		.memory_budget = 2ull << 30,
+		.max_mappings = 16384,
 		.max_clients_per_user = 16,
 		.max_incomplete_clients = 16,
 		.handshake_timeout_ms = 5000,
@@ -167,6 +169,10 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 {
 	if (!strcmp(key, "max-clients"))
 		return set_u32(&cfg->max_clients, value, 1, 65536);
+	if (!strcmp(key, "memory-budget"))
+		return set_u64(&cfg->memory_budget, value, 1 << 20, UINT64_MAX / 2);
+	if (!strcmp(key, "max-mappings"))
+		return set_u32(&cfg->max_mappings, value, 1, 1u << 20);
 	if (!strcmp(key, "user"))
 		return set_string(cfg->user, sizeof(cfg->user), value);
 	if (!strcmp(key, "max-clients-per-user"))

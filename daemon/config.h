@@ -34,6 +34,8 @@ struct config {
 	uint16_t projector_vid, projector_pid; /* 0 = any Spindle projector */
 	char projector_path[32];               /* USB bus path "1-2.4", "" = any */
 	bool blank_only;                       /* --blank: darken the projector and exit */
+	uint64_t memory_budget;                /* all clients: buffer bytes + CLIENT_VERTEX_BYTES per vertex held */
+	uint32_t max_mappings;                 /* all clients: memfd buffers mapped */
 	uint32_t max_clients;                  /* one kept for an admin (admission.h) */
 	uint32_t max_clients_per_user;         /* connections of one non-admin uid */
 	uint32_t max_incomplete_clients;       /* non-admin connections before hello */

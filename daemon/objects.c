@@ -31,6 +31,46 @@ int object_register(struct client *c, struct object *obj, uint32_t id, enum prot
 	return 0;
 }
 
+/* ---- the client's and the daemon-wide accounting ---- */
+
+/* Bytes counted against memory-budget. */
+static uint64_t budget_used(const struct client_totals *t)
+{
+	return t->buffer_bytes + t->vertices * CLIENT_VERTEX_BYTES;
+}
+
+/* Room for bytes more under memory-budget; else c is failed (quota). */
+static int budget_room(struct client *c, uint64_t bytes)
+{
+	struct client_totals *t = c->env->totals;
+	uint64_t budget = c->env->cfg->memory_budget, used = budget_used(t);
+	if (used <= budget && bytes <= budget - used)
+		return 0;
+	t->refused_memory++;
+	return client_fail(c, 1, PROTO_ERR_QUOTA, "the daemon's memory budget is used up (%llu of %llu bytes)",
+			   (unsigned long long)used, (unsigned long long)budget);
+}
+
+/* Vertices more the budget has room for. */
+static uint64_t budget_vertices(const struct client *c)
+{
+	uint64_t budget = c->env->cfg->memory_budget, used = budget_used(c->env->totals);
+	return used < budget ? (budget - used) / CLIENT_VERTEX_BYTES : 0;
+}
+
+static void account_buffer(struct client *c, int64_t bytes, int mappings)
+{
+	c->buffer_bytes += (uint64_t)bytes;
+	c->env->totals->buffer_bytes += (uint64_t)bytes;
+	c->env->totals->mappings += (uint32_t)mappings;
+}
+
+static void account_vertices(struct client *c, int64_t n)
+{
+	c->vertices += (uint64_t)n;
+	c->env->totals->vertices += (uint64_t)n;
+}
+
 /* ---- buffers ---- */
 
 static void buffer_destroy(struct buffer *b)
@@ -39,7 +79,7 @@ static void buffer_destroy(struct buffer *b)
 		free((void *)b->map);
 	else if (b->map)
 		munmap((void *)b->map, b->size ? b->size : 1);
-	b->base.client->buffer_bytes -= b->size;
+	account_buffer(b->base.client, -(int64_t)b->size, b->map && !b->inline_data ? -1 : 0);
 	free(b);
 }
 
@@ -68,6 +108,14 @@ int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd)
 				(unsigned long long)c->env->cfg->max_buffer_bytes);
 		goto out_close;
 	}
+	if ((r = budget_room(c, size)) < 0)
+		goto out_close;
+	if (size && c->env->totals->mappings >= c->env->cfg->max_mappings) {
+		c->env->totals->refused_mappings++;
+		r = client_fail(c, 1, PROTO_ERR_QUOTA, "the daemon maps as many buffers as it may (%u)",
+				c->env->cfg->max_mappings);
+		goto out_close;
+	}
 	struct buffer *b = calloc(1, sizeof(*b));
 	if (!b) {
 		r = client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
@@ -83,8 +131,8 @@ int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd)
 		b->map = map;
 	}
 	b->size = size;
-	c->buffer_bytes += size;
 	b->base.client = c;
+	account_buffer(c, (int64_t)size, size ? 1 : 0);
 	r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
 	if (r < 0)
 		buffer_destroy(b);
@@ -99,6 +147,8 @@ int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data
 	if (size > c->env->cfg->max_buffer_bytes - c->buffer_bytes)
 		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
 				   (unsigned long long)c->env->cfg->max_buffer_bytes);
+	if (budget_room(c, size) < 0)
+		return -EPROTO;
 	struct buffer *b = calloc(1, sizeof(*b));
 	void *copy = malloc(size ? size : 1);
 	if (!b || !copy) {
@@ -111,8 +161,8 @@ int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data
 	b->map = copy;
 	b->inline_data = true;
 	b->size = size;
-	c->buffer_bytes += size;
 	b->base.client = c;
+	account_buffer(c, size, 0);
 	int r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
 	if (r < 0)
 		buffer_destroy(b);
@@ -185,7 +235,7 @@ void list_unref(struct list *l)
 		return;
 	struct client *c = l->base.client;
 	if (c)
-		c->vertices -= l->pending.vertices;
+		account_vertices(c, -(int64_t)l->pending.vertices);
 	draws_finish(&l->pending);
 	draws_finish(&l->committed);
 	link_remove(&l->link);
@@ -224,7 +274,7 @@ int objects_create_list(struct client *c, uint32_t id)
 static int list_clear(void *target)
 {
 	struct list *l = target;
-	l->base.client->vertices -= l->pending.vertices;
+	account_vertices(l->base.client, -(int64_t)l->pending.vertices);
 	draws_clear(&l->pending);
 	list_reset_state(l);
 	l->changed = true;
@@ -377,7 +427,8 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 	struct client *c = l->base.client;
 	struct vdata *v;
 	uint32_t bad = 0;
-	switch (draw_build(src, c->env->cfg->max_vertices - c->vertices, &v, &bad)) {
+	uint64_t room = c->env->cfg->max_vertices - c->vertices, budget = budget_vertices(c);
+	switch (draw_build(src, room < budget ? room : budget, &v, &bad)) {
 	case DRAW_OK:
 		break;
 	case DRAW_BAD_COUNT:
@@ -387,6 +438,13 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 		return list_fail(l, PROTO_ERR_VALUE, "draw_indexed: index %u is not below vertex_count %u", bad,
 				 src->vertex_count);
 	case DRAW_TOO_MANY:
+		if (budget < room) {
+			c->env->totals->refused_memory++;
+			return list_fail(l, PROTO_ERR_QUOTA,
+					 "the daemon's memory budget is used up (room for %llu "
+					 "vertices more)",
+					 (unsigned long long)budget);
+		}
 		return list_fail(l, PROTO_ERR_QUOTA, "more than %llu vertices",
 				 (unsigned long long)c->env->cfg->max_vertices);
 	case DRAW_NO_MEMORY:
@@ -401,7 +459,7 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 		vdata_unref(v);
 		return list_fail(l, PROTO_ERR_NO_MEMORY, "out of memory");
 	}
-	c->vertices += v->count;
+	account_vertices(c, v->count);
 	l->changed = true;
 	return 0;
 }

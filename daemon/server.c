@@ -1,8 +1,10 @@
 #include "server.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <grp.h>
+#include <malloc.h>
 #include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -224,21 +226,29 @@ static void expire_handshakes(struct server *srv)
 
 /* ---- clients ---- */
 
+#define TRIM_AFTER_BYTES (8u << 20)
+
 static int reap(sd_event_source *s, void *data)
 {
 	struct server *srv = data;
 	struct client *c, *tmp;
 	bool changed = false;
+	uint64_t freed = 0;
 	link_for_each_safe(c, tmp, &srv->clients, link) {
 		if (!c->dead)
 			continue;
 		changed |= c->left_scene;
+		freed += c->buffer_bytes + c->vertices * CLIENT_VERTEX_BYTES;
 		link_remove(&c->link);
 		srv->client_count--;
 		log_debug("client %d disconnected", proto_conn_get_fd(c->conn));
 		client_destroy(c);
 	}
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
+	/* Give what large clients held back to the system, not just to
+	 * malloc's free lists. */
+	if (freed >= TRIM_AFTER_BYTES)
+		malloc_trim(0);
 	if (changed)
 		stage_changed(&srv->stage);
 	return 0;
@@ -255,10 +265,16 @@ static void client_status(void *data, struct proto_display_status_args *out)
 	server_get_status(data, out);
 }
 
+static void client_limits(void *data, struct proto_display_limits_args *out)
+{
+	server_get_limits(data, out);
+}
+
 static const struct client_listener client_listener = {
 	.version = CLIENT_LISTENER_VERSION,
 	.dead = client_dead,
 	.status = client_status,
+	.limits = client_limits,
 };
 
 /* ---- the stage, frames and captures ---- */
@@ -442,6 +458,47 @@ void server_get_status(struct server *srv, struct proto_display_status_args *out
 	};
 }
 
+/* The fds open now (for the limits event: asked for, never polled). */
+static uint32_t open_fds(void)
+{
+	DIR *d = opendir("/proc/self/fd");
+	if (!d)
+		return 0;
+	uint32_t n = 0;
+	while (readdir(d))
+		n++;
+	closedir(d);
+	return n > 3 ? n - 3 : 0; /* ".", "..", and the directory's own fd */
+}
+
+void server_get_limits(struct server *srv, struct proto_display_limits_args *out)
+{
+	const struct admission_counters *a = &srv->admission;
+	const struct client_totals *t = &srv->totals;
+	struct rlimit rl = { 0 };
+	getrlimit(RLIMIT_NOFILE, &rl);
+	uint32_t incomplete = 0;
+	struct client *c;
+	link_for_each(c, &srv->clients, link)
+		incomplete += !c->version && !c->dead;
+	*out = (struct proto_display_limits_args){
+		.refused_clients = a->refused[ADMISSION_FULL],
+		.refused_per_user = a->refused[ADMISSION_USER],
+		.refused_incomplete = a->refused[ADMISSION_INCOMPLETE],
+		.handshake_timeouts = a->handshake_timeouts,
+		.accept_pauses = a->accept_pauses,
+		.clients_in_handshake = incomplete,
+		.fds = open_fds(),
+		.fd_limit = rl.rlim_cur > UINT32_MAX ? UINT32_MAX : (uint32_t)rl.rlim_cur,
+		.memory_used = t->buffer_bytes + t->vertices * CLIENT_VERTEX_BYTES,
+		.memory_budget = srv->cfg.memory_budget,
+		.refused_memory = t->refused_memory,
+		.mappings = t->mappings,
+		.mapping_budget = srv->cfg.max_mappings,
+		.refused_mappings = t->refused_mappings,
+	};
+}
+
 /* Tells version 2 clients of a change of state (a flag, or rpm by 1% of
  * nominal): when the devices report one, and 20 times a second for rpm. */
 #define STATE_INTERVAL_US 50000
@@ -620,6 +677,7 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		.admin_gid = admin_gid(cfg->admin_group),
 		.stage = &srv->stage,
 		.frames = &srv->frames,
+		.totals = &srv->totals,
 		.listener = &client_listener,
 		.data = srv,
 	};

@@ -46,6 +46,7 @@ struct server {
 	struct stage stage;   /* the committed scene */
 	struct frames frames; /* frame callbacks and captures waiting */
 	struct client_env client_env;
+	struct client_totals totals; /* against memory-budget and max-mappings */
 };
 
 /* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */
@@ -61,5 +62,7 @@ int server_add_client(struct server *srv, int fd);
 
 /* The status as display.status carries it: every field filled here. */
 void server_get_status(struct server *srv, struct proto_display_status_args *out);
+/* The limits and what they did, as display.limits carries them. */
+void server_get_limits(struct server *srv, struct proto_display_limits_args *out);
 
 #endif

@@ -155,8 +155,34 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 		.index_error_us = a->index_error_us,
 		.angle_error_p99 = a->angle_error_p99,
 		.angle_error_max = a->angle_error_max,
+		.limits_known = sp->limits_known,
+		.limits = sp->limits,
 	};
 	sp->status_serial++;
+	return 0;
+}
+
+/* Comes just before status, which takes it along. */
+static int on_limits(void *target, const struct proto_display_limits_args *a)
+{
+	struct spindle *sp = target;
+	sp->limits = (struct spindle_limits){
+		.refused_clients = a->refused_clients,
+		.refused_per_user = a->refused_per_user,
+		.refused_incomplete = a->refused_incomplete,
+		.handshake_timeouts = a->handshake_timeouts,
+		.accept_pauses = a->accept_pauses,
+		.clients_in_handshake = a->clients_in_handshake,
+		.fds = a->fds,
+		.fd_limit = a->fd_limit,
+		.memory_used = a->memory_used,
+		.memory_budget = a->memory_budget,
+		.refused_memory = a->refused_memory,
+		.mappings = a->mappings,
+		.mapping_budget = a->mapping_budget,
+		.refused_mappings = a->refused_mappings,
+	};
+	sp->limits_known = true;
 	return 0;
 }
 
@@ -192,6 +218,7 @@ static const struct proto_display_events display_events = {
 	.status = on_status,
 	.state = on_state,
 	.refused = on_refused,
+	.limits = on_limits,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)

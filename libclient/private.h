@@ -45,6 +45,8 @@ struct spindle {
 	bool dead;
 	struct spindle_device_info info;
 	struct spindle_status status;
+	struct spindle_limits limits; /* from the limits event before status (version 3) */
+	bool limits_known;
 	uint64_t status_serial;
 	struct spindle_state state; /* version 2: the last state event */
 	uint64_t refusals;          /* refused events received */

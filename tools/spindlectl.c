@@ -124,6 +124,21 @@ static void print_status(const struct spindle_status *st)
 	printf("upload rate: %llu bytes/s\n", (unsigned long long)st->upload_rate);
 	printf("render time: %.3f ms\n", st->render_us / 1e3);
 	printf("clients: %u\n", st->clients);
+	if (!st->limits_known)
+		return;
+	const struct spindle_limits *l = &st->limits;
+	printf("clients in handshake: %u\n", l->clients_in_handshake);
+	printf("refused clients: %llu over max-clients, %llu over max-clients-per-user, %llu over "
+	       "max-incomplete-clients\n",
+	       (unsigned long long)l->refused_clients, (unsigned long long)l->refused_per_user,
+	       (unsigned long long)l->refused_incomplete);
+	printf("handshake timeouts: %llu\n", (unsigned long long)l->handshake_timeouts);
+	printf("file descriptors: %u of %u; accepting paused %llu times\n", l->fds, l->fd_limit,
+	       (unsigned long long)l->accept_pauses);
+	printf("memory: %llu of %llu bytes; %llu clients refused over it\n", (unsigned long long)l->memory_used,
+	       (unsigned long long)l->memory_budget, (unsigned long long)l->refused_memory);
+	printf("mappings: %u of %u; %llu clients refused over it\n", l->mappings, l->mapping_budget,
+	       (unsigned long long)l->refused_mappings);
 }
 
 static int cmd_status(const struct ctl_args *a)

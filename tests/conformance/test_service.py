@@ -13,7 +13,7 @@ import signal
 import socket
 import time
 
-from harness import Abuse, Daemon, ERR, Witness, case, check, run, with_daemon
+from harness import Abuse, Daemon, ERR, Witness, case, check, run, w, with_daemon
 from spindlewire import Closed, Conn
 
 NOBODY = 65534
@@ -209,6 +209,81 @@ def fd_exhaustion():
         check('accepting paused' in d.logtext(), 'the pauses are counted in the log at exit')
     finally:
         d.stop()
+
+
+def limits(c):
+    """display.limits, which comes just before status (version 3)."""
+    c.req(1, 'display.get_status')
+    lim = c.wait('display.limits')
+    c.wait('display.status')
+    return lim
+
+
+def memfd_buffer(c, size):
+    fd = w.memfd(size=size)
+    try:
+        return c.create('create_buffer', size, fd)
+    finally:
+        os.close(fd)
+
+
+@with_daemon('memory-budget=8388608')
+def memory_budget(d):
+    """The daemon-wide memory budget refuses the client that would go over
+    it (quota, fatal), not the daemon; room comes back when others go."""
+    wit = Witness(d)
+    with Abuse(d, wit) as a:
+        big = a.conn()
+        memfd_buffer(big, 6 << 20)
+        big.sync()
+        over = a.conn()
+        memfd_buffer(over, 4 << 20)
+        ev = over.expect_fatal(ERR['quota'], obj=1)
+        check('memory budget' in ev['message'], f'says why: {ev}')
+        lim = limits(a.conn())
+        check(lim['refused_memory'] == 1 and lim['memory_budget'] == 8 << 20 and lim['memory_used'] >= 6 << 20,
+              f'limits: {lim}')
+        big.close()
+        end = time.monotonic() + 3
+        while limits(a.conn())['memory_used'] >= 6 << 20:
+            check(time.monotonic() < end, 'the budget is given back when the client goes')
+            time.sleep(0.05)
+        again = a.conn()
+        memfd_buffer(again, 4 << 20)
+        again.sync()
+
+
+@with_daemon('max-mappings=4')
+def mapping_budget(d):
+    wit = Witness(d)                      # one mapped buffer
+    with Abuse(d, wit) as a:
+        c = a.conn()
+        for _ in range(3):
+            memfd_buffer(c, 4096)
+        c.sync()
+        memfd_buffer(c, 4096)
+        ev = c.expect_fatal(ERR['quota'], obj=1)
+        check('maps as many buffers' in ev['message'], f'says why: {ev}')
+        lim = limits(a.conn())
+        check(lim['refused_mappings'] == 1 and lim['mapping_budget'] == 4, f'limits: {lim}')
+        inline = a.conn()                 # inline buffers are not mappings
+        inline.create('create_buffer_inline', b'\0' * 64)
+        inline.sync()
+
+
+@with_daemon('max-clients=8', 'handshake-timeout-ms=60000')
+def limits_reported(d):
+    """What the limits did is in the limits event (spindlectl status)."""
+    if not privileged():
+        return
+    idle = connect_as(NOBODY, d.sock, 9)
+    for c in idle:
+        refused(c, 0.3)
+    lim = limits(d.conn())
+    check(lim['refused_clients'] == 2 and lim['clients_in_handshake'] == 7, f'limits: {lim}')
+    check(0 < lim['fds'] <= lim['fd_limit'], f'fds: {lim}')
+    for c in idle:
+        c.close()
 
 
 @with_daemon()

@@ -26,7 +26,7 @@ extern "C" {
 #endif
 
 /* The protocol version this library speaks at most. */
-#define SPINDLE_PROTOCOL_VERSION 2
+#define SPINDLE_PROTOCOL_VERSION 3
 
 /* Default socket path, used when neither a path nor SPINDLE_SOCKET is given. */
 #define SPINDLE_DEFAULT_SOCKET "/run/spindle/spindle.sock"
@@ -75,6 +75,23 @@ struct spindle_status {
 	float angle_error_p99;     /* slice angle error, 99th percentile, in slices
 				    * (< 0: unknown; only the simulated projector knows) */
 	float angle_error_max;     /* largest slice angle error, slices (< 0: unknown) */
+	/* The daemon's limits (spindled(8)) and what they did since it
+	 * started; from a daemon speaking protocol 3, else limits_known is
+	 * false and they are 0. */
+	bool limits_known;
+	struct spindle_limits {
+		uint64_t refused_clients;    /* connections over max-clients */
+		uint64_t refused_per_user;   /* over max-clients-per-user */
+		uint64_t refused_incomplete; /* over max-incomplete-clients */
+		uint64_t handshake_timeouts; /* closed for no hello in time */
+		uint64_t accept_pauses;      /* accepting paused, out of fds */
+		uint32_t clients_in_handshake;
+		uint32_t fds, fd_limit;              /* the daemon's open fds, RLIMIT_NOFILE */
+		uint64_t memory_used, memory_budget; /* buffers + 16 bytes a vertex held, memory-budget */
+		uint64_t refused_memory;             /* clients refused over memory-budget */
+		uint32_t mappings, mapping_budget;   /* memfd buffers mapped, max-mappings */
+		uint64_t refused_mappings;           /* clients refused over max-mappings */
+	} limits;
 };
 
 /* The display's state, pushed by the daemon when it changes (protocol
