@@ -24,7 +24,10 @@ static void usage(FILE *f)
 		   "                           else cpu), cpu, egl, osmesa\n"
 		   "  -s, --socket PATH        client socket (default $SPINDLE_SOCKET or\n"
 		   "                           /run/spindle/spindle.sock)\n"
-		   "  -o, --set KEY=VALUE      set any configuration key\n"
+		   "      --user NAME          started as root: run as this user once the\n"
+		   "                           devices and the socket are open (default\n"
+		   "                           spindle; root: stay root, for development)\n");
+	fprintf(f, "  -o, --set KEY=VALUE      set any configuration key\n"
 		   "  -v, --verbose            debug logging\n"
 		   "  -h, --help               this help\n"
 		   "      --version            print the version\n");
@@ -50,6 +53,8 @@ static int apply(struct config *cfg, int opt, char *arg)
 		return set_option(cfg, "renderer", arg);
 	case 's':
 		return set_option(cfg, "socket", arg);
+	case 'U':
+		return set_option(cfg, "user", arg);
 	case 'v':
 		cfg->verbose = true;
 		return 0;
@@ -77,6 +82,7 @@ int main(int argc, char **argv)
 		{ "profile", required_argument, NULL, 'p' },
 		{ "renderer", required_argument, NULL, 'r' },
 		{ "socket", required_argument, NULL, 's' },
+		{ "user", required_argument, NULL, 'U' }, /* = --set user=NAME */
 		{ "set", required_argument, NULL, 'o' },
 		{ "verbose", no_argument, NULL, 'v' },
 		{ "help", no_argument, NULL, 'h' },
