@@ -29,7 +29,8 @@ void config_defaults(struct config *cfg)
 		.exclusive = POLICY_ADMIN,
 	};
 	strcpy(cfg->admin_group, "spindle-admin");
-	strcpy(cfg->user, "spindle");
+	const char *user = getenv("SPINDLE_USER");
+	snprintf(cfg->user, sizeof(cfg->user), "%s", user && *user ? user : "spindle");
 	const char *env = getenv("SPINDLE_SOCKET");
 	snprintf(cfg->socket_path, sizeof(cfg->socket_path), "%s", env && *env ? env : "/run/spindle/spindle.sock");
 	strcpy(cfg->device, "sim");

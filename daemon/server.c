@@ -22,6 +22,7 @@
 #include "devices.h"
 #include "log.h"
 #include "pipeline.h"
+#include "privilege.h"
 #include "render.h"
 
 /* ---- the listening socket ---- */
@@ -736,6 +737,12 @@ int server_run(const struct config *cfg)
 	int r = server_init(&srv, cfg, true);
 	if (r < 0)
 		goto out;
+	/* The devices, the renderer and the socket are open: root is no
+	 * longer needed. A failed drop may leave the ids half switched. */
+	if ((r = privilege_drop(srv.cfg.user)) < 0) {
+		log_error("not serving: could not give up root");
+		goto out;
+	}
 	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", devices_name(srv.dev), srv.geom.width,
 		 srv.geom.height, srv.geom.images_per_rev, srv.geom.mirrored ? " (mirrored)" : "", srv.geom.rpm);
 	sd_notify(0, "READY=1\nSTATUS=Serving clients");

@@ -286,6 +286,46 @@ def limits_reported(d):
         c.close()
 
 
+def proc_status(pid):
+    with open(f'/proc/{pid}/status') as f:
+        return dict(line.rstrip('\n').split(':\t', 1) for line in f if ':\t' in line)
+
+
+@case
+def privilege_drop():
+    """Started as root with user = nobody: once serving, every uid and gid
+    is nobody's, no capability is left, no_new_privs is set; clients are
+    served as before. A user that does not exist: it does not start."""
+    if not privileged():
+        return
+    saved = os.environ.get('ASAN_OPTIONS')
+    # LeakSanitizer cannot stop the world of a process that gave up root.
+    os.environ['ASAN_OPTIONS'] = (saved + ':' if saved else '') + 'detect_leaks=0'
+    try:
+        d = Daemon('user=nobody')
+        try:
+            st = proc_status(d.pid)
+            check(st['Uid'].split() == [str(NOBODY)] * 4, f'Uid: {st["Uid"]}')
+            check(st['Gid'].split()[:3] == [str(NOBODY)] * 3, f'Gid: {st["Gid"]}')
+            for cap in ('CapEff', 'CapPrm', 'CapAmb'):
+                check(int(st[cap], 16) == 0, f'{cap}: {st[cap]}')
+            check(st['NoNewPrivs'].strip() == '1', f'NoNewPrivs: {st["NoNewPrivs"]}')
+            wit = Witness(d)                # root is still an admin: capture works
+            wit.check()
+        finally:
+            d.stop()
+        try:
+            Daemon('user=no-such-user-spindle')
+            check(False, 'a daemon with no such user started')
+        except AssertionError as e:
+            check('exited' in str(e) and "no user 'no-such-user-spindle'" in str(e), f'fails closed: {e}')
+    finally:
+        if saved is None:
+            del os.environ['ASAN_OPTIONS']
+        else:
+            os.environ['ASAN_OPTIONS'] = saved
+
+
 @with_daemon()
 def sighup_ignored(d):
     d.proc.send_signal(signal.SIGHUP)
