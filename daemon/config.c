@@ -16,7 +16,7 @@ void config_defaults(struct config *cfg)
 		.projector_buffers = 3,
 		.sim_link_bytes_per_sec = 400u * 1000 * 1000, /* ~USB 3 sustained */
 		.max_clients = 64,
-		.memory_budget = 2ull << 30,
+		.memory_budget = 1ull << 30,
 		.max_mappings = 16384,
 		.max_clients_per_user = 16,
 		.max_incomplete_clients = 16,
