@@ -5,8 +5,8 @@
 enum admission_verdict admission_check(const struct config *cfg, bool admin, const struct admission_load *load)
 {
 	uint32_t room = cfg->max_clients;
-	if (!admin && room >= 2)
-		room--; /* the admin's slot */
+	if (!admin) /* the admins' slots, while there is room for one client more */
+		room = cfg->admin_reserved_clients < room ? room - cfg->admin_reserved_clients : (room ? 1 : 0);
 	if (load->clients >= room)
 		return ADMISSION_FULL;
 	if (admin)

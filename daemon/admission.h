@@ -3,9 +3,10 @@
  * connections and lock the others out (dbus-daemon's limits are the model:
  * max_connections_per_user, max_incomplete_connections, auth_timeout).
  *
- * - max-clients: connections in all. One of them is kept for an admin
- *   (root, the daemon's own user, the admin group) whenever max-clients is
- *   2 or more, so that `spindlectl status` works when the rest are taken.
+ * - max-clients: connections in all. admin-reserved-clients of them (1)
+ *   are kept for admins (root, the daemon's own user, the admin group), so
+ *   that `spindlectl status` works when the rest are taken; others get at
+ *   least one.
  * - max-clients-per-user: connections of one uid (admins are not counted
  *   against it).
  * - max-incomplete-clients: connections that have not completed hello

@@ -18,6 +18,7 @@ void config_defaults(struct config *cfg)
 		.max_clients = 64,
 		.memory_budget = 1ull << 30,
 		.max_mappings = 16384,
+		.admin_reserved_clients = 1,
 		.max_clients_per_user = 16,
 		.max_incomplete_clients = 16,
 		.handshake_timeout_ms = 5000,
@@ -176,6 +177,8 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u32(&cfg->max_mappings, value, 1, 1u << 20);
 	if (!strcmp(key, "user"))
 		return set_string(cfg->user, sizeof(cfg->user), value);
+	if (!strcmp(key, "admin-reserved-clients"))
+		return set_u32(&cfg->admin_reserved_clients, value, 0, 65536);
 	if (!strcmp(key, "max-clients-per-user"))
 		return set_u32(&cfg->max_clients_per_user, value, 1, 65536);
 	if (!strcmp(key, "max-incomplete-clients"))

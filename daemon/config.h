@@ -37,6 +37,7 @@ struct config {
 	uint64_t memory_budget;                /* all clients: buffer bytes + CLIENT_VERTEX_BYTES per vertex held */
 	uint32_t max_mappings;                 /* all clients: memfd buffers mapped */
 	uint32_t max_clients;                  /* one kept for an admin (admission.h) */
+	uint32_t admin_reserved_clients;       /* of max_clients, kept for admins */
 	uint32_t max_clients_per_user;         /* connections of one non-admin uid */
 	uint32_t max_incomplete_clients;       /* non-admin connections before hello */
 	uint32_t handshake_timeout_ms;         /* no hello by then: closed */

@@ -18,7 +18,7 @@ import time
 
 import harness
 
-from harness import Abuse, Daemon, ERR, Witness, case, check, run, w, with_daemon
+from harness import Abuse, Daemon, ERR, Witness, case, check, run, settle_fds, w, with_daemon
 from spindlewire import Closed, Conn
 
 NOBODY = 65534
@@ -79,6 +79,7 @@ def idle_lockout(d):
     if not privileged():
         return
     wit = Witness(d)                      # client 1 (root)
+    before = d.nfds()
     idle = connect_as(NOBODY, d.sock, 10)  # room for 6: one slot is kept
     verdicts = [refused(c, 0.5) for c in idle]
     check(verdicts.count(False) == 6 and verdicts.count(True) == 4, f'admitted/refused: {verdicts}')
@@ -92,6 +93,7 @@ def idle_lockout(d):
         c.close()
     admin.close()
     wit.check()
+    settle_fds(d, before)
     check('over max-clients' in d.logtext() or 'too many clients' in d.logtext(), 'refusals are logged')
 
 
@@ -100,6 +102,7 @@ def per_user_cap(d):
     if not privileged():
         return
     wit = Witness(d)
+    before = d.nfds()
     mine = connect_as(NOBODY, d.sock, 5)
     verdicts = [refused(c, 0.5) for c in mine]
     check(verdicts == [False, False, False, True, True], f'per user: {verdicts}')
@@ -112,6 +115,7 @@ def per_user_cap(d):
     for c in mine + [other]:
         c.close()
     wit.check()
+    settle_fds(d, before)
 
 
 @with_daemon('max-incomplete-clients=3', 'max-clients-per-user=100', 'handshake-timeout-ms=60000')
@@ -119,6 +123,7 @@ def incomplete_cap(d):
     if not privileged():
         return
     wit = Witness(d)
+    before = d.nfds()
     first = connect_as(NOBODY, d.sock, 4)
     verdicts = [refused(c, 0.5) for c in first]
     check(verdicts == [False, False, False, True], f'in handshake: {verdicts}')
@@ -130,6 +135,7 @@ def incomplete_cap(d):
     for c in first + [late]:
         c.close()
     wit.check()
+    settle_fds(d, before)
 
 
 @with_daemon('handshake-timeout-ms=300')
@@ -237,6 +243,7 @@ def memory_budget(d):
     """The daemon-wide memory budget refuses the client that would go over
     it (quota, fatal), not the daemon; room comes back when others go."""
     wit = Witness(d)
+    base = d.rss_kb()
     with Abuse(d, wit) as a:
         big = a.conn()
         memfd_buffer(big, 6 << 20)
@@ -245,6 +252,8 @@ def memory_budget(d):
         memfd_buffer(over, 4 << 20)
         ev = over.expect_fatal(ERR['quota'], obj=1)
         check('memory budget' in ev['message'], f'says why: {ev}')
+        grew = (d.rss_kb() - base) / 1024
+        check(grew <= 8 + 48, f'RSS grew {grew:.1f} MiB under an 8 MiB budget (sanitizers take some)')
         lim = limits(a.conn())
         check(lim['refused_memory'] == 1 and lim['memory_budget'] == 8 << 20 and lim['memory_used'] >= 6 << 20,
               f'limits: {lim}')

@@ -14,7 +14,10 @@ static enum admission_verdict ask(const struct config *cfg, bool admin, uint32_t
 
 int main(void)
 {
-	struct config cfg = { .max_clients = 8, .max_clients_per_user = 3, .max_incomplete_clients = 2 };
+	struct config cfg = { .max_clients = 8,
+			      .admin_reserved_clients = 1,
+			      .max_clients_per_user = 3,
+			      .max_incomplete_clients = 2 };
 	CHECK_EQ(ask(&cfg, false, 0, 0, 0), ADMISSION_OK);
 	CHECK_EQ(ask(&cfg, false, 6, 0, 0), ADMISSION_OK);
 	CHECK_EQ(ask(&cfg, false, 7, 0, 0), ADMISSION_FULL); /* the last slot is an admin's */
@@ -28,6 +31,14 @@ int main(void)
 	cfg.max_clients = 1;
 	CHECK_EQ(ask(&cfg, false, 0, 0, 0), ADMISSION_OK);
 	CHECK_EQ(ask(&cfg, true, 1, 0, 0), ADMISSION_FULL);
+	/* More kept, or none. */
+	cfg.max_clients = 8;
+	cfg.admin_reserved_clients = 3;
+	CHECK_EQ(ask(&cfg, false, 4, 0, 0), ADMISSION_OK);
+	CHECK_EQ(ask(&cfg, false, 5, 0, 0), ADMISSION_FULL);
+	CHECK_EQ(ask(&cfg, true, 7, 0, 0), ADMISSION_OK);
+	cfg.admin_reserved_clients = 0;
+	CHECK_EQ(ask(&cfg, false, 7, 0, 0), ADMISSION_OK);
 	for (int v = ADMISSION_OK; v <= ADMISSION_INCOMPLETE; v++)
 		CHECK(admission_reason((enum admission_verdict)v)[0]);
 	return check_done();
