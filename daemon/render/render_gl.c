@@ -24,6 +24,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
 #include "bin.h"
@@ -557,6 +558,20 @@ const char *render_gl_describe(const struct renderer *base)
 	return ((const struct render_gl *)base)->description;
 }
 
+/* Whether this process may map memory both writable and executable.
+ * llvmpipe compiles shaders to machine code at run time and needs it;
+ * where it is denied (systemd's MemoryDenyWriteExecute=, the kernel's
+ * PR_SET_MDWE) llvmpipe crashes at its first shader instead of failing. */
+static bool jit_allowed(void)
+{
+	size_t page = (size_t)sysconf(_SC_PAGESIZE);
+	void *p = mmap(NULL, page, PROT_READ | PROT_WRITE | PROT_EXEC, MAP_PRIVATE | MAP_ANONYMOUS, -1, 0);
+	if (p == MAP_FAILED)
+		return false;
+	munmap(p, page);
+	return true;
+}
+
 /* Makes the context (left unbound) and everything the pipeline keeps in
  * it. */
 static int open_gl(struct render_gl *r, enum gl_backend backend)
@@ -568,6 +583,12 @@ static int open_gl(struct render_gl *r, enum gl_backend backend)
 	if (err == 0 && r->opts.hardware_only && !r->ctx.hardware) {
 		log_info("GL renderer %s: %s is a software rasterizer", gl_backend_name(backend), r->ctx.renderer);
 		err = -ENODEV;
+	}
+	if (err == 0 && !r->ctx.hardware && !jit_allowed()) {
+		log_warn("GL renderer %s: %s compiles shaders to machine code, and this process may not map "
+			 "memory writable and executable (MemoryDenyWriteExecute=; docs/rendering.md)",
+			 gl_backend_name(backend), r->ctx.renderer);
+		err = -ENOTSUP;
 	}
 	if (err == 0)
 		err = build_programs(r);
