@@ -3,6 +3,7 @@
 #ifndef SPINDLE_LOG_H
 #define SPINDLE_LOG_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 enum log_level { LOG_LEVEL_ERROR = 3, LOG_LEVEL_WARN = 4, LOG_LEVEL_INFO = 6, LOG_LEVEL_DEBUG = 7 };
@@ -17,5 +18,26 @@ void log_msg(enum log_level level, const char *fmt, ...) __attribute__((format(p
 
 /* CLOCK_MONOTONIC in nanoseconds. */
 int64_t now_ns(void);
+
+/* A message that may come in floods (refused clients, accept() out of
+ * fds) is logged at most once an interval; the rest are counted. */
+struct log_ratelimit {
+	int64_t interval_ns;
+	int64_t last_ns;     /* 0: never logged */
+	uint64_t suppressed; /* since the last one logged */
+};
+
+/* Whether to log now. When it says yes, r->suppressed tells how many were
+ * not logged before this one; the caller reads it, then it starts again. */
+static inline bool log_ratelimit_ok(struct log_ratelimit *r)
+{
+	int64_t now = now_ns();
+	if (r->last_ns && now - r->last_ns < r->interval_ns) {
+		r->suppressed++;
+		return false;
+	}
+	r->last_ns = now;
+	return true;
+}
 
 #endif

@@ -44,7 +44,6 @@ const char *admission_reason(enum admission_verdict v);
 struct admission_counters {
 	uint64_t refused[4];         /* by verdict (refused[ADMISSION_OK] is unused) */
 	uint64_t handshake_timeouts; /* closed for no hello in time */
-	uint64_t accept_pauses;      /* accept() out of fds: the socket rested */
 };
 
 #endif

@@ -250,6 +250,31 @@ static enum line_status read_line(FILE *f, char *buf)
 	return nul ? LINE_NUL : LINE_OK;
 }
 
+/* One line n of path, without its ending: a comment, blank, or key =
+ * value. 0 or -EINVAL (logged). */
+static int parse_line(struct config *cfg, const char *path, unsigned n, char *line)
+{
+	char *hash = strchr(line, '#');
+	if (hash)
+		*hash = '\0';
+	char *s = trim(line);
+	if (!*s)
+		return 0;
+	char *eq = strchr(s, '=');
+	if (!eq) {
+		log_error("%s:%u: expected key = value", path, n);
+		return -EINVAL;
+	}
+	*eq = '\0';
+	char *key = trim(s), *value = trim(eq + 1);
+	int e = config_set(cfg, key, value);
+	if (e < 0) {
+		log_error("%s:%u: %s '%s'", path, n, e == -ENOENT ? "unknown key" : "bad value for", key);
+		return -EINVAL;
+	}
+	return 0;
+}
+
 int config_load(struct config *cfg, const char *path, bool required)
 {
 	FILE *f = fopen(path, "re");
@@ -273,25 +298,8 @@ int config_load(struct config *cfg, const char *path, bool required)
 			r = -EINVAL;
 			continue;
 		}
-		char *hash = strchr(line, '#');
-		if (hash)
-			*hash = '\0';
-		char *s = trim(line);
-		if (!*s)
-			continue;
-		char *eq = strchr(s, '=');
-		if (!eq) {
-			log_error("%s:%u: expected key = value", path, n);
+		if (parse_line(cfg, path, n, line) < 0)
 			r = -EINVAL;
-			continue;
-		}
-		*eq = '\0';
-		char *key = trim(s), *value = trim(eq + 1);
-		int e = config_set(cfg, key, value);
-		if (e < 0) {
-			log_error("%s:%u: %s '%s'", path, n, e == -ENOENT ? "unknown key" : "bad value for", key);
-			r = -EINVAL;
-		}
 	}
 	if (ferror(f)) {
 		log_error("cannot read %s: %s", path, strerror(errno));

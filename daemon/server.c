@@ -2,7 +2,6 @@
 
 #include <dirent.h>
 #include <errno.h>
-#include <fcntl.h>
 #include <grp.h>
 #include <malloc.h>
 #include <signal.h>
@@ -11,8 +10,6 @@
 #include <string.h>
 #include <sys/resource.h>
 #include <sys/socket.h>
-#include <sys/stat.h>
-#include <sys/un.h>
 #include <systemd/sd-daemon.h>
 #include <systemd/sd-event.h>
 #include <unistd.h>
@@ -20,83 +17,13 @@
 #include "admission.h"
 #include "client.h"
 #include "devices.h"
+#include "listen_socket.h"
 #include "log.h"
 #include "pipeline.h"
 #include "privilege.h"
 #include "render.h"
 
-/* ---- the listening socket ---- */
-
-/* A socket file nobody listens on is left over from a crash: remove it. */
-static int remove_stale_socket(const struct sockaddr_un *addr)
-{
-	struct stat st;
-	if (lstat(addr->sun_path, &st) < 0)
-		return errno == ENOENT ? 0 : -errno;
-	if (!S_ISSOCK(st.st_mode))
-		return -EEXIST;
-	int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC, 0);
-	if (fd < 0)
-		return -errno;
-	int r = connect(fd, (const struct sockaddr *)addr, sizeof(*addr));
-	int e = errno;
-	close(fd);
-	if (r == 0)
-		return -EADDRINUSE;
-	if (e != ECONNREFUSED)
-		return -e;
-	return unlink(addr->sun_path) < 0 ? -errno : 0;
-}
-
-static int bind_socket(struct server *srv)
-{
-	struct sockaddr_un addr = { .sun_family = AF_UNIX };
-	snprintf(addr.sun_path, sizeof(addr.sun_path), "%s", srv->cfg.socket_path);
-	int r = remove_stale_socket(&addr);
-	if (r < 0) {
-		log_error("socket %s: %s", addr.sun_path,
-			  r == -EADDRINUSE ? "another spindled is listening there" : strerror(-r));
-		return r;
-	}
-	int fd = socket(AF_UNIX, SOCK_STREAM | SOCK_CLOEXEC | SOCK_NONBLOCK, 0);
-	if (fd < 0)
-		return -errno;
-	if (bind(fd, (const struct sockaddr *)&addr, sizeof(addr)) < 0 || chmod(addr.sun_path, 0660) < 0 ||
-	    listen(fd, 64) < 0) {
-		r = -errno;
-		log_error("cannot listen on %s: %s", addr.sun_path, strerror(errno));
-		close(fd);
-		return r;
-	}
-	srv->listen_fd = fd;
-	srv->listen_fd_owned = true;
-	srv->socket_path = strdup(addr.sun_path);
-	return 0;
-}
-
-/* systemd socket activation first, else our own socket. */
-static int open_socket(struct server *srv)
-{
-	int n = sd_listen_fds(1);
-	if (n > 1) {
-		log_error("systemd passed %d sockets, expected one", n);
-		return -EINVAL;
-	}
-	if (n == 1) {
-		if (sd_is_socket_unix(SD_LISTEN_FDS_START, SOCK_STREAM, 1, NULL, 0) <= 0) {
-			log_error("the socket systemd passed is not a listening Unix stream socket");
-			return -EINVAL;
-		}
-		srv->listen_fd = SD_LISTEN_FDS_START;
-		fcntl(srv->listen_fd, F_SETFL, fcntl(srv->listen_fd, F_GETFL) | O_NONBLOCK);
-		log_info("listening on the socket from systemd");
-		return 0;
-	}
-	int r = bind_socket(srv);
-	if (r == 0)
-		log_info("listening on %s", srv->cfg.socket_path);
-	return r;
-}
+/* ---- admitting clients ---- */
 
 /* Tells a client over a limit why, as far as its socket takes it
  * without waiting, and closes it. */
@@ -115,15 +42,12 @@ static void refuse_client(int fd, const char *why, uint32_t clients)
 /* At most one line a second about refused clients. */
 static void log_refusal(struct server *srv, enum admission_verdict v, uid_t uid)
 {
-	int64_t now = now_ns();
-	if (srv->refusal_logged_ns && now - srv->refusal_logged_ns < 1000000000) {
-		srv->refusals_unlogged++;
+	if (!log_ratelimit_ok(&srv->refusal_log))
 		return;
-	}
 	log_warn("refusing a client (uid %u): %s; %u connected; %llu more refused since the last message",
-		 (unsigned)uid, admission_reason(v), srv->client_count, (unsigned long long)srv->refusals_unlogged);
-	srv->refusal_logged_ns = now;
-	srv->refusals_unlogged = 0;
+		 (unsigned)uid, admission_reason(v), srv->client_count,
+		 (unsigned long long)srv->refusal_log.suppressed);
+	srv->refusal_log.suppressed = 0;
 }
 
 /* What is connected, as a new peer of uid sees it. */
@@ -160,56 +84,22 @@ static int admit(struct server *srv, int cfd)
 	return -1;
 }
 
-/* Out of fds (or memory) to accept with: the socket rests a while, the
- * rest of the loop (reaping the clients that left among it) goes on, and
- * accepting starts again by itself: after 50 ms, doubling while it
- * recurs, at most 1.6 s. */
-static void pause_accept(struct server *srv, int err)
-{
-	srv->admission.accept_pauses++;
-	srv->accept_backoff_ms = srv->accept_backoff_ms ? srv->accept_backoff_ms * 2 : 50;
-	if (srv->accept_backoff_ms > 1600)
-		srv->accept_backoff_ms = 1600;
-	int64_t now = now_ns();
-	if (!srv->pause_logged_ns || now - srv->pause_logged_ns >= 10000000000LL) {
-		log_warn("accept: %s: not accepting clients for %u ms (%llu pauses so far; said at most every 10 s)",
-			 strerror(err), srv->accept_backoff_ms, (unsigned long long)srv->admission.accept_pauses);
-		srv->pause_logged_ns = now;
-	}
-	sd_event_source_set_enabled(srv->listen_source, SD_EVENT_OFF);
-	sd_event_source_set_time_relative(srv->accept_timer, (uint64_t)srv->accept_backoff_ms * 1000);
-	sd_event_source_set_enabled(srv->accept_timer, SD_EVENT_ONESHOT);
-}
-
-static int on_accept_timer(sd_event_source *s, uint64_t usec, void *data)
+static void accepted(void *data, int fd)
 {
 	struct server *srv = data;
-	sd_event_source_set_enabled(srv->listen_source, SD_EVENT_ON);
-	return 0;
+	if (admit(srv, fd) < 0)
+		return;
+	int r = server_add_client(srv, fd);
+	if (r < 0)
+		log_warn("cannot set up a client: %s", strerror(-r));
+	else
+		log_debug("client %d connected", fd);
 }
 
-static int on_accept(sd_event_source *s, int fd, uint32_t revents, void *data)
-{
-	struct server *srv = data;
-	for (;;) {
-		int cfd = accept4(fd, NULL, NULL, SOCK_NONBLOCK | SOCK_CLOEXEC);
-		if (cfd < 0) {
-			if (errno == EMFILE || errno == ENFILE || errno == ENOBUFS || errno == ENOMEM)
-				pause_accept(srv, errno);
-			else if (errno != EAGAIN && errno != EINTR && errno != ECONNABORTED)
-				log_warn("accept: %s", strerror(errno));
-			return 0;
-		}
-		srv->accept_backoff_ms = 0;
-		if (admit(srv, cfd) < 0)
-			continue;
-		int r = server_add_client(srv, cfd);
-		if (r < 0)
-			log_warn("cannot set up a client: %s", strerror(-r));
-		else
-			log_debug("client %d connected", cfd);
-	}
-}
+static const struct listen_socket_listener listen_socket_listener = {
+	.version = LISTEN_SOCKET_LISTENER_VERSION,
+	.accepted = accepted,
+};
 
 /* Connections that have not said hello within handshake-timeout-ms are
  * closed (checked with the state events, 20 times a second). */
@@ -487,7 +377,7 @@ void server_get_limits(struct server *srv, struct proto_display_limits_args *out
 		.refused_per_user = a->refused[ADMISSION_USER],
 		.refused_incomplete = a->refused[ADMISSION_INCOMPLETE],
 		.handshake_timeouts = a->handshake_timeouts,
-		.accept_pauses = a->accept_pauses,
+		.accept_pauses = srv->sock.pauses,
 		.clients_in_handshake = incomplete,
 		.fds = open_fds(),
 		.fd_limit = rl.rlim_cur > UINT32_MAX ? UINT32_MAX : (uint32_t)rl.rlim_cur,
@@ -592,9 +482,6 @@ static int setup_loop(struct server *srv)
 		return r;
 	if ((r = setup_signals(srv)) < 0 || (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
 		return r;
-	r = sd_event_add_time(srv->event, &srv->accept_timer, CLOCK_MONOTONIC, 0, 1000, on_accept_timer, srv);
-	if (r < 0 || (r = sd_event_source_set_enabled(srv->accept_timer, SD_EVENT_OFF)) < 0)
-		return r;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
 	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_NORMAL + 10);
 	return sd_event_set_watchdog(srv->event, true);
@@ -630,24 +517,35 @@ void server_finish(struct server *srv)
 		client_destroy(c);
 	}
 	pipeline_destroy(srv->pipe);
+	srv->pipe = NULL;          /* the devices may still report while they close */
 	devices_destroy(srv->dev); /* blanks the projector */
-	sd_event_source_disable_unref(srv->listen_source);
 	sd_event_source_disable_unref(srv->reap_source);
 	sd_event_source_disable_unref(srv->state_timer);
-	sd_event_source_disable_unref(srv->accept_timer);
-	if (srv->listen_fd >= 0)
-		close(srv->listen_fd);
-	if (srv->socket_path) {
-		unlink(srv->socket_path);
-		free(srv->socket_path);
-	}
+	listen_socket_close(&srv->sock);
 	sd_event_unref(srv->event);
-	*srv = (struct server){ .listen_fd = -1 };
+	*srv = (struct server){ .sock.fd = -1 };
+}
+
+/* What every client shares. */
+static void set_client_env(struct server *srv)
+{
+	srv->client_env = (struct client_env){
+		.event = srv->event,
+		.cfg = &srv->cfg,
+		.geom = &srv->geom,
+		.device_name = devices_name(srv->dev),
+		.admin_gid = admin_gid(srv->cfg.admin_group),
+		.stage = &srv->stage,
+		.frames = &srv->frames,
+		.totals = &srv->totals,
+		.listener = &client_listener,
+		.data = srv,
+	};
 }
 
 int server_init(struct server *srv, const struct config *cfg, bool listen)
 {
-	*srv = (struct server){ .cfg = *cfg, .listen_fd = -1 };
+	*srv = (struct server){ .cfg = *cfg, .sock.fd = -1, .refusal_log.interval_ns = 1000000000 };
 	link_init(&srv->clients);
 	stage_init(&srv->stage, &stage_listener, srv);
 	frames_init(&srv->frames, &frames_listener, srv);
@@ -670,25 +568,12 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		log_error("renderer: %s", strerror(-r));
 		return r;
 	}
-	srv->client_env = (struct client_env){
-		.event = srv->event,
-		.cfg = &srv->cfg,
-		.geom = &srv->geom,
-		.device_name = devices_name(srv->dev),
-		.admin_gid = admin_gid(cfg->admin_group),
-		.stage = &srv->stage,
-		.frames = &srv->frames,
-		.totals = &srv->totals,
-		.listener = &client_listener,
-		.data = srv,
-	};
+	set_client_env(srv);
 	if ((r = setup_state_timer(srv)) < 0)
 		return r;
 	if (!listen)
 		return 0;
-	if ((r = open_socket(srv)) < 0)
-		return r;
-	return sd_event_add_io(srv->event, &srv->listen_source, srv->listen_fd, EPOLLIN, on_accept, srv);
+	return listen_socket_open(&srv->sock, srv->event, srv->cfg.socket_path, &listen_socket_listener, srv);
 }
 
 int server_add_client(struct server *srv, int fd)
@@ -727,7 +612,7 @@ static void log_admission(const struct server *srv)
 		 "max-incomplete-clients; %llu closed for no hello in time; accepting paused %llu times (out of fds)",
 		 (unsigned long long)a->refused[ADMISSION_FULL], (unsigned long long)a->refused[ADMISSION_USER],
 		 (unsigned long long)a->refused[ADMISSION_INCOMPLETE], (unsigned long long)a->handshake_timeouts,
-		 (unsigned long long)a->accept_pauses);
+		 (unsigned long long)srv->sock.pauses);
 }
 
 int server_run(const struct config *cfg)

@@ -13,6 +13,7 @@
 #include "frames.h"
 #include "geometry.h"
 #include "link.h"
+#include "listen_socket.h"
 #include "spindle-protocol.h"
 #include "stage.h"
 
@@ -27,17 +28,10 @@ struct server {
 	struct sd_event *event;
 	struct config cfg;
 	struct geometry geom;
-	int listen_fd;
-	bool listen_fd_owned; /* false when systemd passed it */
-	char *socket_path;    /* to unlink on exit, when we bound it */
-	struct sd_event_source *listen_source;
-	struct sd_event_source *reap_source;  /* deferred: frees dead clients */
-	struct sd_event_source *state_timer;  /* pushes state events, expires handshakes */
-	struct sd_event_source *accept_timer; /* ends a pause of accepting */
-	uint32_t accept_backoff_ms;           /* the last pause; 0 after an accept */
-	int64_t pause_logged_ns;              /* pauses are logged once in 10 s */
-	int64_t refusal_logged_ns;            /* refusals are logged once a second */
-	uint64_t refusals_unlogged;
+	struct listen_socket sock;
+	struct sd_event_source *reap_source; /* deferred: frees dead clients */
+	struct sd_event_source *state_timer; /* pushes state events, expires handshakes */
+	struct log_ratelimit refusal_log;    /* refusals: once a second */
 	struct admission_counters admission;
 	struct link clients;
 	uint32_t client_count;
