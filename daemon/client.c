@@ -414,6 +414,7 @@ struct client *client_create(const struct client_env *env, int fd)
 	c->conn = proto_conn_create(fd, CLIENT_MAX_OUT);
 	if (!c->conn)
 		goto err_free;
+	proto_conn_set_max_fds(c->conn, env->cfg->max_client_fds);
 	int r = sd_event_add_io(env->event, &c->source, fd, EPOLLIN, client_event, c);
 	if (r < 0) {
 		errno = -r;

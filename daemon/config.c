@@ -8,6 +8,7 @@
 
 #include "log.h"
 #include "sim_rotor.h"
+#include "wire.h"
 
 void config_defaults(struct config *cfg)
 {
@@ -22,6 +23,7 @@ void config_defaults(struct config *cfg)
 		.max_clients_per_user = 16,
 		.max_incomplete_clients = 16,
 		.handshake_timeout_ms = 5000,
+		.max_client_fds = PROTO_MAX_QUEUED_FDS,
 		.max_objects = 4096,
 		.max_buffer_bytes = 1ull << 30,
 		.max_vertices = 32u << 20,
@@ -185,6 +187,8 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u32(&cfg->max_incomplete_clients, value, 1, 65536);
 	if (!strcmp(key, "handshake-timeout-ms"))
 		return set_u32(&cfg->handshake_timeout_ms, value, 10, 600000);
+	if (!strcmp(key, "max-client-fds"))
+		return set_u32(&cfg->max_client_fds, value, PROTO_MAX_MESSAGE_FDS, PROTO_MAX_QUEUED_FDS);
 	if (!strcmp(key, "max-objects"))
 		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
 	if (!strcmp(key, "max-buffer-bytes"))

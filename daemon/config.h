@@ -41,6 +41,7 @@ struct config {
 	uint32_t max_clients_per_user;         /* connections of one non-admin uid */
 	uint32_t max_incomplete_clients;       /* non-admin connections before hello */
 	uint32_t handshake_timeout_ms;         /* no hello by then: closed */
+	uint32_t max_client_fds;               /* received fds one client may hold ahead of their messages */
 	uint32_t max_objects;                  /* per client */
 	uint64_t max_buffer_bytes;             /* per client */
 	uint64_t max_vertices;                 /* per client */

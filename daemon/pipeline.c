@@ -303,6 +303,11 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 	return 0;
 }
 
+int64_t pipeline_render_started(struct pipeline *p)
+{
+	return p && p->busy ? p->started_ns : 0; /* both the loop's */
+}
+
 void pipeline_mark_dirty(struct pipeline *p)
 {
 	p->dirty = true;

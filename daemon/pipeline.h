@@ -73,6 +73,9 @@ void pipeline_projector_arrived(struct pipeline *p);
 /* Whether a swap was asked for and not yet reported: a newer volume may
  * be shown from the next revolution start on. */
 bool pipeline_swap_pending(const struct pipeline *p);
+/* When the render in flight started (ns, CLOCK_MONOTONIC), 0 when none
+ * runs. Accepts NULL. */
+int64_t pipeline_render_started(struct pipeline *p);
 /* The volume on display as the daemon sent it, or NULL before the first. */
 const struct volume *pipeline_shown(const struct pipeline *p);
 void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out);

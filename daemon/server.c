@@ -22,6 +22,7 @@
 #include "pipeline.h"
 #include "privilege.h"
 #include "render.h"
+#include "watchdog.h"
 
 /* ---- admitting clients ---- */
 
@@ -136,6 +137,7 @@ static int reap(sd_event_source *s, void *data)
 		client_destroy(c);
 	}
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
+	srv->dead_since_ns = 0;
 	/* Give what large clients held back to the system, not just to
 	 * malloc's free lists. */
 	if (freed >= TRIM_AFTER_BYTES)
@@ -148,6 +150,8 @@ static int reap(sd_event_source *s, void *data)
 static void client_dead(void *data, struct client *c)
 {
 	struct server *srv = data;
+	if (!srv->dead_since_ns)
+		srv->dead_since_ns = now_ns();
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_ONESHOT);
 }
 
@@ -246,6 +250,7 @@ static const struct pipeline_listener pipeline_listener = {
 static void projector_lit(void *data, int64_t time_ns)
 {
 	struct server *srv = data;
+	srv->revolution_ns = time_ns;
 	if (frames_lit(&srv->frames, time_ns))
 		serve_captures(srv);
 }
@@ -253,6 +258,7 @@ static void projector_lit(void *data, int64_t time_ns)
 static void revolution(void *data, int64_t time_ns)
 {
 	struct server *srv = data;
+	srv->revolution_ns = time_ns;
 	if (srv->pipe) /* none while setting up */
 		frames_revolution(&srv->frames, time_ns, pipeline_swap_pending(srv->pipe));
 }
@@ -407,6 +413,8 @@ static void push_state(struct server *srv)
 
 static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
 {
+	struct server *srv = data;
+	srv->state_ns = now_ns();
 	expire_handshakes(data);
 	push_state(data);
 	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
@@ -484,8 +492,35 @@ static int setup_loop(struct server *srv)
 		return r;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
 	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_NORMAL + 10);
-	return sd_event_set_watchdog(srv->event, true);
+	return 0;
 }
+
+/* What the watchdog asks: work pending for half its interval is stuck.
+ * The state timer runs 20 times a second at the clients' priority, so a
+ * loop that spins on one source without serving the rest shows there;
+ * dead clients wait for the reap, which runs after the clients' events; a
+ * render runs on its own thread; and a lit projector is locked to a
+ * rotor whose revolutions the devices report. */
+static const char *stalled(void *data, int64_t now, int64_t interval)
+{
+	struct server *srv = data;
+	int64_t patience = interval / 2;
+	if (srv->state_ns && now - srv->state_ns > patience)
+		return "the event loop is not serving (the state timer is late)";
+	if (srv->dead_since_ns && now - srv->dead_since_ns > patience)
+		return "disconnected clients are not being freed";
+	int64_t started = pipeline_render_started(srv->pipe);
+	if (started && now - started > patience)
+		return "a render is taking too long (render thread stuck?)";
+	if (devices_lit(srv->dev) && srv->revolution_ns && now - srv->revolution_ns > patience)
+		return "the projector is lit but no revolution has been reported";
+	return NULL;
+}
+
+static const struct watchdog_listener watchdog_listener = {
+	.version = WATCHDOG_LISTENER_VERSION,
+	.stalled = stalled,
+};
 
 static int setup_render(struct server *srv)
 {
@@ -519,6 +554,7 @@ void server_finish(struct server *srv)
 	pipeline_destroy(srv->pipe);
 	srv->pipe = NULL;          /* the devices may still report while they close */
 	devices_destroy(srv->dev); /* blanks the projector */
+	watchdog_destroy(srv->watchdog);
 	sd_event_source_disable_unref(srv->reap_source);
 	sd_event_source_disable_unref(srv->state_timer);
 	listen_socket_close(&srv->sock);
@@ -631,6 +667,11 @@ int server_run(const struct config *cfg)
 	log_info("ready: %s, %ux%u, %u images per revolution%s, %.0f rpm", devices_name(srv.dev), srv.geom.width,
 		 srv.geom.height, srv.geom.images_per_rev, srv.geom.mirrored ? " (mirrored)" : "", srv.geom.rpm);
 	sd_notify(0, "READY=1\nSTATUS=Serving clients");
+	if (!(srv.watchdog = watchdog_create(srv.event, &watchdog_listener, &srv))) {
+		r = -errno;
+		log_error("cannot set up the watchdog: %s", strerror(errno));
+		goto out;
+	}
 	r = sd_event_loop(srv.event);
 	sd_notify(0, "STOPPING=1");
 	log_admission(&srv);

@@ -41,6 +41,11 @@ struct server {
 	struct frames frames; /* frame callbacks and captures waiting */
 	struct client_env client_env;
 	struct client_totals totals; /* against memory-budget and max-mappings */
+	struct watchdog *watchdog;   /* fed while nothing below is stuck */
+	/* Signs of progress, for the watchdog (CLOCK_MONOTONIC ns). */
+	int64_t dead_since_ns; /* the oldest dead client not yet reaped; 0: none */
+	int64_t state_ns;      /* the state timer's last run */
+	int64_t revolution_ns; /* the last revolution reported, or lit */
 };
 
 /* Runs the daemon until SIGINT/SIGTERM. Returns the exit status. */

@@ -25,7 +25,7 @@ struct proto_conn {
 	uint8_t in[IN_CAP];
 	size_t head, tail;
 	int in_fds[PROTO_MAX_QUEUED_FDS];
-	unsigned in_fd_count;
+	unsigned in_fd_count, max_in_fds;
 	unsigned consumed_fds; /* fds of the last message handed out */
 	/* Bytes to send in out[out_head, out_tail), with their fds. */
 	uint8_t *out;
@@ -43,7 +43,13 @@ struct proto_conn *proto_conn_create(int fd, size_t max_out)
 	}
 	conn->fd = fd;
 	conn->max_out = max_out;
+	conn->max_in_fds = PROTO_MAX_QUEUED_FDS;
 	return conn;
+}
+
+void proto_conn_set_max_fds(struct proto_conn *conn, unsigned max)
+{
+	conn->max_in_fds = max < 1 ? 1 : max > PROTO_MAX_QUEUED_FDS ? PROTO_MAX_QUEUED_FDS : max;
 }
 
 static void drop_in_fds(struct proto_conn *conn, unsigned n)
@@ -91,12 +97,12 @@ static int take_rights(struct proto_conn *conn, struct cmsghdr *cmsg, struct pro
 	size_t n = (cmsg->cmsg_len - CMSG_LEN(0)) / sizeof(int);
 	int r = 0;
 	for (size_t i = 0; i < n; i++) {
-		if (conn->in_fd_count < PROTO_MAX_QUEUED_FDS) {
+		if (conn->in_fd_count < conn->max_in_fds) {
 			conn->in_fds[conn->in_fd_count++] = fds[i];
 		} else {
 			close(fds[i]);
-			r = proto_fail(err, PROTO_ERR_FD, "more than %d file descriptors ahead of their messages",
-				       PROTO_MAX_QUEUED_FDS);
+			r = proto_fail(err, PROTO_ERR_FD, "more than %u file descriptors ahead of their messages",
+				       conn->max_in_fds);
 		}
 	}
 	return r;

@@ -58,6 +58,9 @@ struct proto_conn *proto_conn_create(int fd, size_t max_out);
 /* Closes the socket and every queued fd. Accepts NULL. */
 void proto_conn_destroy(struct proto_conn *conn);
 int proto_conn_get_fd(const struct proto_conn *conn);
+/* How many received fds the connection may hold ahead of their messages
+ * (1 to PROTO_MAX_QUEUED_FDS, the default; clamped). More is an error. */
+void proto_conn_set_max_fds(struct proto_conn *conn, unsigned max);
 
 /* Receives what the socket has. Returns bytes received (> 0), 0 when
  * nothing was available, -EPIPE when the peer closed, -EPROTO for bad

@@ -28,7 +28,7 @@ def case(fn):
 
 
 class Daemon:
-    def __init__(self, *settings, name='d', preexec=None):
+    def __init__(self, *settings, name='d', preexec=None, env=None):
         self.tmp = tempfile.mkdtemp(prefix='spindle-conf-')
         os.chmod(self.tmp, 0o755)
         self.sock = os.path.join(self.tmp, 'spindle.sock')
@@ -39,7 +39,8 @@ class Daemon:
             args += ['--set', s]
         self.args = args
         self.log = open(self.logpath, 'w')
-        self.proc = subprocess.Popen(args, stderr=self.log, stdout=self.log, preexec_fn=preexec)
+        self.proc = subprocess.Popen(args, stderr=self.log, stdout=self.log, preexec_fn=preexec,
+                                     env=dict(os.environ, **env) if env else None)
         self.pid = self.proc.pid
         end = time.monotonic() + 20
         while True:

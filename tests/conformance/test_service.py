@@ -14,6 +14,7 @@ import signal
 import socket
 import subprocess
 import tempfile
+import threading
 import time
 
 import harness
@@ -164,6 +165,49 @@ def daemon_cpu_s(d):
     return (int(fields[11]) + int(fields[12])) / os.sysconf('SC_CLK_TCK')
 
 
+class ServiceManager:
+    """systemd's side of sd_notify(): a datagram socket the daemon is
+    told of (NOTIFY_SOCKET, and WATCHDOG_USEC when watchdog_us), drained by
+    a thread that notes when each message came."""
+    def __init__(self, watchdog_us=None):
+        self.dir = tempfile.mkdtemp(prefix='spindle-notify-')
+        os.chmod(self.dir, 0o755)
+        self.path = os.path.join(self.dir, 'notify')
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_DGRAM)
+        self.sock.bind(self.path)
+        os.chmod(self.path, 0o777)       # the daemon may have dropped root
+        self.sock.settimeout(0.1)
+        self.messages = []               # (monotonic time, text)
+        self.env = {'NOTIFY_SOCKET': self.path}
+        if watchdog_us:
+            self.env['WATCHDOG_USEC'] = str(watchdog_us)
+        self.running = True
+        self.thread = threading.Thread(target=self._drain, daemon=True)
+        self.thread.start()
+
+    def _drain(self):
+        while self.running:
+            try:
+                data = self.sock.recv(4096)
+            except socket.timeout:
+                continue
+            except OSError:
+                break
+            self.messages.append((time.monotonic(), data.decode(errors='replace')))
+
+    def feeds(self, start=0.0, end=float('inf')):
+        return sum(1 for t, m in self.messages if start <= t < end and 'WATCHDOG=1' in m.split('\n'))
+
+    def said(self, what):
+        return any(what in m.split('\n') for _, m in self.messages)
+
+    def close(self):
+        self.running = False
+        self.thread.join()
+        self.sock.close()
+        shutil.rmtree(self.dir, ignore_errors=True)
+
+
 def small_fd_limit():
     resource.setrlimit(resource.RLIMIT_NOFILE, (96, 96))
 
@@ -173,10 +217,12 @@ def fd_exhaustion():
     """Out of fds: the daemon stops accepting for a while instead of
     spinning on accept(), reaps and serves meanwhile, and accepts again by
     itself once fds are free (EMFILE forced with RLIMIT_NOFILE = 96)."""
+    sm = ServiceManager(watchdog_us=1000000)     # fed every 0.25 s while making progress
     d = Daemon('max-clients=1000', 'max-clients-per-user=1000', 'max-incomplete-clients=1000',
-               'handshake-timeout-ms=60000', preexec=small_fd_limit)
+               'handshake-timeout-ms=60000', preexec=small_fd_limit, env=sm.env)
     try:
         wit = Witness(d)
+        attack = time.monotonic()
         socks = []
         last = time.monotonic()
         while len(socks) < 300 and time.monotonic() - last < 1.0:   # until the backlog stays full
@@ -214,12 +260,75 @@ def fd_exhaustion():
                 check(time.monotonic() < end, 'accepting again within 5 s of the fds coming free')
                 time.sleep(0.1)
         wit.check()
-        print(f'  daemon CPU {cpu:.1%} of a core while out of fds')
+        fed = sm.feeds(attack, time.monotonic())
+        took = time.monotonic() - attack
+        check(fed >= took / 0.25 / 2, f'the watchdog was fed {fed} times in {took:.1f} s: the daemon made progress')
+        check('watchdog not fed' not in d.logtext(), 'never withheld')
+        print(f'  daemon CPU {cpu:.1%} of a core while out of fds; watchdog fed {fed} times in {took:.1f} s')
         d.proc.send_signal(signal.SIGTERM)
         d.proc.wait(timeout=20)
         check('accepting paused' in d.logtext(), 'the pauses are counted in the log at exit')
+        check(sm.said('STOPPING=1'), 'STOPPING=1 at exit')
     finally:
         d.stop()
+        sm.close()
+
+
+@with_daemon('max-client-fds=8')
+def client_fd_cap(d):
+    """max-client-fds = 8: two syncs with 4 memfds each are held ahead
+    of their messages; a third is one too many (bad_fd, disconnected); the
+    others are served throughout and the fds go back to baseline."""
+    wit = Witness(d)
+    before = d.nfds()
+    ok, over = d.conn(), d.conn()
+    for c, n in ((ok, 2), (over, 3)):
+        for _ in range(n):
+            fds = [w.memfd(bytes(12)) for _ in range(4)]
+            cb = c.new_id()
+            c.objects[cb] = 'callback'
+            w.send_ignoring_close(c, c.encode(1, 'display.sync', cb)[0], fds)
+            for fd in fds:
+                os.close(fd)
+    ok.sync()
+    check(not ok.errors() and not ok.eof, f'8 fds ahead: {ok.errors()}')
+    over.expect_fatal((ERR['bad_fd'],), (0, 1))
+    over.close()
+    ok.close()
+    wit.check()
+    settle_fds(d, before)
+
+
+@case
+def watchdog():
+    """WATCHDOG=1 goes out at a quarter of WatchdogSec while the daemon
+    makes progress, and is withheld while it does not: a daemon stopped
+    (SIGSTOP) for twice its patience finds its state timer late when it
+    resumes, says so, and is fed again at the next check."""
+    sm = ServiceManager(watchdog_us=400000)
+    d = Daemon(env=sm.env)
+    try:
+        wit = Witness(d)
+        t0 = time.monotonic()
+        time.sleep(1.0)
+        fed = sm.feeds(t0, time.monotonic())
+        check(sm.said('READY=1'), 'READY=1')
+        check(fed >= 4, f'fed {fed} times in 1 s (every 0.1 s expected)')
+        d.proc.send_signal(signal.SIGSTOP)
+        time.sleep(0.5)
+        d.proc.send_signal(signal.SIGCONT)
+        t1 = time.monotonic()
+        time.sleep(1.0)
+        log = d.logtext()
+        check('watchdog not fed: the event loop is not serving' in log, f'withheld after the stop: {log[-2000:]}')
+        check('making progress again' in log, 'fed again')
+        fed = sm.feeds(t1, time.monotonic())
+        check(fed >= 4, f'fed {fed} times in the second after')
+        wit.check()
+        print(f'  watchdog: 400 ms, fed {fed} times in the second after a 0.5 s stop')
+    finally:
+        d.stop()
+        sm.close()
 
 
 def limits(c):
