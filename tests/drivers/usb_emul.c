@@ -4,15 +4,21 @@
  * while libusb waits in its ioctl for the answer. */
 #include "usb_emul.h"
 
+#include <dirent.h>
 #include <errno.h>
+#include <ftw.h>
+#include <limits.h>
 #include <linux/usbdevice_fs.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/ioctl.h>
+#include <sys/socket.h>
+#include <sys/un.h>
 #include <time.h>
 #include <umockdev.h>
+#include <unistd.h>
 
 #include "log.h"
 #include "proj_sim_dev.h"
@@ -45,6 +51,9 @@ struct usb_emul {
 	uint8_t inject[256];
 	size_t inject_len;
 	struct usb_emul_stats st;
+	usb_emul_node_rule *rule;
+	void *rule_data;
+	char node[PATH_MAX]; /* the node's file in the testbed */
 };
 
 static void fifo_push(struct urb_fifo *f, struct usbdevfs_urb *urb)
@@ -283,6 +292,9 @@ struct usb_emul *usb_emul_create(void)
 	e->clients = g_ptr_array_new_with_free_func(g_object_unref);
 	e->rotor = sim_rotor_create(1800.0);
 	e->testbed = umockdev_testbed_new();
+	char *root = umockdev_testbed_get_root_dir(e->testbed);
+	snprintf(e->node, sizeof(e->node), "%s%s", root, DEV_PATH);
+	g_free(root);
 	e->handler = umockdev_ioctl_base_new();
 	g_signal_connect(e->handler, "handle-ioctl", G_CALLBACK(handle_ioctl), e);
 	g_signal_connect(e->handler, "client-connected", G_CALLBACK(on_client_connected), e);
@@ -338,7 +350,7 @@ int usb_emul_plug(struct usb_emul *e, const struct geometry *geom, uint32_t buff
 	e->attached = true;
 	if (!umockdev_testbed_add_from_string(e->testbed, device_text, NULL))
 		return -EIO;
-	return 0;
+	return e->rule ? usb_emul_apply_node_rule(e) : 0;
 }
 
 void usb_emul_unplug(struct usb_emul *e)
@@ -401,4 +413,87 @@ void usb_emul_get_stats(struct usb_emul *e, struct usb_emul_stats *out)
 	pthread_mutex_lock(&e->lock);
 	*out = e->st;
 	pthread_mutex_unlock(&e->lock);
+}
+
+void usb_emul_set_node_rule(struct usb_emul *e, usb_emul_node_rule *rule, void *data)
+{
+	e->rule = rule;
+	e->rule_data = data;
+}
+
+int usb_emul_apply_node_rule(struct usb_emul *e)
+{
+	pthread_mutex_lock(&e->lock);
+	bool plugged = e->dev;
+	pthread_mutex_unlock(&e->lock);
+	if (!plugged)
+		return -ENODEV;
+	return e->rule ? e->rule(e->rule_data, e->node) : 0;
+}
+
+const char *usb_emul_node_path(const struct usb_emul *e)
+{
+	return e->node;
+}
+
+/* What chown_one() needs, as nftw() passes its callback no data: set for
+ * the time of one walk. */
+static struct {
+	const struct usb_emul *e;
+	uid_t uid;
+	gid_t gid;
+} chown_walk;
+
+static int chown_one(const char *path, const struct stat *st, int type, struct FTW *ftw)
+{
+	if (!strcmp(path, chown_walk.e->node))
+		return 0;
+	return lchown(path, chown_walk.uid, chown_walk.gid) < 0 ? -errno : 0;
+}
+
+int usb_emul_chown_testbed(struct usb_emul *e, uid_t uid, gid_t gid)
+{
+	char *root = umockdev_testbed_get_root_dir(e->testbed);
+	chown_walk.e = e;
+	chown_walk.uid = uid;
+	chown_walk.gid = gid;
+	int r = nftw(root, chown_one, 16, FTW_PHYS);
+	g_free(root);
+	return r < 0 ? -errno : r;
+}
+
+/* Whether fd is a socket connected to the node's ioctl socket, which is
+ * <root>/ioctl/dev/... (the preload library may double the slash). */
+static bool ioctl_client(const struct usb_emul *e, int fd)
+{
+	struct sockaddr_un addr;
+	socklen_t len = sizeof(addr);
+	if (getpeername(fd, (struct sockaddr *)&addr, &len) < 0 || addr.sun_family != AF_UNIX ||
+	    len <= offsetof(struct sockaddr_un, sun_path))
+		return false;
+	size_t n = strnlen(addr.sun_path, len - offsetof(struct sockaddr_un, sun_path));
+	size_t root = strlen(e->node) - strlen(DEV_PATH), dev = strlen(DEV_PATH);
+	return n > root + dev && !strncmp(addr.sun_path, e->node, root) &&
+	       !strncmp(addr.sun_path + root, "/ioctl/", 7) && !memcmp(addr.sun_path + n - dev, DEV_PATH, dev);
+}
+
+int usb_emul_close_stray_sockets(struct usb_emul *e)
+{
+	DIR *d = opendir("/proc/self/fd");
+	if (!d)
+		return -errno;
+	int stray[64], n = 0;
+	struct dirent *de;
+	while ((de = readdir(d)) && n < 64) {
+		char *end;
+		long fd = strtol(de->d_name, &end, 10);
+		if (*end || end == de->d_name || fd == dirfd(d))
+			continue;
+		if (ioctl_client(e, (int)fd))
+			stray[n++] = (int)fd;
+	}
+	closedir(d);
+	for (int i = 0; i < n; i++)
+		close(stray[i]);
+	return n;
 }

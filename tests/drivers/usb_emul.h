@@ -13,6 +13,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <sys/types.h>
 
 #include "geometry.h"
 #include "volume.h"
@@ -58,5 +59,50 @@ void usb_emul_get_stats(struct usb_emul *e, struct usb_emul_stats *out);
  * client closed (its worker thread does that a little later). Returns how
  * many opens it still serves. */
 int usb_emul_wait_closed(struct usb_emul *e, int ms);
+
+/* ---- Permissions, for a driver that runs unprivileged ----
+ *
+ * On a real system the kernel creates the device node root-owned and udev
+ * then applies its rule (owner, group, mode) before it passes the event on
+ * to libudev's listeners, libusb's hot-plug among them. Here the test
+ * process itself plays the kernel, and a rule set with
+ * usb_emul_set_node_rule() plays udev. */
+
+/* Gives the device node at path its owner, group and mode: 0 or a negative
+ * errno. */
+typedef int usb_emul_node_rule(void *data, const char *path);
+
+/* From now on usb_emul_plug() calls rule (NULL: none; the node keeps what
+ * umockdev gives it) on the device node once the device is in the testbed
+ * and before it returns, so before a driver can try to open it. The node
+ * is the file that open() of /dev/bus/usb/001/002 reaches, created anew
+ * at each plug: the kernel checks its owner, group and mode as it would
+ * the real node's. (The socket umockdev answers the node's ioctls on is
+ * no part of it: the preload library connects to it at each open, even
+ * a refused one, and exits the process when that connect() is refused.)
+ * A failing rule fails the plug. */
+void usb_emul_set_node_rule(struct usb_emul *e, usb_emul_node_rule *rule, void *data);
+/* Calls the rule again on the node of the device plugged now (as
+ * `udevadm trigger` does after a rule changed). 0, -ENODEV when none is
+ * plugged, or the rule's error. */
+int usb_emul_apply_node_rule(struct usb_emul *e);
+/* The node's file in the testbed (see usb_emul_set_node_rule()). */
+const char *usb_emul_node_path(const struct usb_emul *e);
+/* Gives every file of the testbed but the node to uid:gid, so that this
+ * process can go on playing the kernel after it gave up root: adding and
+ * removing the device's sysfs entries and node, and sending uevents to the
+ * listeners' sockets (umockdev connects to each, which needs write access,
+ * and aborts when refused); and so that the driver's opens can connect to
+ * the node's ioctl socket. The tree is the test's plumbing; the node alone
+ * stands for what udev guards. 0 or a negative errno. */
+int usb_emul_chown_testbed(struct usb_emul *e, uid_t uid, gid_t gid);
+/* Closes what the preload library leaves of the opens of the node that the
+ * kernel refused: it connects to the node's ioctl socket at each open,
+ * refused or not, and closes that socket only with the fd the open
+ * returned, so a refused open's stays, an fd of this process and a client
+ * of the emulator (which usb_emul_wait_closed() would wait for in vain).
+ * For a time no driver holds the device open (its own connection would go
+ * too). Returns how many it closed. */
+int usb_emul_close_stray_sockets(struct usb_emul *e);
 
 #endif
