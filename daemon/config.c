@@ -29,6 +29,8 @@ void config_defaults(struct config *cfg)
 		.max_vertices = 32u << 20,
 		.max_primitives = 8u << 20,
 		.max_scene_primitives = 16u << 20,
+		.cache = true,
+		.cache_budget = 256ull << 20,
 		.exclusive = POLICY_ADMIN,
 	};
 	strcpy(cfg->admin_group, "spindle-admin");
@@ -199,6 +201,10 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u64(&cfg->max_primitives, value, 0, 1ull << 32);
 	if (!strcmp(key, "max-scene-primitives"))
 		return set_u64(&cfg->max_scene_primitives, value, 0, 1ull << 32);
+	if (!strcmp(key, "cache"))
+		return set_bool(&cfg->cache, value);
+	if (!strcmp(key, "cache-budget"))
+		return set_u64(&cfg->cache_budget, value, 0, UINT64_MAX / 2);
 	if (!strcmp(key, "exclusive"))
 		return set_policy(&cfg->exclusive, value);
 	if (!strcmp(key, "admin-group"))

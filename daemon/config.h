@@ -47,6 +47,8 @@ struct config {
 	uint64_t max_vertices;                 /* per client */
 	uint64_t max_primitives;               /* per client, per volume */
 	uint64_t max_scene_primitives;         /* all clients, per volume: priority decides */
+	bool cache;                            /* the object cache and compositor (cache.h) */
+	uint64_t cache_budget;                 /* bytes it may hold */
 	enum policy exclusive;                 /* who may have exclusive layers */
 	char admin_group[32];                  /* may capture, and be exclusive under "admin" */
 	char user[32]; /* started as root: run as this user after opening the devices ("root": stay root) */

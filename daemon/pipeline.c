@@ -9,8 +9,10 @@
 #include <systemd/sd-event.h>
 #include <unistd.h>
 
+#include "cache.h"
 #include "devices.h"
 #include "log.h"
+#include "pool.h"
 #include "projector.h"
 #include "render.h"
 #include "snapshot.h"
@@ -59,6 +61,9 @@ struct pipeline {
 	int done_fd;
 	sd_event_source *done_source;
 	sd_event_source *start_timer; /* a render put off (render_start_time()) */
+	/* The object cache, or NULL (off), and the threads it composes on. */
+	struct cache *cache;
+	struct pool *pool;
 };
 
 static void *render_thread(void *data)
@@ -72,7 +77,8 @@ static void *render_thread(void *data)
 			break;
 		const struct scene *scene = p->job_scene;
 		pthread_mutex_unlock(&p->lock);
-		int r = render_volume(p->renderer, scene, p->work);
+		int r = p->cache ? cache_render(p->cache, p->renderer, scene, p->work)
+				 : render_volume(p->renderer, scene, p->work);
 		pthread_mutex_lock(&p->lock);
 		p->result = r;
 		p->job = false;
@@ -177,6 +183,9 @@ static void start_render(struct pipeline *p)
 		skip_unchanged(p);
 		return;
 	}
+	if (p->cache && cache_plan(p->cache, p->building) < 0)
+		log_warn("object cache: out of memory planning volume %llu; rendering it whole",
+			 (unsigned long long)p->next_seq);
 	uint64_t seq = p->next_seq++;
 	p->listener->scene_taken(p->data, seq, false);
 	p->busy = true;
@@ -282,6 +291,8 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 	int64_t ns = now_ns() - p->started_ns;
 	pthread_mutex_unlock(&p->lock);
 	p->busy = false;
+	if (p->cache)
+		cache_done(p->cache, r);
 	if (r < 0) {
 		log_error("render failed: %s", strerror(-r));
 		snapshot_release(p->building);
@@ -393,6 +404,28 @@ void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out)
 	*out = p->stats;
 }
 
+bool pipeline_get_cache_stats(const struct pipeline *p, struct cache_stats *out)
+{
+	if (!p->cache)
+		return false;
+	cache_get_stats(p->cache, out);
+	return true;
+}
+
+static int create_cache(struct pipeline *p, const struct geometry *g)
+{
+	unsigned threads = p->cfg.threads;
+	if (!threads) {
+		long n = sysconf(_SC_NPROCESSORS_ONLN);
+		threads = n > 0 ? (unsigned)n : 1;
+	}
+	p->pool = pool_create(threads);
+	if (!p->pool)
+		return -errno;
+	p->cache = cache_create(g, p->cfg.cache_budget, p->pool);
+	return p->cache ? 0 : -errno;
+}
+
 static int create_volumes(struct pipeline *p, const struct geometry *g)
 {
 	p->work = volume_create(g);
@@ -430,7 +463,7 @@ struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct rende
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->cond, NULL);
 	r = create_volumes(p, &renderer->geom);
-	if (r < 0)
+	if (r < 0 || (cfg->cache && (r = create_cache(p, &renderer->geom)) < 0))
 		goto err;
 	p->done_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
 	if (p->done_fd < 0) {
@@ -472,6 +505,8 @@ void pipeline_destroy(struct pipeline *p)
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++)
 		volume_destroy(p->content[b]);
 	volume_destroy(p->work);
+	cache_destroy(p->cache);
+	pool_destroy(p->pool);
 	render_destroy(p->renderer);
 	pthread_mutex_destroy(&p->lock);
 	pthread_cond_destroy(&p->cond);

@@ -32,6 +32,10 @@ struct pipeline_config {
 	struct stage *stage;     /* what is shown, read at each scene taken */
 	struct devices *devices; /* its projector, and when revolutions start */
 	uint64_t max_scene_primitives;
+	/* The object cache (cache.h): off renders every scene whole. */
+	bool cache;
+	uint64_t cache_budget; /* bytes */
+	unsigned threads;      /* composing; 0 = one per core */
 };
 
 #define PIPELINE_LISTENER_VERSION 1
@@ -79,5 +83,8 @@ int64_t pipeline_render_started(struct pipeline *p);
 /* The volume on display as the daemon sent it, or NULL before the first. */
 const struct volume *pipeline_shown(const struct pipeline *p);
 void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out);
+struct cache_stats;
+/* The object cache's counters; false (out untouched) when it is off. */
+bool pipeline_get_cache_stats(const struct pipeline *p, struct cache_stats *out);
 
 #endif

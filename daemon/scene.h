@@ -27,9 +27,20 @@ struct scene_draw {
 				  * immutable while the scene lives */
 };
 
+/* A retained object: the draws of one layer (its list placed by its
+ * transform), the unit the object cache keeps (cache.h). Renderers draw
+ * the draws and ignore the objects. */
+struct scene_object {
+	uint64_t key;        /* the same while the object lives (its layer's serial), never 0 */
+	uint32_t first_draw; /* its draws are draws[first_draw, first_draw + draw_count) */
+	uint32_t draw_count;
+};
+
 struct scene {
 	uint32_t draw_count;
 	const struct scene_draw *draws;
+	uint32_t object_count; /* 0: the draws are no objects (one render) */
+	const struct scene_object *objects;
 };
 
 #endif

@@ -538,6 +538,9 @@ static int setup_render(struct server *srv)
 		.stage = &srv->stage,
 		.devices = srv->dev,
 		.max_scene_primitives = cfg->max_scene_primitives,
+		.cache = cfg->cache,
+		.cache_budget = cfg->cache_budget,
+		.threads = cfg->render_threads,
 	};
 	srv->pipe = pipeline_create(&pc, r, &pipeline_listener, srv);
 	return srv->pipe ? 0 : -errno;

@@ -22,9 +22,29 @@ static int snapshot_grow(struct snapshot *snap)
 	return 0;
 }
 
+static int add_object(struct snapshot *snap, const struct stage_layer *y)
+{
+	if (snap->scene.object_count == snap->object_cap) {
+		uint32_t cap = snap->object_cap ? snap->object_cap * 2 : 16;
+		struct scene_object *o = realloc(snap->objects, cap * sizeof(*o));
+		if (!o)
+			return -ENOMEM;
+		snap->objects = o;
+		snap->object_cap = cap;
+	}
+	snap->objects[snap->scene.object_count++] = (struct scene_object){
+		.key = y->serial,
+		.first_draw = snap->scene.draw_count,
+		.draw_count = y->draws->count,
+	};
+	return 0;
+}
+
 static int add_layer(struct snapshot *snap, const struct stage_layer *y)
 {
 	const struct draw_array *a = y->draws;
+	if (a->count && add_object(snap, y) < 0)
+		return -ENOMEM;
 	for (uint32_t i = 0; i < a->count; i++) {
 		const struct list_item *d = &a->items[i];
 		if (snap->scene.draw_count == snap->cap && snapshot_grow(snap) < 0)
@@ -48,6 +68,7 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y)
 int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget)
 {
 	snap->scene.draw_count = 0;
+	snap->scene.object_count = 0;
 	snap->layers_left_out = 0;
 	int n = stage_shown_layers(stage, &snap->layers, &snap->layer_cap);
 	if (n < 0)
@@ -68,6 +89,7 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 		}
 	}
 	snap->scene.draws = snap->draws;
+	snap->scene.objects = snap->objects;
 	return 0;
 }
 
@@ -93,6 +115,7 @@ void snapshot_release(struct snapshot *snap)
 	for (uint32_t i = 0; i < snap->scene.draw_count; i++)
 		vdata_unref(snap->data[i]);
 	snap->scene.draw_count = 0;
+	snap->scene.object_count = 0;
 }
 
 void snapshot_finish(struct snapshot *snap)
@@ -100,6 +123,7 @@ void snapshot_finish(struct snapshot *snap)
 	snapshot_release(snap);
 	free(snap->draws);
 	free(snap->data);
+	free(snap->objects);
 	free(snap->layers);
 	*snap = (struct snapshot){ 0 };
 }

@@ -18,6 +18,8 @@ struct snapshot {
 	struct scene_draw *draws;
 	struct vdata **data; /* one reference per draw */
 	uint32_t cap;
+	struct scene_object *objects; /* one per layer drawn, in order */
+	uint32_t object_cap;
 	/* Work space: the layers shown, in priority order. */
 	const struct stage_layer **layers;
 	uint32_t layer_count, layer_cap;

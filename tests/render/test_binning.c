@@ -173,7 +173,7 @@ static void check_variants(const struct geometry *g)
 		rtest_draw(SCENE_TRIANGLES, &tri, 77, 128, 201),
 		rtest_draw(SCENE_POINTS, &pts, 255, 1, 254),
 	};
-	struct scene scene = { 2, d };
+	struct scene scene = { .draw_count = 2, .draws = d };
 	struct volume *ref = NULL;
 	for (const struct halftone_variant *v = halftone_variants(); v->name; v++) {
 		struct render_cpu_options o = { .threads = 2, .simd = v->name };

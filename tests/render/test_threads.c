@@ -75,7 +75,7 @@ static void check_repeat(const struct geometry *g)
 	struct busy a, b;
 	busy_init(&a, 1);
 	busy_init(&b, 2);
-	struct scene sa = { 4, a.draws }, sb = { 4, b.draws };
+	struct scene sa = { .draw_count = 4, .draws = a.draws }, sb = { .draw_count = 4, .draws = b.draws };
 	struct renderer *r = render_create("cpu", g, 0);
 	struct volume *v1 = volume_create(g), *v2 = volume_create(g), *vb = volume_create(g);
 	CHECK(r && v1 && v2 && vb);
@@ -86,7 +86,7 @@ static void check_repeat(const struct geometry *g)
 	CHECK(!rtest_same(v1, v2));
 	CHECK(render_volume(r, &sa, v2) == 0); /* over old content */
 	CHECK(rtest_same(v1, v2));
-	struct scene empty = { 0, NULL };
+	struct scene empty = { 0 };
 	CHECK(render_volume(r, &empty, v2) == 0);
 	CHECK(volume_tile_count(v2) == 0);
 	volume_destroy(v1);
@@ -103,7 +103,7 @@ static void check_create(void)
 	struct renderer *r = render_create("auto", &g, 0);
 	CHECK(r && r->impl && r->impl->name);
 	struct volume *vol = volume_create(&other);
-	struct scene empty = { 0, NULL };
+	struct scene empty = { 0 };
 	CHECK(render_volume(r, &empty, vol) == -EINVAL);
 	render_destroy(r);
 	volume_destroy(vol);

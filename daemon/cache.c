@@ -1,0 +1,545 @@
+/* The object cache and compositor (cache.h). */
+#include "cache.h"
+
+#include <errno.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "compose.h"
+#include "draw.h"
+#include "log.h"
+#include "renderer.h"
+#include "snapshot.h"
+#include "volume.h"
+
+/* Volumes in a row an object must come unchanged before it is cached,
+ * shifted left by its back-off. */
+#define CREATE_AFTER 1
+#define MAX_BACKOFF 6 /* waits of up to 64 volumes */
+/* Hits in a row that take one step off the back-off. */
+#define HITS_PER_FORGIVE 64
+/* Volumes an object may be missing from the scene (a hidden layer) before
+ * its entry goes. */
+#define IDLE_VOLUMES 24
+
+enum role {
+	ROLE_REST,   /* rendered with every other object not cached */
+	ROLE_CREATE, /* rendered alone; its volume kept */
+	ROLE_USE,    /* composed from its volume */
+};
+
+struct entry {
+	uint64_t key;
+	uint8_t reuse;       /* volumes in a row it came unchanged, saturating */
+	uint8_t backoff;     /* times its cached volume was dropped for a change, saturating */
+	uint8_t hits;        /* hits since the back-off last wore off by one */
+	uint8_t absent;      /* volumes in a row it was not in the scene */
+	bool seen;           /* in the scene being planned */
+	bool in_base;        /* its volume is ORed into the base */
+	enum role role;      /* in the plan */
+	uint32_t first_draw; /* in the planned scene */
+	uint64_t last_used;  /* the plan that last composed it */
+	/* What it draws (copies of the scene's draws, with references to
+	 * their vertex data so that identity means equality). */
+	struct scene_draw *draws;
+	struct vdata **refs;
+	uint32_t draw_count;
+	struct rle_volume *vol; /* its rendered volume, or NULL */
+};
+
+struct cache {
+	struct geometry geom;
+	uint64_t budget;
+	struct compose *compose;
+	/* Entries, sorted by key. */
+	struct entry **entries;
+	uint32_t count, cap;
+	/* The base: the OR of the volumes of the entries in_base, or NULL.
+	 * base_next is where a new base is composed. */
+	struct volume *base, *base_next;
+	bool base_valid;
+	/* The plan, made by cache_plan() for cache_render(). */
+	bool planned;
+	uint64_t plan_seq;
+	bool rebuild_base; /* compose the base anew from every used entry */
+	struct entry **uses, **creates;
+	uint32_t use_count, create_count, array_cap;
+	struct scene_draw *rest;
+	uint32_t rest_count, rest_cap, rest_objects;
+	struct rle_volume **created; /* creates[i]'s volume, made by the render */
+	struct volume *rest_vol, *tmp;
+	struct compose_source *sources;
+	uint32_t source_cap;
+	uint32_t render_us, compose_us; /* of the last render */
+	struct cache_stats stats;
+};
+
+struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool)
+{
+	struct cache *c = calloc(1, sizeof(*c));
+	if (!c)
+		return NULL;
+	c->geom = *geom;
+	c->budget = budget;
+	c->compose = compose_create(geom, pool);
+	c->base = volume_create(geom);
+	c->base_next = volume_create(geom);
+	c->rest_vol = volume_create(geom);
+	c->tmp = volume_create(geom);
+	if (!c->compose || !c->base || !c->base_next || !c->rest_vol || !c->tmp) {
+		cache_destroy(c);
+		errno = ENOMEM;
+		return NULL;
+	}
+	return c;
+}
+
+static void drop_volume(struct cache *c, struct entry *e)
+{
+	if (!e->vol)
+		return;
+	rle_volume_free(e->vol);
+	e->vol = NULL;
+	if (e->in_base)
+		c->base_valid = false; /* composed anew without it */
+	e->in_base = false;
+}
+
+static void release_draws(struct entry *e)
+{
+	for (uint32_t i = 0; i < e->draw_count; i++)
+		vdata_unref(e->refs[i]);
+	free(e->draws);
+	free(e->refs);
+	e->draws = NULL;
+	e->refs = NULL;
+	e->draw_count = 0;
+}
+
+static void free_entry(struct cache *c, struct entry *e)
+{
+	drop_volume(c, e);
+	release_draws(e);
+	free(e);
+}
+
+void cache_destroy(struct cache *c)
+{
+	if (!c)
+		return;
+	for (uint32_t i = 0; i < c->count; i++)
+		free_entry(c, c->entries[i]);
+	for (uint32_t i = 0; c->created && i < c->create_count; i++)
+		rle_volume_free(c->created[i]);
+	free(c->entries);
+	free(c->uses);
+	free(c->creates);
+	free(c->created);
+	free(c->rest);
+	free(c->sources);
+	volume_destroy(c->base);
+	volume_destroy(c->base_next);
+	volume_destroy(c->rest_vol);
+	volume_destroy(c->tmp);
+	compose_destroy(c->compose);
+	free(c);
+}
+
+/* ---- entries ---- */
+
+/* The index of key, or where it would go. */
+static uint32_t find(const struct cache *c, uint64_t key)
+{
+	uint32_t lo = 0, hi = c->count;
+	while (lo < hi) {
+		uint32_t mid = lo + (hi - lo) / 2;
+		if (c->entries[mid]->key < key)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	return lo;
+}
+
+static struct entry *lookup_or_add(struct cache *c, uint64_t key)
+{
+	uint32_t i = find(c, key);
+	if (i < c->count && c->entries[i]->key == key)
+		return c->entries[i];
+	if (c->count == c->cap) {
+		uint32_t cap = c->cap ? c->cap * 2 : 64;
+		struct entry **a = realloc(c->entries, cap * sizeof(*a));
+		if (!a)
+			return NULL;
+		c->entries = a;
+		c->cap = cap;
+	}
+	struct entry *e = calloc(1, sizeof(*e));
+	if (!e)
+		return NULL;
+	e->key = key;
+	memmove(c->entries + i + 1, c->entries + i, (c->count - i) * sizeof(*c->entries));
+	c->entries[i] = e;
+	c->count++;
+	return e;
+}
+
+static bool draw_equal(const struct scene_draw *a, const struct scene_draw *b)
+{
+	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->prim_rgb == b->prim_rgb &&
+	       a->point_size == b->point_size && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
+}
+
+static bool unchanged(const struct entry *e, const struct scene_draw *draws, uint32_t n)
+{
+	if (e->draw_count != n)
+		return false;
+	for (uint32_t i = 0; i < n; i++)
+		if (!draw_equal(&e->draws[i], &draws[i]))
+			return false;
+	return true;
+}
+
+/* The entry now follows these draws (with references to their data). */
+static int follow(struct entry *e, const struct scene_draw *draws, struct vdata *const *data, uint32_t n)
+{
+	struct scene_draw *d = malloc(n * sizeof(*d));
+	struct vdata **refs = malloc(n * sizeof(*refs));
+	if (!d || !refs) {
+		free(d);
+		free(refs);
+		return -ENOMEM;
+	}
+	memcpy(d, draws, n * sizeof(*d));
+	for (uint32_t i = 0; i < n; i++)
+		refs[i] = vdata_ref(data[i]);
+	release_draws(e);
+	e->draws = d;
+	e->refs = refs;
+	e->draw_count = n;
+	return 0;
+}
+
+static uint8_t sat_inc(uint8_t v, uint8_t max)
+{
+	return v < max ? (uint8_t)(v + 1) : max;
+}
+
+/* Tile storage a volume has allocated. */
+static uint64_t volume_held(const struct volume *v)
+{
+	uint64_t b = (uint64_t)v->image_count * (sizeof(*v->images) + v->mask_bytes);
+	for (uint32_t k = 0; k < v->image_count; k++)
+		b += (uint64_t)v->images[k].tile_cap * VOLUME_TILE_BYTES;
+	return b;
+}
+
+/* Bytes held now against the budget: the coded volumes, the base and the
+ * bookkeeping. (The volumes it renders and composes into are working
+ * storage, as the pipeline's own volumes are: not counted.) */
+static uint64_t held(const struct cache *c)
+{
+	uint64_t b = (uint64_t)c->cap * sizeof(*c->entries) + (uint64_t)c->count * sizeof(struct entry);
+	for (uint32_t i = 0; i < c->count; i++) {
+		const struct entry *e = c->entries[i];
+		b += (uint64_t)e->draw_count * (sizeof(*e->draws) + sizeof(*e->refs));
+		if (e->vol)
+			b += e->vol->bytes;
+	}
+	return c->base_valid ? b + volume_sparse_bytes(c->base) : b;
+}
+
+/* Drops the volumes of the least recently used entries not used by the
+ * plan being made until the cache holds at most target bytes. An entry
+ * evicted backs off as a changed one does: it waits longer before it is
+ * cached again, so a budget too small for the scene does not make the
+ * cache render objects alone only to throw them away. */
+static void evict_to(struct cache *c, uint64_t target)
+{
+	uint64_t now = held(c);
+	while (now > target) {
+		struct entry *lru = NULL;
+		for (uint32_t i = 0; i < c->count; i++) {
+			struct entry *e = c->entries[i];
+			if (e->vol && !(c->planned && e->role == ROLE_USE) && (!lru || e->last_used < lru->last_used))
+				lru = e;
+		}
+		if (!lru)
+			break;
+		now -= lru->vol->bytes;
+		drop_volume(c, lru);
+		lru->reuse = 0;
+		lru->backoff = sat_inc(lru->backoff, MAX_BACKOFF);
+		c->stats.evictions++;
+	}
+}
+
+static int grow_plan(struct cache *c, uint32_t objects)
+{
+	if (objects <= c->array_cap)
+		return 0;
+	uint32_t cap = c->array_cap ? c->array_cap : 64;
+	while (cap < objects)
+		cap *= 2;
+	struct entry **u = realloc(c->uses, cap * sizeof(*u));
+	if (!u)
+		return -ENOMEM;
+	c->uses = u;
+	struct entry **k = realloc(c->creates, cap * sizeof(*k));
+	if (!k)
+		return -ENOMEM;
+	c->creates = k;
+	struct rle_volume **v = realloc(c->created, cap * sizeof(*v));
+	if (!v)
+		return -ENOMEM;
+	c->created = v;
+	struct compose_source *s = realloc(c->sources, (cap + 2) * sizeof(*s));
+	if (!s)
+		return -ENOMEM;
+	c->sources = s;
+	c->source_cap = cap + 2;
+	c->array_cap = cap;
+	return 0;
+}
+
+static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
+{
+	if (c->rest_count + n > c->rest_cap) {
+		uint32_t cap = c->rest_cap ? c->rest_cap : 64;
+		while (cap < c->rest_count + n)
+			cap *= 2;
+		struct scene_draw *r = realloc(c->rest, cap * sizeof(*r));
+		if (!r)
+			return -ENOMEM;
+		c->rest = r;
+		c->rest_cap = cap;
+	}
+	memcpy(c->rest + c->rest_count, draws, n * sizeof(*draws));
+	c->rest_count += n;
+	c->rest_objects++;
+	return 0;
+}
+
+/* The role of object e this volume, and its state moved on. room: the
+ * budget has room for new entries. */
+static enum role decide(struct cache *c, struct entry *e, bool same, bool room)
+{
+	if (!same) {
+		if (e->vol) {
+			drop_volume(c, e);
+			e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
+			c->stats.invalidations++;
+		}
+		e->reuse = 0;
+		e->hits = 0;
+		return ROLE_REST;
+	}
+	e->reuse = sat_inc(e->reuse, UINT8_MAX);
+	if (e->vol) {
+		e->hits = sat_inc(e->hits, HITS_PER_FORGIVE);
+		if (e->hits == HITS_PER_FORGIVE && e->backoff) {
+			e->backoff--;
+			e->hits = 0;
+		}
+		return ROLE_USE;
+	}
+	uint32_t wait = (uint32_t)CREATE_AFTER << e->backoff;
+	if (e->reuse >= (wait < UINT8_MAX ? wait : UINT8_MAX) && room)
+		return ROLE_CREATE;
+	return ROLE_REST;
+}
+
+int cache_plan(struct cache *c, const struct snapshot *snap)
+{
+	const struct scene *s = &snap->scene;
+	c->planned = false;
+	c->plan_seq++;
+	c->use_count = c->create_count = c->rest_count = c->rest_objects = 0;
+	if (grow_plan(c, s->object_count) < 0)
+		return -ENOMEM;
+	for (uint32_t i = 0; i < c->count; i++)
+		c->entries[i]->seen = false;
+	bool room = held(c) < c->budget;
+	for (uint32_t o = 0; o < s->object_count; o++) {
+		const struct scene_object *obj = &s->objects[o];
+		const struct scene_draw *draws = s->draws + obj->first_draw;
+		struct entry *e = lookup_or_add(c, obj->key);
+		if (!e)
+			return -ENOMEM;
+		bool fresh = e->draw_count == 0 && !e->draws;
+		bool same = !fresh && unchanged(e, draws, obj->draw_count);
+		if (!same && follow(e, draws, snap->data + obj->first_draw, obj->draw_count) < 0)
+			return -ENOMEM;
+		e->seen = true;
+		e->absent = 0;
+		e->first_draw = obj->first_draw;
+		e->role = decide(c, e, same, room);
+		switch (e->role) {
+		case ROLE_USE:
+			e->last_used = c->plan_seq;
+			c->uses[c->use_count++] = e;
+			c->stats.hits++;
+			break;
+		case ROLE_CREATE:
+			e->last_used = c->plan_seq;
+			c->creates[c->create_count++] = e;
+			c->stats.misses++;
+			break;
+		case ROLE_REST:
+			if (add_rest(c, draws, obj->draw_count) < 0)
+				return -ENOMEM;
+			c->stats.misses++;
+			break;
+		}
+	}
+	/* Objects missing from the scene: kept a while (a layer hidden and
+	 * shown again), then forgotten. Their volumes leave the base. */
+	for (uint32_t i = 0; i < c->count;) {
+		struct entry *e = c->entries[i];
+		if (!e->seen) {
+			e->role = ROLE_REST;
+			if (e->in_base)
+				c->base_valid = false;
+			e->absent = sat_inc(e->absent, UINT8_MAX);
+			if (e->absent > IDLE_VOLUMES) {
+				free_entry(c, e);
+				memmove(c->entries + i, c->entries + i + 1, (c->count - i - 1) * sizeof(*c->entries));
+				c->count--;
+				c->stats.expired++;
+				continue;
+			}
+		}
+		i++;
+	}
+	/* The base stays while every entry in it is used; new ones are
+	 * ORed in. One that left makes it be composed anew. */
+	for (uint32_t i = 0; i < c->count; i++) {
+		const struct entry *e = c->entries[i];
+		if (e->in_base && e->role != ROLE_USE)
+			c->base_valid = false;
+	}
+	c->planned = true;
+	evict_to(c, c->budget);
+	c->rebuild_base = !c->base_valid;
+	for (uint32_t i = 0; i < c->create_count; i++)
+		c->created[i] = NULL;
+	return 0;
+}
+
+/* ---- the render thread ---- */
+
+static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
+{
+	return (struct scene){ .draw_count = n, .draws = draws };
+}
+
+int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
+{
+	if (!c->planned)
+		return render_volume(r, scene, out);
+	int64_t t0 = now_ns();
+	int err;
+	/* Everything rendered: nothing to compose. */
+	if (c->use_count == 0 && c->create_count == 0) {
+		struct scene rest = sub_scene(c->rest, c->rest_count);
+		err = render_volume(r, &rest, out);
+		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
+		c->compose_us = 0;
+		return err;
+	}
+	unsigned n = 0;
+	if (c->rest_count) {
+		struct scene rest = sub_scene(c->rest, c->rest_count);
+		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
+			return err;
+		c->sources[n++] = (struct compose_source){ .vol = c->rest_vol };
+	}
+	for (uint32_t i = 0; i < c->create_count; i++) {
+		const struct entry *e = c->creates[i];
+		struct scene one = sub_scene(scene->draws + e->first_draw, e->draw_count);
+		if ((err = render_volume(r, &one, c->tmp)) < 0)
+			return err;
+		if (!(c->created[i] = rle_volume_encode(c->tmp)))
+			return -ENOMEM;
+		c->sources[n++] = (struct compose_source){ .rle = c->created[i] };
+	}
+	int64_t t1 = now_ns();
+	if (c->use_count) {
+		/* The base: anew from every entry used, or the old one with
+		 * the entries used for the first time ORed in. */
+		unsigned m = 0;
+		struct compose_source *bs = c->sources + n;
+		if (!c->rebuild_base)
+			bs[m++] = (struct compose_source){ .vol = c->base };
+		for (uint32_t i = 0; i < c->use_count; i++)
+			if (c->rebuild_base || !c->uses[i]->in_base)
+				bs[m++] = (struct compose_source){ .rle = c->uses[i]->vol };
+		if (m > 1 || c->rebuild_base) {
+			if ((err = compose_volumes(c->compose, c->base_next, bs, m)) < 0)
+				return err;
+			struct volume *t = c->base;
+			c->base = c->base_next;
+			c->base_next = t;
+		}
+		c->sources[n++] = (struct compose_source){ .vol = c->base };
+	}
+	err = compose_volumes(c->compose, out, c->sources, n);
+	int64_t t2 = now_ns();
+	c->render_us = (uint32_t)((t1 - t0) / 1000);
+	c->compose_us = (uint32_t)((t2 - t1) / 1000);
+	return err;
+}
+
+/* ---- after ---- */
+
+void cache_done(struct cache *c, int result)
+{
+	if (!c->planned)
+		return;
+	c->planned = false;
+	if (result < 0) {
+		/* Nothing of this render is trusted: the base is composed
+		 * anew, the entries to be made are not. */
+		for (uint32_t i = 0; i < c->create_count; i++) {
+			rle_volume_free(c->created[i]);
+			c->created[i] = NULL;
+		}
+		for (uint32_t i = 0; i < c->count; i++)
+			c->entries[i]->in_base = false;
+		c->base_valid = false;
+		return;
+	}
+	if (c->use_count) {
+		for (uint32_t i = 0; i < c->count; i++)
+			c->entries[i]->in_base = false;
+		for (uint32_t i = 0; i < c->use_count; i++)
+			c->uses[i]->in_base = true;
+		c->base_valid = true;
+	} else {
+		c->base_valid = false;
+	}
+	for (uint32_t i = 0; i < c->create_count; i++) {
+		c->creates[i]->vol = c->created[i];
+		c->created[i] = NULL;
+		c->stats.creates++;
+	}
+	c->stats.last_rendered = c->rest_objects + c->create_count;
+	c->stats.last_reused = c->use_count;
+	c->stats.last_render_us = c->render_us;
+	c->stats.last_compose_us = c->compose_us;
+	evict_to(c, c->budget);
+}
+
+void cache_get_stats(const struct cache *c, struct cache_stats *out)
+{
+	*out = c->stats;
+	out->objects = c->count;
+	out->cached = 0;
+	for (uint32_t i = 0; i < c->count; i++)
+		out->cached += c->entries[i]->vol != NULL;
+	out->bytes = held(c);
+	out->budget = c->budget;
+	out->working_bytes =
+		volume_held(c->base) + volume_held(c->base_next) + volume_held(c->rest_vol) + volume_held(c->tmp);
+}

@@ -1,0 +1,88 @@
+/* The object cache and compositor (DESIGN.md section 5: the seed thesis'
+ * automatic impostors, in volume form).
+ *
+ * Each object of a scene (a layer: its list placed by its transform, struct
+ * scene_object) has an entry that follows it from volume to volume through
+ * the thesis' states:
+ *
+ * - analyse: the entry counts the volumes in a row the object came
+ *   unchanged (draw for draw the same vertex data, by identity, transform,
+ *   colour and point size), in a saturating counter;
+ * - create: once that count says reuse is likely, the object is rendered on
+ *   its own and its volume kept, run-length coded (compose.h);
+ * - use: while it stays unchanged the volume is composed from the entry
+ *   and the object is not rendered;
+ * - idle: a changed object loses its volume and must stay unchanged longer
+ *   before it is cached again (a saturating back-off that doubles the wait
+ *   and wears off with use), so an object that keeps changing stops being
+ *   cached; an object gone from the scene for a while loses its entry.
+ *
+ * The volume shown is the OR of the cached volumes and the render of every
+ * object not composed from the cache (compose.h says why that is exact:
+ * bit for bit the renderer's render of the whole scene). The cached volumes
+ * in use are kept ORed together in a base volume, rebuilt only when one of
+ * them leaves, so a static scene costs a composition of two volumes.
+ *
+ * Entries, with the base, stay within a byte budget: past it the least
+ * recently used entries lose their volumes. The cache is driven from the
+ * daemon's loop (cache_plan(), cache_done()) and runs its renders and
+ * compositions on the render thread (cache_render()), never both at once. */
+#ifndef SPINDLE_CACHE_H
+#define SPINDLE_CACHE_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "geometry.h"
+
+struct pool;
+struct renderer;
+struct scene;
+struct snapshot;
+struct volume;
+
+struct cache_stats {
+	uint32_t objects;       /* entries: objects being followed */
+	uint32_t cached;        /* of them holding a volume */
+	uint64_t bytes;         /* held: coded volumes, the base, bookkeeping */
+	uint64_t budget;        /* cache-budget */
+	uint64_t working_bytes; /* the volumes it renders and composes into (not in bytes) */
+	uint64_t hits;          /* objects composed from the cache, summed over volumes */
+	uint64_t misses;        /* objects rendered, summed over volumes */
+	uint64_t creates;       /* volumes cached */
+	uint64_t invalidations; /* cached volumes dropped because their object changed */
+	uint64_t evictions;     /* cached volumes dropped over the budget */
+	uint64_t expired;       /* entries dropped, their object gone from the scene */
+	/* The last volume: */
+	uint32_t last_rendered;  /* objects rendered (new entries and the rest) */
+	uint32_t last_reused;    /* objects composed from the cache */
+	uint32_t last_render_us; /* rendering them */
+	uint32_t last_compose_us;
+};
+
+struct cache;
+
+/* A cache for volumes of geom, holding at most budget bytes. pool (may be
+ * NULL) runs the compositions; it stays the caller's and must outlive the
+ * cache. NULL + errno. */
+struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool);
+/* Accepts NULL. */
+void cache_destroy(struct cache *c);
+
+/* Before a render (the loop's thread): decides, object by object of snap,
+ * whether it is composed from its entry, rendered into a new one, or
+ * rendered with the rest. Takes references to the vertex data of the
+ * objects it follows. 0, or -ENOMEM: then cache_render() renders the
+ * whole scene as it is. */
+int cache_plan(struct cache *c, const struct snapshot *snap);
+/* The render (the render thread): renders with r what the plan says and
+ * composes the result into out. scene is the planned snapshot's. 0 or
+ * negative errno (out is then unusable). */
+int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out);
+/* After the render (the loop's thread): takes the new entries in, or, when
+ * result < 0, forgets what the render was to make; keeps the budget. */
+void cache_done(struct cache *c, int result);
+
+void cache_get_stats(const struct cache *c, struct cache_stats *out);
+
+#endif

@@ -1,0 +1,310 @@
+/* Composition of packed volumes by OR, and their run-length coded form
+ * (compose.h). */
+#include "compose.h"
+
+#include <errno.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "pool.h"
+
+#define MAX_LITERAL 128
+#define MAX_ZEROS 128
+
+/* Codes one tile into out (room for VOLUME_TILE_BYTES + its control bytes,
+ * at most VOLUME_TILE_BYTES + VOLUME_TILE_BYTES / MAX_LITERAL + 1);
+ * returns the bytes written. */
+static size_t encode_tile(const uint8_t *tile, uint8_t *out)
+{
+	size_t o = 0, i = 0;
+	while (i < VOLUME_TILE_BYTES) {
+		size_t n = 0;
+		while (i + n < VOLUME_TILE_BYTES && tile[i + n] == 0 && n < MAX_ZEROS)
+			n++;
+		if (n > 0) {
+			out[o++] = (uint8_t)(127 + n);
+			i += n;
+			continue;
+		}
+		/* Literals up to the next pair of zeros (a lone zero is cheaper
+		 * kept literal than coded). */
+		while (i + n < VOLUME_TILE_BYTES && n < MAX_LITERAL &&
+		       !(tile[i + n] == 0 && (i + n + 1 == VOLUME_TILE_BYTES || tile[i + n + 1] == 0)))
+			n++;
+		out[o++] = (uint8_t)(n - 1);
+		memcpy(out + o, tile + i, n);
+		o += n;
+		i += n;
+	}
+	return o;
+}
+
+/* ORs one coded tile into dst; returns the coded bytes read, or 0 when the
+ * code is broken (it never is for what encode_tile() wrote). */
+static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
+{
+	size_t o = 0, i = 0;
+	while (o < VOLUME_TILE_BYTES) {
+		if (i >= avail)
+			return 0;
+		uint8_t c = in[i++];
+		if (c >= 128) {
+			o += (size_t)c - 127;
+			continue;
+		}
+		size_t n = (size_t)c + 1;
+		if (i + n > avail || o + n > VOLUME_TILE_BYTES)
+			return 0;
+		for (size_t j = 0; j < n; j++)
+			dst[o + j] |= in[i + j];
+		i += n;
+		o += n;
+	}
+	return o == VOLUME_TILE_BYTES ? i : 0;
+}
+
+struct rle_volume *rle_volume_encode(const struct volume *vol)
+{
+	struct rle_volume *r = calloc(1, sizeof(*r));
+	if (!r)
+		return NULL;
+	r->image_count = vol->image_count;
+	r->mask_bytes = vol->mask_bytes;
+	r->tiles_per_image = volume_tiles_per_image(vol);
+	r->images = calloc(vol->image_count, sizeof(*r->images));
+	if (!r->images)
+		goto fail;
+	r->bytes = sizeof(*r) + vol->image_count * sizeof(*r->images);
+	uint8_t *tmp = NULL;
+	size_t tmp_cap = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		const struct volume_image *img = &vol->images[k];
+		if (!img->tile_count)
+			continue;
+		size_t need = vol->mask_bytes + (size_t)img->tile_count * (VOLUME_TILE_BYTES + 4);
+		if (need > tmp_cap) {
+			uint8_t *t = realloc(tmp, need);
+			if (!t) {
+				free(tmp);
+				goto fail;
+			}
+			tmp = t;
+			tmp_cap = need;
+		}
+		memcpy(tmp, img->mask, vol->mask_bytes);
+		size_t len = vol->mask_bytes;
+		for (uint32_t i = 0; i < img->tile_count; i++)
+			len += encode_tile(img->tiles + (size_t)i * VOLUME_TILE_BYTES, tmp + len);
+		uint8_t *data = malloc(len);
+		if (!data) {
+			free(tmp);
+			goto fail;
+		}
+		memcpy(data, tmp, len);
+		r->images[k] = (struct rle_image){ .tile_count = img->tile_count, .len = (uint32_t)len, .data = data };
+		r->tiles += img->tile_count;
+		r->bytes += len;
+	}
+	free(tmp);
+	r->packed_bytes = r->tiles * VOLUME_TILE_BYTES;
+	return r;
+fail:
+	rle_volume_free(r);
+	errno = ENOMEM;
+	return NULL;
+}
+
+void rle_volume_free(struct rle_volume *r)
+{
+	if (!r)
+		return;
+	for (uint32_t k = 0; r->images && k < r->image_count; k++)
+		free(r->images[k].data);
+	free(r->images);
+	free(r);
+}
+
+/* ---- composition ---- */
+
+struct compose_worker {
+	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
+	uint8_t *touched; /* tiles_per_image flags */
+	int err;
+};
+
+struct compose {
+	struct pool *pool;
+	unsigned workers;
+	uint32_t tiles_per_image, mask_bytes, image_count;
+	struct compose_worker *w;
+	/* Per call: */
+	struct volume *out;
+	const struct compose_source *src;
+	unsigned n;
+	atomic_uint next_image;
+};
+
+struct compose *compose_create(const struct geometry *geom, struct pool *pool)
+{
+	struct volume *probe = volume_create(geom); /* its tiling */
+	if (!probe)
+		return NULL;
+	struct compose *c = calloc(1, sizeof(*c));
+	if (!c) {
+		volume_destroy(probe);
+		return NULL;
+	}
+	c->pool = pool;
+	c->workers = pool ? pool_workers(pool) : 1;
+	c->tiles_per_image = volume_tiles_per_image(probe);
+	c->mask_bytes = probe->mask_bytes;
+	c->image_count = probe->image_count;
+	volume_destroy(probe);
+	c->w = calloc(c->workers, sizeof(*c->w));
+	if (!c->w)
+		goto fail;
+	for (unsigned i = 0; i < c->workers; i++) {
+		c->w[i].tiles = calloc(c->tiles_per_image, VOLUME_TILE_BYTES);
+		c->w[i].touched = calloc(c->tiles_per_image, 1);
+		if (!c->w[i].tiles || !c->w[i].touched)
+			goto fail;
+	}
+	return c;
+fail:
+	compose_destroy(c);
+	errno = ENOMEM;
+	return NULL;
+}
+
+void compose_destroy(struct compose *c)
+{
+	if (!c)
+		return;
+	for (unsigned i = 0; c->w && i < c->workers; i++) {
+		free(c->w[i].tiles);
+		free(c->w[i].touched);
+	}
+	free(c->w);
+	free(c);
+}
+
+static void or_tile(uint8_t *dst, const uint8_t *src)
+{
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i++)
+		dst[i] |= src[i];
+}
+
+/* The tile numbers a mask holds, in order: calls fn for the i-th stored
+ * tile. */
+#define FOR_EACH_TILE(mask, mask_bytes, t, i)                          \
+	for (uint32_t byte_ = 0, i = 0; byte_ < (mask_bytes); byte_++) \
+		for (uint32_t bits_ = (mask)[byte_], t;                \
+		     bits_ && ((t = byte_ * 8 + (uint32_t)__builtin_ctz(bits_)), 1); bits_ &= bits_ - 1, i++)
+
+/* Image k of every source ORed into w's dense image, then packed into out. */
+static int compose_image(struct compose *c, struct compose_worker *w, uint32_t k)
+{
+	uint32_t count = 0;
+	for (unsigned s = 0; s < c->n; s++) {
+		const struct compose_source *src = &c->src[s];
+		if (src->vol) {
+			const struct volume_image *img = &src->vol->images[k];
+			if (!img->tile_count)
+				continue;
+			FOR_EACH_TILE(img->mask, c->mask_bytes, t, i)
+			{
+				count += !w->touched[t];
+				w->touched[t] = 1;
+				or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES,
+					img->tiles + (size_t)i * VOLUME_TILE_BYTES);
+			}
+		} else {
+			const struct rle_image *img = &src->rle->images[k];
+			if (!img->tile_count)
+				continue;
+			const uint8_t *code = img->data + c->mask_bytes;
+			size_t avail = img->len - c->mask_bytes;
+			FOR_EACH_TILE(img->data, c->mask_bytes, t, i)
+			{
+				(void)i;
+				count += !w->touched[t];
+				w->touched[t] = 1;
+				size_t used = or_coded_tile(code, avail, w->tiles + (size_t)t * VOLUME_TILE_BYTES);
+				if (!used)
+					return -EINVAL;
+				code += used;
+				avail -= used;
+			}
+		}
+	}
+	if (!count)
+		return 0;
+	int err = volume_image_reserve(c->out, k, count);
+	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
+		if (!w->touched[t])
+			continue;
+		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+		if (err == 0)
+			err = volume_image_append(c->out, k, t, tile);
+		memset(tile, 0, VOLUME_TILE_BYTES);
+		w->touched[t] = 0;
+	}
+	return err;
+}
+
+static void compose_job(void *arg, unsigned index)
+{
+	struct compose *c = arg;
+	struct compose_worker *w = &c->w[index];
+	for (;;) {
+		uint32_t k = atomic_fetch_add(&c->next_image, 1);
+		if (k >= c->image_count)
+			break;
+		int err = compose_image(c, w, k);
+		if (err < 0 && w->err == 0)
+			w->err = err;
+	}
+}
+
+int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n)
+{
+	if (out->image_count != c->image_count || volume_tiles_per_image(out) != c->tiles_per_image)
+		return -EINVAL;
+	for (unsigned s = 0; s < n; s++) {
+		if (src[s].vol == out || (!src[s].vol && !src[s].rle))
+			return -EINVAL;
+		if (src[s].vol && src[s].vol->image_count != c->image_count)
+			return -EINVAL;
+		if (src[s].rle &&
+		    (src[s].rle->image_count != c->image_count || src[s].rle->mask_bytes != c->mask_bytes))
+			return -EINVAL;
+	}
+	volume_clear(out);
+	c->out = out;
+	c->src = src;
+	c->n = n;
+	atomic_store(&c->next_image, 0);
+	for (unsigned i = 0; i < c->workers; i++)
+		c->w[i].err = 0;
+	if (c->pool)
+		pool_run(c->pool, compose_job, c);
+	else
+		compose_job(c, 0);
+	int err = 0;
+	for (unsigned i = 0; i < c->workers && !err; i++)
+		err = c->w[i].err;
+	c->out = NULL;
+	return err;
+}
+
+int rle_volume_decode(const struct rle_volume *r, struct volume *out)
+{
+	struct compose *c = compose_create(&out->geom, NULL);
+	if (!c)
+		return -ENOMEM;
+	struct compose_source s = { .rle = r };
+	int err = compose_volumes(c, out, &s, 1);
+	compose_destroy(c);
+	return err;
+}

@@ -1,0 +1,363 @@
+/* The object cache and compositor (daemon/cache.h) against full renders:
+ * random sequences of objects created, left unchanged, moved (by arbitrary
+ * transforms and by rotations about the axis of whole slice steps),
+ * recoloured, given new vertex data, hidden and shown again, deleted, and
+ * deleted several at once (a client disconnecting), with budgets from
+ * roomy to tiny (evictions) and none; every composed volume must be bit for
+ * bit the renderer's full render of the same scene. The CPU renderer at
+ * two geometries; the GL renderers, each against its own full render, when
+ * they run here. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cache.h"
+#include "check.h"
+#include "compose.h"
+#include "draw.h"
+#include "render.h"
+#include "rtest.h"
+#include "snapshot.h"
+
+#define MAX_OBJECTS 24
+#define MAX_DRAWS 2
+
+static uint64_t rng_state;
+
+static uint32_t rnd(void)
+{
+	/* splitmix64 */
+	uint64_t z = (rng_state += 0x9e3779b97f4a7c15ull);
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+	return (uint32_t)((z ^ (z >> 31)) >> 32);
+}
+
+static double unit(void)
+{
+	return rnd() / 4294967296.0;
+}
+
+static double range(double a, double b)
+{
+	return a + (b - a) * unit();
+}
+
+struct tobj {
+	bool alive, visible;
+	uint64_t key;
+	uint32_t ndraws;
+	struct vdata *data[MAX_DRAWS];
+	float transform[16];
+	uint8_t rgb[MAX_DRAWS][3];
+	uint8_t point_size;
+};
+
+struct world {
+	const struct geometry *geom;
+	struct tobj obj[MAX_OBJECTS];
+	uint64_t next_key;
+	/* The scene as the daemon's snapshot would carry it. */
+	struct snapshot snap;
+	struct scene_draw draws[MAX_OBJECTS * MAX_DRAWS];
+	struct vdata *data[MAX_OBJECTS * MAX_DRAWS];
+	struct scene_object objects[MAX_OBJECTS];
+};
+
+static struct vdata *make_data(void)
+{
+	enum scene_prim prim = (enum scene_prim)(rnd() % 3);
+	uint32_t per = prim == SCENE_POINTS ? 1 : prim == SCENE_LINES ? 2 : 3;
+	uint32_t prims = 1 + rnd() % 12;
+	uint32_t count = prims * per;
+	struct vdata *v = calloc(1, sizeof(*v) + count * 3 * sizeof(float));
+	CHECK(v != NULL);
+	v->refs = 1;
+	v->prim = prim;
+	v->count = count;
+	v->prims = prims;
+	/* Small shapes around a point of the volume. */
+	double cx = range(-0.6, 0.6), cy = range(-0.6, 0.6), cz = range(-0.6, 0.6);
+	for (uint32_t i = 0; i < count; i++) {
+		v->xyz[3 * i] = (float)(cx + range(-0.3, 0.3));
+		v->xyz[3 * i + 1] = (float)(cy + range(-0.3, 0.3));
+		v->xyz[3 * i + 2] = (float)(cz + range(-0.3, 0.3));
+	}
+	if (rnd() % 4 == 0) {
+		v->prim_rgb = malloc(prims * 3);
+		CHECK(v->prim_rgb != NULL);
+		for (uint32_t i = 0; i < prims * 3; i++)
+			v->prim_rgb[i] = (uint8_t)rnd();
+	}
+	return v;
+}
+
+static void free_data(struct vdata *v)
+{
+	if (v && v->refs == 1)
+		free(v->prim_rgb); /* vdata_unref() frees the rest */
+	vdata_unref(v);
+}
+
+static void random_transform(float t[16])
+{
+	double a = range(0, 2 * M_PI), s = range(0.5, 1.3);
+	memset(t, 0, 16 * sizeof(float));
+	t[0] = (float)(s * cos(a));
+	t[2] = (float)(-s * sin(a));
+	t[5] = (float)s;
+	t[8] = (float)(s * sin(a));
+	t[10] = (float)(s * cos(a));
+	t[12] = (float)range(-0.2, 0.2);
+	t[13] = (float)range(-0.2, 0.2);
+	t[14] = (float)range(-0.2, 0.2);
+	t[15] = 1;
+}
+
+/* t = R_y(steps slices) * t: a turn about the axis by whole images. */
+static void turn(const struct geometry *g, float t[16], int steps)
+{
+	double a = 2 * M_PI * steps / g->images_per_rev;
+	double c = cos(a), s = sin(a);
+	for (int col = 0; col < 4; col++) {
+		double x = t[col * 4], z = t[col * 4 + 2];
+		t[col * 4] = (float)(c * x - s * z);
+		t[col * 4 + 2] = (float)(s * x + c * z);
+	}
+}
+
+static void random_colour(uint8_t rgb[3])
+{
+	for (int c = 0; c < 3; c++) {
+		uint32_t r = rnd() % 4;
+		rgb[c] = r == 0 ? 0 : r == 1 ? 255 : (uint8_t)rnd();
+	}
+}
+
+static void create(struct world *w, struct tobj *o)
+{
+	*o = (struct tobj){ .alive = true, .visible = true, .key = ++w->next_key };
+	o->ndraws = 1 + rnd() % MAX_DRAWS;
+	for (uint32_t d = 0; d < o->ndraws; d++) {
+		o->data[d] = make_data();
+		random_colour(o->rgb[d]);
+	}
+	random_transform(o->transform);
+	o->point_size = (uint8_t)(1 + rnd() % 3);
+}
+
+static void destroy(struct tobj *o)
+{
+	for (uint32_t d = 0; d < o->ndraws; d++)
+		free_data(o->data[d]);
+	*o = (struct tobj){ 0 };
+}
+
+/* One random change; returns its name. */
+static const char *mutate(struct world *w)
+{
+	struct tobj *o = &w->obj[rnd() % MAX_OBJECTS];
+	if (!o->alive) {
+		create(w, o);
+		return "create";
+	}
+	switch (rnd() % 8) {
+	case 0:
+		random_transform(o->transform);
+		return "move";
+	case 1:
+	case 2:
+		turn(w->geom, o->transform, 1 + (int)(rnd() % 5));
+		return "turn";
+	case 3:
+		random_colour(o->rgb[rnd() % o->ndraws]);
+		return "colour";
+	case 4: {
+		uint32_t d = rnd() % o->ndraws;
+		free_data(o->data[d]);
+		o->data[d] = make_data();
+		return "data";
+	}
+	case 5:
+		o->visible = !o->visible;
+		return "hide/show";
+	case 6:
+		destroy(o);
+		return "delete";
+	default: /* a client with several objects goes */
+		for (int i = 0; i < 3; i++)
+			destroy(&w->obj[rnd() % MAX_OBJECTS]);
+		return "disconnect";
+	}
+}
+
+static void build(struct world *w)
+{
+	uint32_t nd = 0, no = 0;
+	for (int i = 0; i < MAX_OBJECTS; i++) {
+		const struct tobj *o = &w->obj[i];
+		if (!o->alive || !o->visible)
+			continue;
+		w->objects[no++] = (struct scene_object){ .key = o->key, .first_draw = nd, .draw_count = o->ndraws };
+		for (uint32_t d = 0; d < o->ndraws; d++) {
+			struct scene_draw *sd = &w->draws[nd];
+			*sd = (struct scene_draw){
+				.prim = o->data[d]->prim,
+				.count = o->data[d]->count,
+				.xyz = o->data[d]->xyz,
+				.point_size = o->point_size,
+				.prim_rgb = o->data[d]->prim_rgb,
+			};
+			memcpy(sd->transform, o->transform, sizeof(sd->transform));
+			memcpy(sd->rgb, o->rgb[d], 3);
+			w->data[nd++] = o->data[d];
+		}
+	}
+	w->snap.draws = w->draws;
+	w->snap.data = w->data;
+	w->snap.objects = w->objects;
+	w->snap.scene =
+		(struct scene){ .draw_count = nd, .draws = w->draws, .object_count = no, .objects = w->objects };
+}
+
+struct run_totals {
+	unsigned volumes;
+	struct cache_stats st;
+};
+
+/* steps volumes of random changes through a cache of budget bytes on r;
+ * each composed volume against r's full render. */
+static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t seed, struct run_totals *out)
+{
+	const struct geometry *g = &r->geom;
+	rng_state = seed;
+	struct world w = { .geom = g };
+	struct cache *c = cache_create(g, budget, NULL);
+	CHECK(c != NULL);
+	struct volume *composed = volume_create(g), *full = volume_create(g);
+	CHECK(composed && full);
+	for (int i = 0; i < MAX_OBJECTS / 2; i++)
+		create(&w, &w.obj[i]);
+	unsigned bad = 0;
+	for (unsigned s = 0; s < steps; s++) {
+		/* Often nothing changes (that is what gets cached), sometimes
+		 * several things do. */
+		unsigned changes = rnd() % 3 == 0 ? 1 + rnd() % 3 : 0;
+		const char *what = "unchanged";
+		for (unsigned i = 0; i < changes; i++)
+			what = mutate(&w);
+		build(&w);
+		CHECK_EQ(cache_plan(c, &w.snap), 0);
+		int err = cache_render(c, r, &w.snap.scene, composed);
+		cache_done(c, err);
+		CHECK_EQ(err, 0);
+		CHECK_EQ(render_volume(r, &w.snap.scene, full), 0);
+		if (!rtest_same(composed, full)) {
+			if (bad++ < 5)
+				printf("  %s: step %u (%s): composed volume differs from the full render\n",
+				       r->impl->name, s, what);
+		}
+	}
+	CHECK_EQ(bad, 0);
+	cache_get_stats(c, &out->st);
+	out->volumes = steps;
+	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
+	       "misses %llu, creates %llu, invalidations %llu, evictions %llu, expired %llu\n",
+	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, steps,
+	       out->st.objects, out->st.cached, (unsigned long long)out->st.bytes, (unsigned long long)out->st.hits,
+	       (unsigned long long)out->st.misses, (unsigned long long)out->st.creates,
+	       (unsigned long long)out->st.invalidations, (unsigned long long)out->st.evictions,
+	       (unsigned long long)out->st.expired);
+	CHECK(out->st.bytes <= budget || out->st.cached == 0);
+	cache_destroy(c);
+	for (int i = 0; i < MAX_OBJECTS; i++)
+		if (w.obj[i].alive)
+			destroy(&w.obj[i]);
+	volume_destroy(composed);
+	volume_destroy(full);
+}
+
+/* The run-length code round trip, and composing volumes by OR. */
+static void test_codec(void)
+{
+	struct geometry g = rtest_small();
+	rng_state = 7;
+	struct world w = { .geom = &g };
+	for (int i = 0; i < 6; i++)
+		create(&w, &w.obj[i]);
+	build(&w);
+	struct volume *v = rtest_render(&g, w.draws, w.snap.scene.draw_count, 2);
+	struct rle_volume *r = rle_volume_encode(v);
+	CHECK(r != NULL);
+	struct volume *back = volume_create(&g);
+	CHECK_EQ(rle_volume_decode(r, back), 0);
+	CHECK(rtest_same(v, back));
+	printf("codec: %llu tiles, %llu bytes packed, %llu coded (%.1f%%)\n", (unsigned long long)r->tiles,
+	       (unsigned long long)r->packed_bytes, (unsigned long long)r->bytes,
+	       100.0 * (double)r->bytes / (double)(r->packed_bytes ? r->packed_bytes : 1));
+	CHECK(r->bytes < r->packed_bytes);
+	/* The OR of each object rendered alone is the render of all. */
+	struct compose *cmp = compose_create(&g, NULL);
+	struct volume *parts[6];
+	struct compose_source src[7];
+	for (int i = 0; i < 6; i++) {
+		const struct scene_object *o = &w.objects[i];
+		parts[i] = rtest_render(&g, w.draws + o->first_draw, o->draw_count, 1);
+		src[i] = i % 2 ? (struct compose_source){ .vol = parts[i] } : (struct compose_source){ .rle = NULL };
+		if (i % 2 == 0) {
+			struct rle_volume *pr = rle_volume_encode(parts[i]);
+			CHECK(pr != NULL);
+			src[i] = (struct compose_source){ .rle = pr };
+		}
+	}
+	CHECK_EQ(compose_volumes(cmp, back, src, 6), 0);
+	CHECK(rtest_same(v, back));
+	src[6] = (struct compose_source){ .vol = back };
+	CHECK(compose_volumes(cmp, back, src, 7) < 0); /* out among the sources */
+	for (int i = 0; i < 6; i++) {
+		if (i % 2 == 0)
+			rle_volume_free((struct rle_volume *)src[i].rle);
+		volume_destroy(parts[i]);
+	}
+	compose_destroy(cmp);
+	rle_volume_free(r);
+	volume_destroy(back);
+	volume_destroy(v);
+	for (int i = 0; i < MAX_OBJECTS; i++)
+		if (w.obj[i].alive)
+			destroy(&w.obj[i]);
+}
+
+int main(void)
+{
+	test_codec();
+	struct geometry small = rtest_small(), odd = rtest_odd();
+	struct run_totals t;
+	struct renderer *cpu = render_cpu_create(&small, 2);
+	CHECK(cpu != NULL);
+	run(cpu, 64u << 20, 160, 1, &t);
+	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
+	run(cpu, 96u << 10, 120, 2, &t); /* a few entries at a time */
+	CHECK(t.st.evictions > 0);
+	run(cpu, 0, 40, 3, &t); /* nothing may be cached */
+	CHECK_EQ(t.st.creates, 0);
+	render_destroy(cpu);
+	cpu = render_cpu_create(&odd, 1);
+	CHECK(cpu != NULL);
+	run(cpu, 64u << 20, 100, 4, &t);
+	render_destroy(cpu);
+	const char *gl[] = { "egl", "osmesa" };
+	for (int i = 0; i < 2; i++) {
+		struct render_gl_options o = { .backend = gl[i], .threads = 2, .no_fallback = true };
+		struct renderer *r = render_gl_create(&small, &o);
+		if (!r) {
+			printf("%s: not here, skipped\n", gl[i]);
+			continue;
+		}
+		run(r, 64u << 20, 60, 5 + (uint64_t)i, &t);
+		CHECK(t.st.hits > 0);
+		render_destroy(r);
+	}
+	return check_done();
+}
