@@ -1,0 +1,360 @@
+/* spindle-bench-cache: the object cache and compositor (daemon/cache.h)
+ * through the code the daemon runs (cache_plan, cache_render, cache_done
+ * around the CPU renderer), at perspecta, against full renders of the
+ * same scenes in the same run. See bench/README.md.
+ *
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] DRAGON.ply */
+#include <errno.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "cache.h"
+#include "draw.h"
+#include "log.h"
+#include "render.h"
+#include "rng.h"
+#include "scenes.h"
+#include "shapes.h"
+#include "snapshot.h"
+
+#define MAX_OBJECTS 1024
+
+/* A scene of objects, one draw each, as the daemon's snapshot carries it. */
+struct bscene {
+	struct snapshot snap;
+	struct scene_draw draws[MAX_OBJECTS];
+	struct scene_object objects[MAX_OBJECTS];
+	struct vdata *data[MAX_OBJECTS];
+	uint32_t n;
+};
+
+static struct vdata *token(void)
+{
+	struct vdata *v = calloc(1, sizeof(*v)); /* only counted: identity is the xyz pointer */
+	if (!v)
+		abort();
+	v->refs = 1;
+	return v;
+}
+
+static void bscene_add(struct bscene *b, const struct scene_draw *d)
+{
+	uint32_t i = b->n++;
+	b->draws[i] = *d;
+	b->objects[i] = (struct scene_object){ .key = i + 1, .first_draw = i, .draw_count = 1 };
+	b->data[i] = token();
+	b->snap.draws = b->draws;
+	b->snap.data = b->data;
+	b->snap.objects = b->objects;
+	b->snap.scene =
+		(struct scene){ .draw_count = b->n, .draws = b->draws, .object_count = b->n, .objects = b->objects };
+}
+
+static void bscene_free(struct bscene *b)
+{
+	for (uint32_t i = 0; i < b->n; i++)
+		vdata_unref(b->data[i]);
+}
+
+struct opts {
+	unsigned volumes;
+	double seconds;
+	const char *profile, *dragon;
+};
+
+struct result {
+	unsigned n;
+	double median_ms, p99_ms, vol_s;
+	double render_ms, compose_ms; /* medians of the cache's split */
+	struct cache_stats st;
+};
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return x < y ? -1 : x > y;
+}
+
+typedef void (*animate_fn)(struct bscene *b, uint64_t frame, void *arg);
+
+/* Renders volumes of b (animated by fn before each) with the cache (or
+ * whole, cache NULL): 3 warm-up volumes, then until opts' count or time. */
+static void measure(struct renderer *r, struct cache *cache, struct bscene *b, animate_fn fn, void *arg,
+		    const struct opts *o, struct result *res)
+{
+	struct volume *out = volume_create(&r->geom);
+	double *ms = calloc(o->volumes, sizeof(double)), *rms = calloc(o->volumes, sizeof(double)),
+	       *cms = calloc(o->volumes, sizeof(double));
+	if (!out || !ms || !rms || !cms)
+		abort();
+	uint64_t frame = 0;
+	unsigned n = 0;
+	int64_t start = 0;
+	for (;;) {
+		bool warm = frame >= 3;
+		if (warm && !start)
+			start = now_ns();
+		if (warm && (n == o->volumes || (double)(now_ns() - start) / 1e9 > o->seconds))
+			break;
+		int64_t t0 = now_ns();
+		if (fn)
+			fn(b, frame, arg);
+		int err;
+		if (cache) {
+			if (cache_plan(cache, &b->snap) < 0)
+				abort();
+			err = cache_render(cache, r, &b->snap.scene, out);
+			cache_done(cache, err);
+		} else {
+			err = render_volume(r, &b->snap.scene, out);
+		}
+		if (err < 0) {
+			fprintf(stderr, "render failed: %s\n", strerror(-err));
+			exit(1);
+		}
+		double t = (double)(now_ns() - t0) / 1e6;
+		frame++;
+		if (!warm)
+			continue;
+		ms[n] = t;
+		if (cache) {
+			struct cache_stats st;
+			cache_get_stats(cache, &st);
+			rms[n] = st.last_render_us / 1e3;
+			cms[n] = st.last_compose_us / 1e3;
+		}
+		n++;
+	}
+	double total = (double)(now_ns() - start) / 1e9;
+	qsort(ms, n, sizeof(double), cmp_double);
+	qsort(rms, n, sizeof(double), cmp_double);
+	qsort(cms, n, sizeof(double), cmp_double);
+	*res = (struct result){
+		.n = n,
+		.median_ms = ms[n / 2],
+		.p99_ms = ms[(unsigned)ceil(0.99 * n) - 1],
+		.vol_s = n / total,
+		.render_ms = rms[n / 2],
+		.compose_ms = cms[n / 2],
+	};
+	if (cache)
+		cache_get_stats(cache, &res->st);
+	free(ms);
+	free(rms);
+	free(cms);
+	volume_destroy(out);
+}
+
+static void row(const char *scene, const char *how, const struct result *r, const char *note)
+{
+	printf("| %s | %s | %u | %.1f | %.2f | %.2f | ", scene, how, r->n, r->vol_s, r->median_ms, r->p99_ms);
+	if (r->st.budget)
+		printf("%.2f | %.2f | %llu / %llu | %.1f | %s |\n", r->render_ms, r->compose_ms,
+		       (unsigned long long)r->st.hits, (unsigned long long)r->st.misses, r->st.bytes / 1048576.0, note);
+	else
+		printf(" |  |  |  | %s |\n", note);
+	fflush(stdout);
+}
+
+/* ---- the scenes ---- */
+
+struct orbiter {
+	struct orbit_params {
+		double radius, y, phase, speed, spin, tilt;
+	} o[MAX_OBJECTS];
+	double volume_s;
+	uint32_t first;  /* objects before first never move */
+	double fraction; /* of the moving ones that move each volume (1: all) */
+	struct rng rng;
+};
+
+static void orbit_init(struct orbit_params *o, struct rng *rng, double h)
+{
+	double sign = rng_unit(rng) < 0.5 ? -1 : 1;
+	o->radius = rng_range(rng, 0.1, 0.9);
+	o->y = rng_range(rng, -0.9, 0.9) * h;
+	o->phase = rng_range(rng, 0, 2 * M_PI);
+	o->speed = sign * rng_range(rng, 0.3, 3.0);
+	o->spin = rng_range(rng, -5.0, 5.0);
+	o->tilt = rng_range(rng, 0, M_PI);
+}
+
+static void pose(struct bscene *b, const struct orbiter * or, uint32_t i, uint64_t frame)
+{
+	const struct orbit_params *o = & or->o[i];
+	double t = (double)frame * or->volume_s;
+	double a = o->phase + o->speed * t;
+	double pos[3] = { o->radius * cos(a), o->y, o->radius * sin(a) };
+	mat4_pose(b->draws[i].transform, pos, o->tilt, o->spin * t, 1.0);
+}
+
+static void animate_orbits(struct bscene *b, uint64_t frame, void *arg)
+{
+	struct orbiter * or = arg;
+	for (uint32_t i = or->first; i < b->n; i++)
+		if (or->fraction >= 1 || rng_unit(& or->rng) < or->fraction)
+			pose(b, or, i, frame);
+}
+
+/* The dragon turned about the axis by one image step per volume. */
+static void animate_turntable(struct bscene *b, uint64_t frame, void *arg)
+{
+	const struct geometry *g = arg;
+	double a = 2 * M_PI * (double)frame / g->images_per_rev;
+	float *t = b->draws[0].transform;
+	memset(t, 0, 16 * sizeof(float));
+	t[0] = (float)cos(a);
+	t[2] = (float)sin(a);
+	t[5] = 1;
+	t[8] = (float)-sin(a);
+	t[10] = (float)cos(a);
+	t[15] = 1;
+}
+
+static const uint8_t orange[3] = { 255, 128, 0 };
+
+static struct scene_draw icosahedron(const struct vbuf *v, const uint8_t rgb[3])
+{
+	struct scene_draw d = { .prim = SCENE_TRIANGLES, .count = v->count, .xyz = v->xyz };
+	for (int i = 0; i < 16; i++)
+		d.transform[i] = i % 5 == 0;
+	memcpy(d.rgb, rgb, 3);
+	return d;
+}
+
+static long rss_kb(void)
+{
+	FILE *f = fopen("/proc/self/status", "r");
+	char line[256];
+	long kb = 0;
+	while (f && fgets(line, sizeof(line), f))
+		if (sscanf(line, "VmRSS: %ld", &kb) == 1)
+			break;
+	if (f)
+		fclose(f);
+	return kb;
+}
+
+int main(int argc, char **argv)
+{
+	struct opts o = { .volumes = 100, .seconds = 4, .profile = "perspecta" };
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--volumes") && i + 1 < argc)
+			o.volumes = (unsigned)atoi(argv[++i]);
+		else if (!strcmp(argv[i], "--seconds") && i + 1 < argc)
+			o.seconds = atof(argv[++i]);
+		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
+			o.profile = argv[++i];
+		else if (argv[i][0] != '-')
+			o.dragon = argv[i];
+		else {
+			fprintf(stderr, "usage: %s [--volumes N] [--seconds S] [--profile P] [DRAGON.ply]\n", argv[0]);
+			return 2;
+		}
+	}
+	if (o.volumes < 1)
+		o.volumes = 1;
+	struct geometry g;
+	if (geometry_from_profile(o.profile, &g) < 0) {
+		fprintf(stderr, "unknown profile %s\n", o.profile);
+		return 2;
+	}
+	log_set_level(LOG_LEVEL_WARN);
+	struct renderer *r = render_cpu_create(&g, 0);
+	struct cache *cache = cache_create(&g, 256ull << 20, NULL);
+	if (!r || !cache)
+		return 1;
+	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
+	       "warm-up volumes, then up to %u volumes or %.0f s; ms per volume (plan + render + compose, animation "
+	       "included), median and p99; render / compose: the cache's split, medians; hits / misses: objects, "
+	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
+	       o.profile, g.width, g.height, g.images_per_rev, g.mirrored ? ", mirrored" : "", r->stats.threads,
+	       o.volumes, o.seconds);
+	printf("| scene | how | volumes | vol/s | median ms | p99 ms | render ms | compose ms | hits / misses | cache "
+	       "MB "
+	       "| |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
+
+	struct vbuf ico = { 0 };
+	shape_icosahedron(&ico, 0.03);
+	struct orbiter * or = calloc(1, sizeof(* or));
+	or->volume_s = 1.0 / (g.rpm / 60.0 * (g.mirrored ? 2 : 1));
+	or->rng = rng_seed(0x5350494e444c4534u);
+	for (uint32_t i = 0; i < MAX_OBJECTS; i++)
+		orbit_init(& or->o[i], & or->rng, g.half_height);
+	struct result solo, res;
+
+	/* An animated object alone, and beside the static dragon. */
+	struct bscene *b = calloc(1, sizeof(*b));
+	struct scene_draw d = icosahedron(&ico, orange);
+	bscene_add(b, &d);
+	or->first = 0;
+	or->fraction = 1;
+	measure(r, NULL, b, animate_orbits, or, &o, &solo);
+	row("icosahedron alone", "full render", &solo, "");
+	bscene_free(b);
+	char err[256];
+	struct bench_scene dragon = { 0 };
+	struct bench_files files = { .dragon = o.dragon };
+	if (o.dragon && bench_scene_build("S3-dragon", &g, &files, &dragon, err, sizeof(err)) == 0) {
+		memset(b, 0, sizeof(*b));
+		bscene_add(b, &dragon.draws[0]);
+		bscene_add(b, &d);
+		or->first = 1;
+		measure(r, NULL, b, animate_orbits, or, &o, &res);
+		row("dragon (static) + icosahedron", "full render", &res, "");
+		measure(r, cache, b, animate_orbits, or, &o, &res);
+		char note[128];
+		snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
+		row("dragon (static) + icosahedron", "cache", &res, note);
+		cache_destroy(cache);
+		cache = cache_create(&g, 256ull << 20, NULL);
+		bscene_free(b);
+
+		/* Turntable: one image step per volume. */
+		memset(b, 0, sizeof(*b));
+		bscene_add(b, &dragon.draws[0]);
+		measure(r, NULL, b, animate_turntable, &g, &o, &res);
+		row("dragon turning one image a volume", "full render", &res, "");
+		measure(r, cache, b, animate_turntable, &g, &o, &res);
+		row("dragon turning one image a volume", "cache", &res, "");
+		cache_destroy(cache);
+		cache = cache_create(&g, 256ull << 20, NULL);
+		bscene_free(b);
+	} else {
+		printf("\n(no dragon: %s)\n", o.dragon ? err : "give dragon_vrip.ply");
+	}
+
+	/* S4: 1,000 icosahedra; all move each volume, or a random 10%. */
+	memset(b, 0, sizeof(*b));
+	for (uint32_t i = 0; i < 1000; i++) {
+		static const uint8_t six[6][3] = { { 255, 0, 0 },   { 0, 255, 0 },   { 0, 0, 255 },
+						   { 255, 255, 0 }, { 255, 0, 255 }, { 0, 255, 255 } };
+		struct scene_draw di = icosahedron(&ico, six[i % 6]);
+		bscene_add(b, &di);
+		pose(b, or, i, 0);
+	}
+	or->first = 0;
+	or->fraction = 1;
+	measure(r, NULL, b, animate_orbits, or, &o, &solo);
+	row("S4: 1,000 objects, all move", "full render", &solo, "");
+	or->fraction = 0.1;
+	measure(r, NULL, b, animate_orbits, or, &o, &res);
+	row("S4: 1,000 objects, 10% move", "full render", &res, "");
+	measure(r, cache, b, animate_orbits, or, &o, &res);
+	char note[128];
+	snprintf(note, sizeof(note), "%.2fx the full render of all moving", res.vol_s / solo.vol_s);
+	row("S4: 1,000 objects, 10% move", "cache", &res, note);
+	printf("\nRSS at the end: %.0f MB; cache working volumes %.1f MB.\n", rss_kb() / 1024.0,
+	       res.st.working_bytes / 1048576.0);
+	bscene_free(b);
+	free(b);
+	free(or);
+	bench_scene_free(&dragon);
+	cache_destroy(cache);
+	render_destroy(r);
+	vbuf_free(&ico);
+	return 0;
+}
