@@ -16,8 +16,11 @@
  * shifted left by its back-off. */
 #define CREATE_AFTER 1
 #define MAX_BACKOFF 6 /* waits of up to 64 volumes */
-/* Hits in a row that take one step off the back-off. */
-#define HITS_PER_FORGIVE 64
+/* Hits a cached volume must have had when its object changes for the
+ * caching to have paid: a volume rendered alone costs about what a few
+ * volumes of rendering the object among others do. Fewer, and the object
+ * backs off; as many, and the back-off wears off by one. */
+#define PAYOFF_HITS 4
 /* Volumes an object may be missing from the scene (a hidden layer) before
  * its entry goes. */
 #define IDLE_VOLUMES 24
@@ -32,10 +35,10 @@ struct entry {
 	uint64_t key;
 	uint8_t reuse;       /* volumes in a row it came unchanged, saturating */
 	uint8_t backoff;     /* times its cached volume was dropped for a change, saturating */
-	uint8_t hits;        /* hits since the back-off last wore off by one */
+	uint8_t hits;        /* hits of its cached volume, saturating at PAYOFF_HITS */
 	uint8_t absent;      /* volumes in a row it was not in the scene */
 	bool seen;           /* in the scene being planned */
-	bool in_base;        /* its volume is ORed into the base */
+	bool in_prev;        /* its volume is in the last composition */
 	enum role role;      /* in the plan */
 	uint32_t first_draw; /* in the planned scene */
 	uint64_t last_used;  /* the plan that last composed it */
@@ -54,14 +57,15 @@ struct cache {
 	/* Entries, sorted by key. */
 	struct entry **entries;
 	uint32_t count, cap;
-	/* The base: the OR of the volumes of the entries in_base, or NULL.
-	 * base_next is where a new base is composed. */
-	struct volume *base, *base_next;
-	bool base_valid;
+	/* The last composition (what cache_render() last handed out), valid
+	 * or not, and per image the tiles of it that may have changed since:
+	 * where objects left it, where the rest was, where new ones come. */
+	struct volume *prev;
+	bool prev_valid, composed, rest_rendered;
+	uint8_t *dirty; /* image_count * mask_bytes */
 	/* The plan, made by cache_plan() for cache_render(). */
 	bool planned;
 	uint64_t plan_seq;
-	bool rebuild_base; /* compose the base anew from every used entry */
 	struct entry **uses, **creates;
 	uint32_t use_count, create_count, array_cap;
 	struct scene_draw *rest;
@@ -82,11 +86,12 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->geom = *geom;
 	c->budget = budget;
 	c->compose = compose_create(geom, pool);
-	c->base = volume_create(geom);
-	c->base_next = volume_create(geom);
+	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
-	if (!c->compose || !c->base || !c->base_next || !c->rest_vol || !c->tmp) {
+	if (c->prev)
+		c->dirty = calloc(c->prev->image_count, c->prev->mask_bytes);
+	if (!c->compose || !c->prev || !c->dirty || !c->rest_vol || !c->tmp) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -94,15 +99,24 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	return c;
 }
 
+/* An entry whose volume is in the last composition leaves it: its tiles
+ * there are composed anew next time. */
+static void leave_composition(struct cache *c, struct entry *e)
+{
+	if (!e->in_prev)
+		return;
+	struct compose_source s = { .rle = e->vol };
+	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, &s);
+	e->in_prev = false;
+}
+
 static void drop_volume(struct cache *c, struct entry *e)
 {
 	if (!e->vol)
 		return;
+	leave_composition(c, e);
 	rle_volume_free(e->vol);
 	e->vol = NULL;
-	if (e->in_base)
-		c->base_valid = false; /* composed anew without it */
-	e->in_base = false;
 }
 
 static void release_draws(struct entry *e)
@@ -137,8 +151,8 @@ void cache_destroy(struct cache *c)
 	free(c->created);
 	free(c->rest);
 	free(c->sources);
-	volume_destroy(c->base);
-	volume_destroy(c->base_next);
+	volume_destroy(c->prev);
+	free(c->dirty);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);
@@ -235,9 +249,10 @@ static uint64_t volume_held(const struct volume *v)
 	return b;
 }
 
-/* Bytes held now against the budget: the coded volumes, the base and the
- * bookkeeping. (The volumes it renders and composes into are working
- * storage, as the pipeline's own volumes are: not counted.) */
+/* Bytes held now against the budget: the coded volumes and the
+ * bookkeeping. (The volumes it renders and composes into, the last
+ * composition among them, are working storage the size of a volume or
+ * two, as the pipeline's own volumes are: counted apart.) */
 static uint64_t held(const struct cache *c)
 {
 	uint64_t b = (uint64_t)c->cap * sizeof(*c->entries) + (uint64_t)c->count * sizeof(struct entry);
@@ -247,7 +262,7 @@ static uint64_t held(const struct cache *c)
 		if (e->vol)
 			b += e->vol->bytes;
 	}
-	return c->base_valid ? b + volume_sparse_bytes(c->base) : b;
+	return b;
 }
 
 /* Drops the volumes of the least recently used entries not used by the
@@ -270,6 +285,7 @@ static void evict_to(struct cache *c, uint64_t target)
 		now -= lru->vol->bytes;
 		drop_volume(c, lru);
 		lru->reuse = 0;
+		lru->hits = 0;
 		lru->backoff = sat_inc(lru->backoff, MAX_BACKOFF);
 		c->stats.evictions++;
 	}
@@ -328,7 +344,10 @@ static enum role decide(struct cache *c, struct entry *e, bool same, bool room)
 	if (!same) {
 		if (e->vol) {
 			drop_volume(c, e);
-			e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
+			if (e->hits < PAYOFF_HITS)
+				e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
+			else if (e->backoff)
+				e->backoff--;
 			c->stats.invalidations++;
 		}
 		e->reuse = 0;
@@ -337,11 +356,7 @@ static enum role decide(struct cache *c, struct entry *e, bool same, bool room)
 	}
 	e->reuse = sat_inc(e->reuse, UINT8_MAX);
 	if (e->vol) {
-		e->hits = sat_inc(e->hits, HITS_PER_FORGIVE);
-		if (e->hits == HITS_PER_FORGIVE && e->backoff) {
-			e->backoff--;
-			e->hits = 0;
-		}
+		e->hits = sat_inc(e->hits, PAYOFF_HITS);
 		return ROLE_USE;
 	}
 	uint32_t wait = (uint32_t)CREATE_AFTER << e->backoff;
@@ -379,6 +394,10 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		case ROLE_USE:
 			e->last_used = c->plan_seq;
 			c->uses[c->use_count++] = e;
+			if (!e->in_prev) { /* back in the scene */
+				struct compose_source src = { .rle = e->vol };
+				compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, &src);
+			}
 			c->stats.hits++;
 			break;
 		case ROLE_CREATE:
@@ -394,13 +413,12 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		}
 	}
 	/* Objects missing from the scene: kept a while (a layer hidden and
-	 * shown again), then forgotten. Their volumes leave the base. */
+	 * shown again), then forgotten. They leave the composition. */
 	for (uint32_t i = 0; i < c->count;) {
 		struct entry *e = c->entries[i];
 		if (!e->seen) {
 			e->role = ROLE_REST;
-			if (e->in_base)
-				c->base_valid = false;
+			leave_composition(c, e);
 			e->absent = sat_inc(e->absent, UINT8_MAX);
 			if (e->absent > IDLE_VOLUMES) {
 				free_entry(c, e);
@@ -412,16 +430,8 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		}
 		i++;
 	}
-	/* The base stays while every entry in it is used; new ones are
-	 * ORed in. One that left makes it be composed anew. */
-	for (uint32_t i = 0; i < c->count; i++) {
-		const struct entry *e = c->entries[i];
-		if (e->in_base && e->role != ROLE_USE)
-			c->base_valid = false;
-	}
 	c->planned = true;
 	evict_to(c, c->budget);
-	c->rebuild_base = !c->base_valid;
 	for (uint32_t i = 0; i < c->create_count; i++)
 		c->created[i] = NULL;
 	return 0;
@@ -434,12 +444,18 @@ static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 	return (struct scene){ .draw_count = n, .draws = draws };
 }
 
+static void add_footprint(struct cache *c, const struct compose_source *src)
+{
+	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
+}
+
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
 	if (!c->planned)
 		return render_volume(r, scene, out);
 	int64_t t0 = now_ns();
 	int err;
+	c->composed = false;
 	/* Everything rendered: nothing to compose. */
 	if (c->use_count == 0 && c->create_count == 0) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
@@ -449,11 +465,14 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		return err;
 	}
 	unsigned n = 0;
+	c->rest_rendered = false;
 	if (c->rest_count) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
 		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
 			return err;
-		c->sources[n++] = (struct compose_source){ .vol = c->rest_vol };
+		c->sources[n] = (struct compose_source){ .vol = c->rest_vol };
+		add_footprint(c, &c->sources[n++]);
+		c->rest_rendered = true;
 	}
 	for (uint32_t i = 0; i < c->create_count; i++) {
 		const struct entry *e = c->creates[i];
@@ -462,29 +481,21 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 			return err;
 		if (!(c->created[i] = rle_volume_encode(c->tmp)))
 			return -ENOMEM;
-		c->sources[n++] = (struct compose_source){ .rle = c->created[i] };
+		c->sources[n] = (struct compose_source){ .rle = c->created[i] };
+		add_footprint(c, &c->sources[n++]);
 	}
 	int64_t t1 = now_ns();
-	if (c->use_count) {
-		/* The base: anew from every entry used, or the old one with
-		 * the entries used for the first time ORed in. */
-		unsigned m = 0;
-		struct compose_source *bs = c->sources + n;
-		if (!c->rebuild_base)
-			bs[m++] = (struct compose_source){ .vol = c->base };
-		for (uint32_t i = 0; i < c->use_count; i++)
-			if (c->rebuild_base || !c->uses[i]->in_base)
-				bs[m++] = (struct compose_source){ .rle = c->uses[i]->vol };
-		if (m > 1 || c->rebuild_base) {
-			if ((err = compose_volumes(c->compose, c->base_next, bs, m)) < 0)
-				return err;
-			struct volume *t = c->base;
-			c->base = c->base_next;
-			c->base_next = t;
-		}
-		c->sources[n++] = (struct compose_source){ .vol = c->base };
-	}
-	err = compose_volumes(c->compose, out, c->sources, n);
+	for (uint32_t i = 0; i < c->use_count; i++)
+		c->sources[n++] = (struct compose_source){ .rle = c->uses[i]->vol };
+	/* The last composition, patched where something may have changed
+	 * (or composed whole when there is none), then handed out. */
+	if (c->prev_valid)
+		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, n);
+	else
+		err = compose_volumes(c->compose, c->prev, c->sources, n);
+	if (err == 0)
+		err = volume_copy(out, c->prev);
+	c->composed = err == 0;
 	int64_t t2 = now_ns();
 	c->render_us = (uint32_t)((t1 - t0) / 1000);
 	c->compose_us = (uint32_t)((t2 - t1) / 1000);
@@ -498,31 +509,35 @@ void cache_done(struct cache *c, int result)
 	if (!c->planned)
 		return;
 	c->planned = false;
+	for (uint32_t i = 0; i < c->count; i++)
+		c->entries[i]->in_prev = false;
+	memset(c->dirty, 0, (size_t)c->prev->image_count * c->prev->mask_bytes);
+	c->prev_valid = result == 0 && c->composed;
 	if (result < 0) {
-		/* Nothing of this render is trusted: the base is composed
-		 * anew, the entries to be made are not. */
+		/* Nothing of this render is trusted: the next composition is
+		 * made whole, the entries to be made are not. */
 		for (uint32_t i = 0; i < c->create_count; i++) {
 			rle_volume_free(c->created[i]);
 			c->created[i] = NULL;
 		}
-		for (uint32_t i = 0; i < c->count; i++)
-			c->entries[i]->in_base = false;
-		c->base_valid = false;
 		return;
-	}
-	if (c->use_count) {
-		for (uint32_t i = 0; i < c->count; i++)
-			c->entries[i]->in_base = false;
-		for (uint32_t i = 0; i < c->use_count; i++)
-			c->uses[i]->in_base = true;
-		c->base_valid = true;
-	} else {
-		c->base_valid = false;
 	}
 	for (uint32_t i = 0; i < c->create_count; i++) {
 		c->creates[i]->vol = c->created[i];
 		c->created[i] = NULL;
 		c->stats.creates++;
+	}
+	if (c->prev_valid) {
+		/* What the composition holds; the rest is composed anew next
+		 * time wherever it was. */
+		for (uint32_t i = 0; i < c->use_count; i++)
+			c->uses[i]->in_prev = true;
+		for (uint32_t i = 0; i < c->create_count; i++)
+			c->creates[i]->in_prev = true;
+		if (c->rest_rendered) {
+			struct compose_source rest = { .vol = c->rest_vol };
+			add_footprint(c, &rest);
+		}
 	}
 	c->stats.last_rendered = c->rest_objects + c->create_count;
 	c->stats.last_reused = c->use_count;
@@ -540,6 +555,5 @@ void cache_get_stats(const struct cache *c, struct cache_stats *out)
 		out->cached += c->entries[i]->vol != NULL;
 	out->bytes = held(c);
 	out->budget = c->budget;
-	out->working_bytes =
-		volume_held(c->base) + volume_held(c->base_next) + volume_held(c->rest_vol) + volume_held(c->tmp);
+	out->working_bytes = volume_held(c->rest_vol) + volume_held(c->tmp) + volume_held(c->prev);
 }

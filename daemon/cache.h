@@ -12,19 +12,24 @@
  *   its own and its volume kept, run-length coded (compose.h);
  * - use: while it stays unchanged the volume is composed from the entry
  *   and the object is not rendered;
- * - idle: a changed object loses its volume and must stay unchanged longer
- *   before it is cached again (a saturating back-off that doubles the wait
- *   and wears off with use), so an object that keeps changing stops being
- *   cached; an object gone from the scene for a while loses its entry.
+ * - idle: a changed object loses its volume; if that volume did not pay
+ *   (fewer than a few hits), the object must stay unchanged longer before
+ *   it is cached again (a saturating back-off that doubles the wait, and
+ *   wears off by one each time a cached volume pays), so an object that
+ *   keeps changing stops being cached; the budget's evictions back off the
+ *   same way; an object gone from the scene for a while loses its entry.
  *
  * The volume shown is the OR of the cached volumes and the render of every
  * object not composed from the cache (compose.h says why that is exact:
- * bit for bit the renderer's render of the whole scene). The cached volumes
- * in use are kept ORed together in a base volume, rebuilt only when one of
- * them leaves, so a static scene costs a composition of two volumes.
+ * bit for bit the renderer's render of the whole scene). The cache keeps
+ * its last composition and patches it (compose_patch()): only the tiles
+ * where an object left it (changed, hidden, gone, evicted), where the
+ * objects rendered this time were last time and are now, and where a
+ * cached object comes back are composed anew. A change costs what it
+ * touches, plus one copy of the composition into the volume handed out.
  *
- * Entries, with the base, stay within a byte budget: past it the least
- * recently used entries lose their volumes. The cache is driven from the
+ * Entries stay within a byte budget: past it the least recently used
+ * entries lose their volumes. The cache is driven from the
  * daemon's loop (cache_plan(), cache_done()) and runs its renders and
  * compositions on the render thread (cache_render()), never both at once. */
 #ifndef SPINDLE_CACHE_H

@@ -421,16 +421,30 @@ static void prefix(struct bin_set *b, uint64_t *prims, uint64_t *points)
 	b->point_start[b->images] = (uint32_t)*points;
 }
 
+/* Vertices in the scene: few are binned on the calling thread, as waking
+ * the pool would cost more than the work. */
+static bool small_scene(const struct scene *scene)
+{
+	uint64_t v = 0;
+	for (uint32_t i = 0; i < scene->draw_count && v <= BIN_SERIAL_VERTICES; i++)
+		v += scene->draws[i].count;
+	return v <= BIN_SERIAL_VERTICES;
+}
+
 int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
 {
 	static const struct scene empty;
 	struct bin_work *w = b->work;
 	if (!scene)
 		scene = &empty;
-	int r = prepare(b, scene, pool_workers(pool));
+	bool serial = small_scene(scene);
+	int r = prepare(b, scene, serial ? 1 : pool_workers(pool));
 	if (r < 0)
 		return r;
-	pool_run(pool, count_job, b);
+	if (serial)
+		count_job(b, 0);
+	else
+		pool_run(pool, count_job, b);
 	uint64_t prims = 0, points = 0;
 	prefix(b, &prims, &points);
 	if ((r = grow((void **)&b->prims, &w->prim_cap, prims, sizeof(struct bin_prim))) < 0 ||
@@ -438,7 +452,10 @@ int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
 		return r;
 	b->prim_count = (uint32_t)prims;
 	b->point_count = (uint32_t)points;
-	pool_run(pool, scatter_job, b);
+	if (serial)
+		scatter_job(b, 0);
+	else
+		pool_run(pool, scatter_job, b);
 	return 0;
 }
 

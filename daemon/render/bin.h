@@ -55,6 +55,10 @@ struct bin_run {
 };
 
 #define BIN_MAX_CLASSES 16 /* 2^15 >= 16384 images */
+/* Scenes of at most this many vertices are binned, and rendered by the
+ * CPU renderer, on the calling thread alone: a small object (the object
+ * cache renders them one by one) costs less than waking the workers. */
+#define BIN_SERIAL_VERTICES 1024
 
 /* Storage is kept between builds and only grows. */
 struct bin_set {

@@ -82,7 +82,8 @@ struct rle_volume *rle_volume_encode(const struct volume *vol)
 		const struct volume_image *img = &vol->images[k];
 		if (!img->tile_count)
 			continue;
-		size_t need = vol->mask_bytes + (size_t)img->tile_count * (VOLUME_TILE_BYTES + 4);
+		size_t head = vol->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+		size_t need = head + (size_t)img->tile_count * (VOLUME_TILE_BYTES + 4);
 		if (need > tmp_cap) {
 			uint8_t *t = realloc(tmp, need);
 			if (!t) {
@@ -93,9 +94,12 @@ struct rle_volume *rle_volume_encode(const struct volume *vol)
 			tmp_cap = need;
 		}
 		memcpy(tmp, img->mask, vol->mask_bytes);
-		size_t len = vol->mask_bytes;
-		for (uint32_t i = 0; i < img->tile_count; i++)
+		size_t len = head;
+		for (uint32_t i = 0; i < img->tile_count; i++) {
+			uint32_t off = (uint32_t)(len - head);
+			memcpy(tmp + vol->mask_bytes + i * sizeof(uint32_t), &off, sizeof(off));
 			len += encode_tile(img->tiles + (size_t)i * VOLUME_TILE_BYTES, tmp + len);
+		}
 		uint8_t *data = malloc(len);
 		if (!data) {
 			free(tmp);
@@ -130,6 +134,7 @@ void rle_volume_free(struct rle_volume *r)
 struct compose_worker {
 	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
 	uint8_t *touched; /* tiles_per_image flags */
+	unsigned *cand;   /* patching: the sources that touch the image's dirty tiles */
 	int err;
 };
 
@@ -138,7 +143,10 @@ struct compose {
 	unsigned workers;
 	uint32_t tiles_per_image, mask_bytes, image_count;
 	struct compose_worker *w;
+	struct volume *tmp; /* patching builds images here, then exchanges them */
+	unsigned cand_cap;
 	/* Per call: */
+	const uint8_t *dirty;
 	struct volume *out;
 	const struct compose_source *src;
 	unsigned n;
@@ -160,7 +168,7 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	c->tiles_per_image = volume_tiles_per_image(probe);
 	c->mask_bytes = probe->mask_bytes;
 	c->image_count = probe->image_count;
-	volume_destroy(probe);
+	c->tmp = probe;
 	c->w = calloc(c->workers, sizeof(*c->w));
 	if (!c->w)
 		goto fail;
@@ -184,8 +192,10 @@ void compose_destroy(struct compose *c)
 	for (unsigned i = 0; c->w && i < c->workers; i++) {
 		free(c->w[i].tiles);
 		free(c->w[i].touched);
+		free(c->w[i].cand);
 	}
 	free(c->w);
+	volume_destroy(c->tmp);
 	free(c);
 }
 
@@ -223,8 +233,9 @@ static int compose_image(struct compose *c, struct compose_worker *w, uint32_t k
 			const struct rle_image *img = &src->rle->images[k];
 			if (!img->tile_count)
 				continue;
-			const uint8_t *code = img->data + c->mask_bytes;
-			size_t avail = img->len - c->mask_bytes;
+			size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+			const uint8_t *code = img->data + head;
+			size_t avail = img->len - head;
 			FOR_EACH_TILE(img->data, c->mask_bytes, t, i)
 			{
 				(void)i;
@@ -267,7 +278,8 @@ static void compose_job(void *arg, unsigned index)
 	}
 }
 
-int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n)
+static int check_sources(const struct compose *c, const struct volume *out, const struct compose_source *src,
+			 unsigned n)
 {
 	if (out->image_count != c->image_count || volume_tiles_per_image(out) != c->tiles_per_image)
 		return -EINVAL;
@@ -280,6 +292,14 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 		    (src[s].rle->image_count != c->image_count || src[s].rle->mask_bytes != c->mask_bytes))
 			return -EINVAL;
 	}
+	return 0;
+}
+
+int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n)
+{
+	int err = check_sources(c, out, src, n);
+	if (err < 0)
+		return err;
 	volume_clear(out);
 	c->out = out;
 	c->src = src;
@@ -291,11 +311,174 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 		pool_run(c->pool, compose_job, c);
 	else
 		compose_job(c, 0);
-	int err = 0;
 	for (unsigned i = 0; i < c->workers && !err; i++)
 		err = c->w[i].err;
 	c->out = NULL;
 	return err;
+}
+
+/* ---- patching ---- */
+
+/* Which stored tile t is: the set bits of mask below t. */
+static uint32_t tile_index(const uint8_t *mask, uint32_t t)
+{
+	uint32_t i = 0, byte = t / 8;
+	for (uint32_t b = 0; b < byte; b++)
+		i += (uint32_t)__builtin_popcount(mask[b]);
+	return i + (uint32_t)__builtin_popcount(mask[byte] & ((1u << (t % 8)) - 1));
+}
+
+static bool bit(const uint8_t *mask, uint32_t t)
+{
+	return (mask[t / 8] >> (t % 8)) & 1;
+}
+
+static const uint8_t *source_mask(const struct compose_source *s, uint32_t k)
+{
+	if (s->vol)
+		return s->vol->images[k].tile_count ? s->vol->images[k].mask : NULL;
+	return s->rle->images[k].tile_count ? s->rle->images[k].data : NULL;
+}
+
+/* ORs source s's tile t of image k (present in its mask) into dst. */
+static int or_source_tile(const struct compose *c, const struct compose_source *s, uint32_t k, uint32_t t, uint8_t *dst)
+{
+	if (s->vol) {
+		const struct volume_image *img = &s->vol->images[k];
+		or_tile(dst, img->tiles + (size_t)tile_index(img->mask, t) * VOLUME_TILE_BYTES);
+		return 0;
+	}
+	const struct rle_image *img = &s->rle->images[k];
+	uint32_t i = tile_index(img->data, t), off;
+	size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+	memcpy(&off, img->data + c->mask_bytes + i * sizeof(uint32_t), sizeof(off));
+	if (head + off >= img->len || !or_coded_tile(img->data + head + off, img->len - head - off, dst))
+		return -EINVAL;
+	return 0;
+}
+
+static bool overlaps(const uint8_t *a, const uint8_t *b, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++)
+		if (a[i] & b[i])
+			return true;
+	return false;
+}
+
+static bool tile_zero(const uint8_t *tile)
+{
+	uint64_t acc = 0;
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += 8) {
+		uint64_t v;
+		memcpy(&v, tile + i, 8);
+		acc |= v;
+	}
+	return acc == 0;
+}
+
+/* Image k of c->out anew: its clean tiles kept, its dirty ones composed
+ * from the sources, built in c->tmp's image k and exchanged. */
+static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
+{
+	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
+	uint32_t dirty_count = 0;
+	for (uint32_t b = 0; b < c->mask_bytes; b++)
+		dirty_count += (uint32_t)__builtin_popcount(dirty[b]);
+	if (!dirty_count)
+		return 0;
+	/* The sources with a tile in a dirty place. */
+	unsigned m = 0;
+	for (unsigned s = 0; s < c->n; s++) {
+		const uint8_t *mask = source_mask(&c->src[s], k);
+		if (mask && overlaps(mask, dirty, c->mask_bytes))
+			w->cand[m++] = s;
+	}
+	struct volume_image *old = &c->out->images[k];
+	volume_image_clear(c->tmp, k);
+	int err = volume_image_reserve(c->tmp, k, old->tile_count + dirty_count);
+	uint32_t i = 0; /* old's next stored tile */
+	for (uint32_t t = 0; t < c->tiles_per_image && err == 0; t++) {
+		bool had = bit(old->mask, t);
+		if (!bit(dirty, t)) {
+			if (had)
+				err = volume_image_append(c->tmp, k, t, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
+			i += had;
+			continue;
+		}
+		i += had;
+		uint8_t *dst = volume_image_next(c->tmp, k);
+		if (!dst) {
+			err = -ENOMEM;
+			break;
+		}
+		memset(dst, 0, VOLUME_TILE_BYTES);
+		for (unsigned j = 0; j < m && err == 0; j++) {
+			const struct compose_source *s = &c->src[w->cand[j]];
+			if (bit(source_mask(s, k), t))
+				err = or_source_tile(c, s, k, t, dst);
+		}
+		if (err == 0 && !tile_zero(dst))
+			err = volume_image_push(c->tmp, k, t);
+	}
+	if (err == 0)
+		volume_image_exchange(c->tmp, k, c->out, k);
+	return err;
+}
+
+static void patch_job(void *arg, unsigned index)
+{
+	struct compose *c = arg;
+	struct compose_worker *w = &c->w[index];
+	for (;;) {
+		uint32_t k = atomic_fetch_add(&c->next_image, 1);
+		if (k >= c->image_count)
+			break;
+		int err = patch_image(c, w, k);
+		if (err < 0 && w->err == 0)
+			w->err = err;
+	}
+}
+
+int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
+		  unsigned n)
+{
+	int err = check_sources(c, vol, src, n);
+	if (err < 0)
+		return err;
+	if (n > c->cand_cap) {
+		for (unsigned i = 0; i < c->workers; i++) {
+			unsigned *cand = realloc(c->w[i].cand, n * sizeof(*cand));
+			if (!cand)
+				return -ENOMEM;
+			c->w[i].cand = cand;
+		}
+		c->cand_cap = n;
+	}
+	c->out = vol;
+	c->src = src;
+	c->n = n;
+	c->dirty = dirty;
+	atomic_store(&c->next_image, 0);
+	for (unsigned i = 0; i < c->workers; i++)
+		c->w[i].err = 0;
+	if (c->pool)
+		pool_run(c->pool, patch_job, c);
+	else
+		patch_job(c, 0);
+	for (unsigned i = 0; i < c->workers && !err; i++)
+		err = c->w[i].err;
+	c->out = NULL;
+	return err;
+}
+
+void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src)
+{
+	for (uint32_t k = 0; k < image_count; k++) {
+		const uint8_t *mask = source_mask(src, k);
+		uint8_t *d = dirty + (size_t)k * mask_bytes;
+		for (uint32_t b = 0; mask && b < mask_bytes; b++)
+			d[b] |= mask[b];
+	}
 }
 
 int rle_volume_decode(const struct rle_volume *r, struct volume *out)

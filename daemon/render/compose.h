@@ -9,10 +9,15 @@
  * Composition is that OR, tile by tile.
  *
  * The compressed form (struct rle_volume) keeps, per image, the occupancy
- * mask and each stored tile's 384 bytes run-length coded on their own: a
- * control byte c < 128 is followed by c + 1 literal bytes, c >= 128 stands
- * for c - 127 zero bytes. A surface crossing a tile lights a few of its
- * pixels, so most of a stored tile is zero. */
+ * mask, where each stored tile's code starts, and each stored tile's 384
+ * bytes run-length coded on their own: a control byte c < 128 is followed
+ * by c + 1 literal bytes, c >= 128 stands for c - 127 zero bytes. A surface
+ * crossing a tile lights a few of its pixels, so most of a stored tile is
+ * zero; any one tile can be read without the others.
+ *
+ * A composition can also be patched: given the previous composition and
+ * the tiles that may have changed (a dirty mask per image), only those
+ * tiles are composed anew, and images with none are not touched. */
 #ifndef SPINDLE_COMPOSE_H
 #define SPINDLE_COMPOSE_H
 
@@ -26,7 +31,8 @@ struct pool;
 struct rle_image {
 	uint32_t tile_count;
 	uint32_t len;  /* bytes of data */
-	uint8_t *data; /* mask (the volume's mask_bytes), then the coded tiles in order */
+	uint8_t *data; /* mask (the volume's mask_bytes), a uint32_t offset per
+			* stored tile (from the first code), the coded tiles in order */
 };
 
 struct rle_volume {
@@ -43,6 +49,11 @@ struct rle_volume *rle_volume_encode(const struct volume *vol);
 void rle_volume_free(struct rle_volume *r);
 /* Expands r into out (same geometry; cleared first). 0 or -ENOMEM/-EINVAL. */
 int rle_volume_decode(const struct rle_volume *r, struct volume *out);
+/* The occupancy mask of image k. */
+static inline const uint8_t *rle_image_mask(const struct rle_volume *r, uint32_t k)
+{
+	return r->images[k].data; /* NULL when the image is empty */
+}
 
 /* One input of a composition: a packed volume or a compressed one. */
 struct compose_source {
@@ -61,5 +72,16 @@ void compose_destroy(struct compose *c);
 /* out = the OR of the n sources, image by image and tile by tile (out is
  * cleared first and must not be one of them). 0 or -ENOMEM/-EINVAL. */
 int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n);
+
+/* Patches the composition vol: in each image k, the tiles whose bit is set
+ * in dirty + k * vol->mask_bytes become the OR of the n sources' tiles
+ * there; the others stay. Images with no dirty tile are not touched, so
+ * the cost is that of the dirty images. vol must not be a source. 0 or
+ * -ENOMEM/-EINVAL (vol is then unusable). */
+int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
+		  unsigned n);
+
+/* dirty |= the footprint of src (its masks), image by image. */
+void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src);
 
 #endif

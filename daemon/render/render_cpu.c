@@ -80,10 +80,13 @@ static void light_point(struct section_canvas *c, const struct bin_point *p)
 		section_span(c, v, u0, u1, p->rgb);
 }
 
-static void raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
+/* Draws image k's points and primitives on the canvas; returns how many
+ * (0: the canvas is untouched). */
+static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
+	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i]);
 	struct section_wedge wedge;
@@ -101,8 +104,10 @@ static void raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 					v[a][e] = p->v[a][e];
 			section_prim(c, &wedge, (const double(*)[3])v, p->nverts, p->rgb);
 			w->prim_images++;
+			drawn++;
 		}
 	}
+	return drawn;
 }
 
 /* Images are handed out one at a time; each image's result depends on
@@ -116,9 +121,10 @@ static void image_job(void *arg, unsigned index)
 		if (k >= r->bins.images)
 			break;
 		int64_t t0 = now_ns();
-		raster_image(r, w, k);
+		uint64_t drawn = raster_image(r, w, k);
 		int64_t t1 = now_ns();
-		int err = pack_image(r, w, k);
+		/* Nothing drawn: the canvas is all zero, the image empty. */
+		int err = drawn ? pack_image(r, w, k) : 0;
 		w->raster_ns += (uint64_t)(t1 - t0);
 		w->pack_ns += (uint64_t)(now_ns() - t1);
 		if (err < 0 && w->err == 0)
@@ -175,7 +181,10 @@ static int cpu_render(struct renderer *base, const struct scene *scene, struct v
 	}
 	r->out = out;
 	atomic_store(&r->next_image, 0);
-	pool_run(r->pool, image_job, r);
+	if (r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
+		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
+	else
+		pool_run(r->pool, image_job, r);
 	r->out = NULL;
 	err = collect(r);
 	base->stats.total_ns = (uint64_t)(now_ns() - start);

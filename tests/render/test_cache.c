@@ -338,7 +338,7 @@ int main(void)
 	CHECK(cpu != NULL);
 	run(cpu, 64u << 20, 160, 1, &t);
 	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
-	run(cpu, 96u << 10, 120, 2, &t); /* a few entries at a time */
+	run(cpu, 40u << 10, 120, 2, &t); /* a few entries at a time */
 	CHECK(t.st.evictions > 0);
 	run(cpu, 0, 40, 3, &t); /* nothing may be cached */
 	CHECK_EQ(t.st.creates, 0);
