@@ -255,6 +255,11 @@ static int display_get_status(void *target)
 		c->env->listener->limits(c->env->data, &lim);
 		client_sent(c, proto_ev_display_limits(c->conn, 1, &lim));
 	}
+	if (c->version >= 4) {
+		struct proto_display_composition_args comp;
+		c->env->listener->composition(c->env->data, &comp);
+		client_sent(c, proto_ev_display_composition(c->conn, 1, &comp));
+	}
 	struct proto_display_status_args st;
 	c->env->listener->status(c->env->data, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, &st));

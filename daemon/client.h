@@ -36,6 +36,8 @@ struct client_listener {
 	/* The daemon's limits and what they did, for display.get_status
 	 * (version 3). */
 	void (*limits)(void *data, struct proto_display_limits_args *out);
+	/* What the object cache did, for display.get_status (version 4). */
+	void (*composition)(void *data, struct proto_display_composition_args *out);
 };
 
 /* The daemon-wide budget counts this much for a vertex a list holds

@@ -15,6 +15,7 @@
 #include <unistd.h>
 
 #include "admission.h"
+#include "cache.h"
 #include "client.h"
 #include "devices.h"
 #include "listen_socket.h"
@@ -160,6 +161,11 @@ static void client_status(void *data, struct proto_display_status_args *out)
 	server_get_status(data, out);
 }
 
+static void client_composition(void *data, struct proto_display_composition_args *out)
+{
+	server_get_composition(data, out);
+}
+
 static void client_limits(void *data, struct proto_display_limits_args *out)
 {
 	server_get_limits(data, out);
@@ -170,6 +176,7 @@ static const struct client_listener client_listener = {
 	.dead = client_dead,
 	.status = client_status,
 	.limits = client_limits,
+	.composition = client_composition,
 };
 
 /* ---- the stage, frames and captures ---- */
@@ -366,6 +373,30 @@ static uint32_t open_fds(void)
 		n++;
 	closedir(d);
 	return n > 3 ? n - 3 : 0; /* ".", "..", and the directory's own fd */
+}
+
+void server_get_composition(struct server *srv, struct proto_display_composition_args *out)
+{
+	struct cache_stats st;
+	*out = (struct proto_display_composition_args){ 0 };
+	if (!srv->pipe || !pipeline_get_cache_stats(srv->pipe, &st))
+		return;
+	*out = (struct proto_display_composition_args){
+		.flags = PROTO_DISPLAY_COMPOSITION_FLAGS_CACHE,
+		.objects = st.objects,
+		.cached = st.cached,
+		.cache_bytes = st.bytes,
+		.cache_budget = st.budget,
+		.hits = st.hits,
+		.misses = st.misses,
+		.creates = st.creates,
+		.invalidations = st.invalidations,
+		.evictions = st.evictions,
+		.objects_rendered = st.last_rendered,
+		.objects_reused = st.last_reused,
+		.render_us = st.last_render_us,
+		.compose_us = st.last_compose_us,
+	};
 }
 
 void server_get_limits(struct server *srv, struct proto_display_limits_args *out)

@@ -61,6 +61,8 @@ int server_add_client(struct server *srv, int fd);
 
 /* The status as display.status carries it: every field filled here. */
 void server_get_status(struct server *srv, struct proto_display_status_args *out);
+/* What the object cache did, as display.composition carries it. */
+void server_get_composition(struct server *srv, struct proto_display_composition_args *out);
 /* The limits and what they did, as display.limits carries them. */
 void server_get_limits(struct server *srv, struct proto_display_limits_args *out);
 

@@ -157,8 +157,34 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 		.angle_error_max = a->angle_error_max,
 		.limits_known = sp->limits_known,
 		.limits = sp->limits,
+		.composition_known = sp->composition_known,
+		.composition = sp->composition,
 	};
 	sp->status_serial++;
+	return 0;
+}
+
+/* Comes just before status, which takes it along. */
+static int on_composition(void *target, const struct proto_display_composition_args *a)
+{
+	struct spindle *sp = target;
+	sp->composition = (struct spindle_composition){
+		.cache = a->flags & PROTO_DISPLAY_COMPOSITION_FLAGS_CACHE,
+		.objects = a->objects,
+		.cached = a->cached,
+		.cache_bytes = a->cache_bytes,
+		.cache_budget = a->cache_budget,
+		.hits = a->hits,
+		.misses = a->misses,
+		.creates = a->creates,
+		.invalidations = a->invalidations,
+		.evictions = a->evictions,
+		.objects_rendered = a->objects_rendered,
+		.objects_reused = a->objects_reused,
+		.render_us = a->render_us,
+		.compose_us = a->compose_us,
+	};
+	sp->composition_known = true;
 	return 0;
 }
 
@@ -219,6 +245,7 @@ static const struct proto_display_events display_events = {
 	.state = on_state,
 	.refused = on_refused,
 	.limits = on_limits,
+	.composition = on_composition,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)

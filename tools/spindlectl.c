@@ -139,6 +139,20 @@ static void print_status(const struct spindle_status *st)
 	       (unsigned long long)l->memory_budget, (unsigned long long)l->refused_memory);
 	printf("mappings: %u of %u; %llu clients refused over it\n", l->mappings, l->mapping_budget,
 	       (unsigned long long)l->refused_mappings);
+	if (!st->composition_known)
+		return;
+	const struct spindle_composition *c = &st->composition;
+	if (!c->cache) {
+		printf("object cache: off\n");
+		return;
+	}
+	printf("object cache: %u objects, %u cached, %llu of %llu bytes\n", c->objects, c->cached,
+	       (unsigned long long)c->cache_bytes, (unsigned long long)c->cache_budget);
+	printf("cache hits: %llu, misses: %llu, volumes cached: %llu, invalidated: %llu, evicted: %llu\n",
+	       (unsigned long long)c->hits, (unsigned long long)c->misses, (unsigned long long)c->creates,
+	       (unsigned long long)c->invalidations, (unsigned long long)c->evictions);
+	printf("last volume: %u objects rendered in %.3f ms, %u reused, composed in %.3f ms\n", c->objects_rendered,
+	       c->render_us / 1e3, c->objects_reused, c->compose_us / 1e3);
 }
 
 static int cmd_status(const struct ctl_args *a)

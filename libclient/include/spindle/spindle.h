@@ -26,7 +26,7 @@ extern "C" {
 #endif
 
 /* The protocol version this library speaks at most. */
-#define SPINDLE_PROTOCOL_VERSION 3
+#define SPINDLE_PROTOCOL_VERSION 4
 
 /* Default socket path, used when neither a path nor SPINDLE_SOCKET is given. */
 #define SPINDLE_DEFAULT_SOCKET "/run/spindle/spindle.sock"
@@ -92,6 +92,20 @@ struct spindle_status {
 		uint32_t mappings, mapping_budget;   /* memfd buffers mapped, max-mappings */
 		uint64_t refused_mappings;           /* clients refused over max-mappings */
 	} limits;
+	/* What the object cache and compositor did (spindled(8), key cache);
+	 * from a daemon speaking protocol 4, else composition_known is false
+	 * and they are 0. */
+	bool composition_known;
+	struct spindle_composition {
+		bool cache;               /* on; off: the rest is 0 */
+		uint32_t objects, cached; /* layers followed; of them, holding a cached volume */
+		uint64_t cache_bytes, cache_budget;
+		uint64_t hits, misses;           /* objects composed from the cache / rendered, over all volumes */
+		uint64_t creates, invalidations; /* volumes cached; dropped for a change */
+		uint64_t evictions;              /* dropped over cache-budget */
+		uint32_t objects_rendered, objects_reused; /* the last volume */
+		uint32_t render_us, compose_us;            /* the last volume: rendering objects, composing */
+	} composition;
 };
 
 /* The display's state, pushed by the daemon when it changes (protocol

@@ -1,0 +1,74 @@
+#!/usr/bin/env python3
+"""display.composition (version 4): what the object cache and compositor
+did, sent just before status; and the compositor's promise, end to end: a
+volume composed from cached layers is the volume the same commits give
+with the cache off (key cache = false), capture for capture."""
+import math
+
+from harness import Daemon, MODE, case, check, lit, run, svol_planes, w
+
+CACHE = w.P.enums['display.composition_flags']['cache'][0]
+STATIC = [(0.0, -0.6, 0.0), (0.0, 0.6, 0.0), (0.5, 0.0, 0.0), (0.5, 0.4, 0.0),
+          (-0.3, -0.2, 0.4), (0.3, 0.5, -0.4)]
+MOVING = [(-0.2, -0.2, 0.0), (0.2, 0.2, 0.0), (0.0, 0.2, 0.2), (0.1, -0.3, -0.2), (0.25, 0.0, 0.1), (-0.1, 0.3, 0.2)]
+
+
+def rot_y(a, t=(0.0, 0.0, 0.0)):
+    c, s = math.cos(a), math.sin(a)
+    return [c, 0, -s, 0, 0, 1, 0, 0, s, 0, c, 0, t[0], t[1], t[2], 1]
+
+
+def layer_of(c, verts, colour, mode='lines'):
+    buf = c.buffer(w.vertices(verts))
+    lst = c.create('create_list')
+    layer = c.create('create_layer')
+    c.req(lst, 'list.set_color', colour)
+    c.req(lst, 'list.draw', MODE[mode], buf, 0, len(verts), 0)
+    c.req(layer, 'layer.set_list', lst)
+    return layer
+
+
+def script(d, frames=12):
+    """Three static layers of one client, one layer of another turning and
+    moving every frame; the capture after the last frame, and the
+    composition event of a status taken then."""
+    a, b = d.conn(), d.conn()
+    for i, colour in enumerate((0xffffffff, 0xff8000ff, 0x40c0ffff)):
+        layer = layer_of(a, [(x + 0.1 * i, y, z) for x, y, z in STATIC], colour)
+        a.req(layer, 'layer.set_transform', rot_y(0.7 * i))
+    a.frame_commit()
+    mover = layer_of(b, MOVING, 0x00ff80ff, 'triangles')
+    for f in range(frames):
+        b.req(mover, 'layer.set_transform', rot_y(0.37 * f, (0.3 * math.cos(f), 0.1, 0.3 * math.sin(f))))
+        b.frame_commit()
+    cap = svol_planes(b.capture())
+    b.req(1, 'display.get_status')
+    comp = b.wait('display.composition')
+    b.wait('display.status')
+    a.close()
+    b.close()
+    return cap, comp
+
+
+@case
+def composition_exact():
+    on, off = Daemon(), Daemon('cache=false')
+    try:
+        cap_on, comp = script(on)
+        cap_off, comp_off = script(off)
+    finally:
+        on.stop()
+        off.stop()
+    check(lit(cap_on) > 0, 'the scene lights voxels')
+    check(cap_on == cap_off, 'the composed volume is the volume rendered whole, bit for bit')
+    check(comp['flags'] & CACHE, f'cache on: {comp}')
+    check(comp['objects'] == 4 and comp['cached'] >= 3, f'four layers followed, the static three cached: {comp}')
+    check(comp['hits'] >= 3 * 8, f'the static layers were reused: {comp}')
+    check(comp['objects_reused'] >= 3 and comp['objects_rendered'] >= 1, f'the last volume: {comp}')
+    check(0 < comp['cache_bytes'] <= comp['cache_budget'], f'within the budget: {comp}')
+    check(comp_off['flags'] == 0 and comp_off['hits'] == 0, f'cache off: {comp_off}')
+    print(f'  composition: {comp}')
+
+
+if __name__ == '__main__':
+    run()
