@@ -85,6 +85,7 @@ static int sim_get_info(struct projector *p, struct projector_info *out)
 	projwire_info_to_geometry(&s->info, &out->geom);
 	out->buffers = s->info.buffers;
 	out->link_bytes_per_sec = s->info.link_bytes_per_sec;
+	out->half_turn_swaps = projwire_info_half_turn_swaps(&s->info);
 	return 0;
 }
 
@@ -142,12 +143,26 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 	return (int)len;
 }
 
+static int swap(struct proj_sim *s, uint32_t buffer, bool half)
+{
+	struct projwire_ctrl c = { .request = half ? PROJWIRE_REQ_SWAP_HALF : PROJWIRE_REQ_SWAP, .buffer = buffer };
+	if (!s->dev)
+		return -ENODEV;
+	if (buffer >= s->info.buffers)
+		return -EINVAL;
+	return control(s, &c, NULL);
+}
+
 static int sim_swap(struct projector *p, uint32_t buffer)
 {
-	struct projwire_ctrl c = { .request = PROJWIRE_REQ_SWAP, .buffer = buffer };
-	if (buffer >= ((struct proj_sim *)p)->info.buffers)
-		return -EINVAL;
-	return control((struct proj_sim *)p, &c, NULL);
+	return swap((struct proj_sim *)p, buffer, false);
+}
+
+/* SWAP_HALF only to a device that takes it (section 1 of the protocol). */
+static int sim_swap_half(struct projector *p, uint32_t buffer)
+{
+	struct proj_sim *s = (struct proj_sim *)p;
+	return swap(s, buffer, s->dev && projwire_info_half_turn_swaps(&s->info));
 }
 
 static int sim_get_fd(struct projector *p)
@@ -159,7 +174,10 @@ static void handle_event(struct proj_sim *s, const struct projwire_event *ev)
 {
 	const struct projector_listener *l = s->base.listener;
 	if (ev->type == PROJWIRE_EV_SWAPPED) {
-		if (l && l->swapped)
+		bool half = ev->boundary & PROJWIRE_SWAPPED_HALF_TURN;
+		if (l && l->swapped_at)
+			l->swapped_at(s->base.listener_data, ev->buffer, ev->time_ns, ev->seq, half);
+		else if (l && l->swapped)
 			l->swapped(s->base.listener_data, ev->buffer, ev->time_ns, ev->seq);
 		return;
 	}
@@ -292,6 +310,7 @@ static const struct projector_impl sim_impl = {
 	.set_timing = sim_set_timing,
 	.upload = sim_upload,
 	.swap = sim_swap,
+	.swap_half = sim_swap_half,
 	.get_fd = sim_get_fd,
 	.dispatch = sim_dispatch,
 	.shown = sim_shown,
@@ -307,6 +326,8 @@ static int attach(struct proj_sim *s)
 	s->dev = proj_simdev_create(s->rotor, &cfg->geom, cfg->buffers, cfg->link_bytes_per_sec);
 	if (!s->dev)
 		return -errno;
+	if (cfg->version_minor)
+		proj_simdev_set_minor(s->dev, cfg->version_minor);
 	uint8_t in[PROJWIRE_CTRL_DATA_MAX];
 	struct projwire_ctrl c = { .request = PROJWIRE_REQ_GET_INFO };
 	int r = control(s, &c, in);
@@ -383,7 +404,7 @@ struct projector *proj_sim_create(struct sim_rotor *rotor, const struct proj_sim
 	s->rotor = rotor;
 	s->cfg = *cfg;
 	s->epfd = s->plug_fd = -1;
-	int r = sim_setup(s);
+	int r = cfg->version_minor > PROJWIRE_VERSION_MINOR ? -EINVAL : sim_setup(s);
 	if (r < 0) {
 		s->cfg.faults = NULL;
 		sim_destroy(&s->base);

@@ -1,9 +1,11 @@
 /* The simulated projector's device model (see proj_sim_dev.h).
  *
- * Time is the rotor's: a swap takes effect at a true revolution start, the
- * first one after the request at which the buffer's data has fully crossed
- * the modelled link. Work is done lazily at dispatch, at the exact
- * revolution start times, so a late dispatch changes no outcome. */
+ * Time is the rotor's: a swap takes effect at a true revolution start (a
+ * SWAP_HALF one at a true half-turn start: a revolution start or the time
+ * the rotor is half a turn past one), the first one after the request at
+ * which the buffer's data has fully crossed the modelled link. Work is
+ * done lazily at dispatch, at the exact boundary times, so a late dispatch
+ * changes no outcome. */
 #include "proj_sim_dev.h"
 
 #include <errno.h>
@@ -28,6 +30,7 @@ struct proj_simdev {
 	struct sim_rotor *rotor;
 	struct geometry geom;
 	uint32_t nbuf;
+	uint8_t minor; /* the protocol version 1.minor it speaks */
 	uint64_t link_rate;
 	struct simdev_buffer buf[PROJWIRE_MAX_BUFFERS];
 	struct projwire_decoder *dec;
@@ -36,7 +39,8 @@ struct proj_simdev {
 	bool blanked, timing_set;
 	struct projwire_timing timing;
 	uint32_t shown, pending;
-	int64_t pending_from; /* the next revolution start to consider is at or after this */
+	bool pending_half;    /* SWAP_HALF: half-turn starts count as well */
+	int64_t pending_from; /* the next boundary to consider is at or after this */
 	bool pending_missed;  /* this swap already counted an underrun */
 	int64_t link_free;    /* when the link is done with the bytes sent so far */
 
@@ -117,8 +121,18 @@ static int arm(struct proj_simdev *dev, int64_t when)
 	return timerfd_settime(dev->fd, TFD_TIMER_ABSTIME, &its, NULL) < 0 ? -errno : 0;
 }
 
-/* The next time dispatch has work: the revolution start a pending swap can
- * first use, or at once when events wait. */
+/* The first boundary the pending swap may take at or after t: a revolution
+ * start, or for SWAP_HALF also the middle of a revolution (*half). */
+static int64_t next_boundary(const struct proj_simdev *dev, int64_t t, bool *half)
+{
+	*half = false;
+	if (dev->pending_half)
+		return sim_rotor_next_half_turn(dev->rotor, t, half);
+	return sim_rotor_next_index(dev->rotor, t);
+}
+
+/* The next time dispatch has work: the boundary a pending swap can first
+ * use, or at once when events wait. */
 static int rearm(struct proj_simdev *dev)
 {
 	if (dev->events_len)
@@ -129,7 +143,8 @@ static int rearm(struct proj_simdev *dev)
 	int64_t from = dev->pending_from;
 	if (b->state == PROJWIRE_BUF_READY && b->ready_ns > from)
 		from = b->ready_ns;
-	return arm(dev, sim_rotor_next_index(dev->rotor, from));
+	bool half;
+	return arm(dev, next_boundary(dev, from, &half));
 }
 
 struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geometry *geom, uint32_t buffers,
@@ -145,6 +160,7 @@ struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geo
 	dev->rotor = rotor;
 	dev->geom = *geom;
 	dev->nbuf = buffers;
+	dev->minor = PROJWIRE_VERSION_MINOR;
 	dev->link_rate = link_bytes_per_sec;
 	dev->blanked = true; /* dark until told otherwise */
 	dev->shown = dev->pending = PROJWIRE_NO_BUFFER;
@@ -220,8 +236,9 @@ static void catch_up(struct proj_simdev *dev, int64_t now)
 static void fill_status(const struct proj_simdev *dev, struct projwire_status *st)
 {
 	memset(st, 0, sizeof(*st));
-	st->flags = (dev->blanked ? PROJWIRE_STATUS_BLANKED : 0) | (dev->timing_set ? PROJWIRE_STATUS_TIMING : 0) |
-		    (dev->pending != PROJWIRE_NO_BUFFER ? PROJWIRE_STATUS_PENDING : 0);
+	st->flags = (dev->blanked ? PROJWIRE_STATUS_BLANKED : 0) | (dev->timing_set ? PROJWIRE_STATUS_TIMING : 0);
+	if (dev->pending != PROJWIRE_NO_BUFFER)
+		st->flags |= PROJWIRE_STATUS_PENDING | (dev->pending_half ? PROJWIRE_STATUS_PENDING_HALF : 0);
 	st->shown = dev->shown;
 	st->pending = dev->pending;
 	st->revolutions = (uint64_t)(sim_rotor_revolution(dev->rotor, sim_rotor_now(dev->rotor)) - dev->rev0);
@@ -236,7 +253,7 @@ static void fill_status(const struct proj_simdev *dev, struct projwire_status *s
 		st->buffer_state[i] = (uint8_t)dev->buf[i].state;
 }
 
-static int do_swap(struct proj_simdev *dev, uint32_t buffer)
+static int do_swap(struct proj_simdev *dev, uint32_t buffer, bool half)
 {
 	if (buffer >= dev->nbuf)
 		return -EINVAL;
@@ -247,6 +264,7 @@ static int do_swap(struct proj_simdev *dev, uint32_t buffer)
 	if (s != PROJWIRE_BUF_READY && s != PROJWIRE_BUF_WRITING)
 		return -ENODATA;
 	dev->pending = buffer;
+	dev->pending_half = half;
 	dev->pending_from = sim_rotor_now(dev->rotor);
 	dev->pending_missed = false;
 	return rearm(dev);
@@ -262,6 +280,7 @@ static int handle_request(struct proj_simdev *dev, const struct projwire_ctrl *c
 		if (in_cap < PROJWIRE_INFO_SIZE)
 			return -EINVAL;
 		projwire_info_from_geometry(&info, &dev->geom, dev->nbuf, dev->link_rate);
+		info.version_minor = dev->minor;
 		projwire_info_encode(&info, in);
 		return PROJWIRE_INFO_SIZE;
 	case PROJWIRE_REQ_GET_STATUS:
@@ -280,10 +299,15 @@ static int handle_request(struct proj_simdev *dev, const struct projwire_ctrl *c
 		dev->timing_set = true;
 		return 0;
 	case PROJWIRE_REQ_SWAP:
-		return do_swap(dev, c->buffer);
+		return do_swap(dev, c->buffer, false);
 	case PROJWIRE_REQ_RESET_STREAM:
 		projwire_decoder_reset(dev->dec);
 		return 0;
+	case PROJWIRE_REQ_SWAP_HALF:
+		/* Meaningless without a mirrored half turn. */
+		if (!dev->geom.mirrored)
+			return -EOPNOTSUPP;
+		return do_swap(dev, c->buffer, true);
 	}
 	return -EOPNOTSUPP;
 }
@@ -295,7 +319,11 @@ int proj_simdev_control(struct proj_simdev *dev, const uint8_t setup[PROJWIRE_SE
 	int64_t now = sim_rotor_now(dev->rotor);
 	catch_up(dev, now);
 	dev->last_ctrl = now; /* even a bad request shows the host is alive */
-	int r = projwire_ctrl_decode(setup, out, out_len, &c);
+	/* A request of a later minor version is unknown, however it is
+	 * formed, as to a device of that age. */
+	int r = setup[1] == PROJWIRE_REQ_SWAP_HALF && dev->minor < 2
+			? -EOPNOTSUPP
+			: projwire_ctrl_decode(setup, out, out_len, &c);
 	if (r >= 0)
 		r = handle_request(dev, &c, in, in_cap);
 	if (r < 0) {
@@ -336,12 +364,17 @@ size_t proj_simdev_bulk_in(struct proj_simdev *dev, uint8_t *buf, size_t cap)
 	return n;
 }
 
+void proj_simdev_set_minor(struct proj_simdev *dev, uint8_t minor)
+{
+	dev->minor = minor;
+}
+
 int proj_simdev_get_fd(struct proj_simdev *dev)
 {
 	return dev->fd;
 }
 
-static void show(struct proj_simdev *dev, uint32_t buffer, int64_t start)
+static void show(struct proj_simdev *dev, uint32_t buffer, int64_t start, bool half)
 {
 	struct volume *vol = dev->buf[buffer].vol;
 	dev->shown = buffer;
@@ -349,21 +382,29 @@ static void show(struct proj_simdev *dev, uint32_t buffer, int64_t start)
 	dev->swaps++;
 	if (!vol->shown_ns)
 		vol->shown_ns = (uint64_t)start;
-	struct projwire_event ev = { .type = PROJWIRE_EV_SWAPPED, .buffer = buffer, .time_ns = start, .seq = vol->seq };
+	struct projwire_event ev = {
+		.type = PROJWIRE_EV_SWAPPED,
+		.buffer = buffer,
+		.time_ns = start,
+		.seq = vol->seq,
+		.boundary = half ? PROJWIRE_SWAPPED_HALF_TURN : 0,
+	};
 	queue_event(dev, &ev);
 }
 
-/* Walks the revolution starts since the swap request up to now. */
+/* Walks the boundaries (revolution starts; half-turn starts for SWAP_HALF)
+ * since the swap request up to now. */
 static void run_pending(struct proj_simdev *dev, int64_t now)
 {
 	while (dev->pending != PROJWIRE_NO_BUFFER) {
 		const struct simdev_buffer *b = &dev->buf[dev->pending];
-		int64_t start = sim_rotor_next_index(dev->rotor, dev->pending_from);
+		bool half;
+		int64_t start = next_boundary(dev, dev->pending_from, &half);
 		if (start > now)
 			return;
 		if (b->state == PROJWIRE_BUF_READY && b->ready_ns <= start) {
 			advance(dev, start);
-			show(dev, dev->pending, start);
+			show(dev, dev->pending, start, half);
 			return;
 		}
 		if (!dev->pending_missed) {

@@ -6,8 +6,10 @@
  *
  * It places slice k of each revolution at index + period * k / N from the
  * latest SET_TIMING and measures where that really was on the rotor
- * (proj_sim_meter.h). It goes dark when no control request came for 2 s.
- * Time is the rotor's clock (sim_rotor_now). */
+ * (proj_sim_meter.h). Swaps take effect at the rotor's true revolution
+ * starts, SWAP_HALF ones (1.2) at its true half-turn starts
+ * (sim_rotor_next_half_turn()). It goes dark when no control request came
+ * for 2 s. Time is the rotor's clock (sim_rotor_now). */
 #ifndef SPINDLE_PROJ_SIM_DEV_H
 #define SPINDLE_PROJ_SIM_DEV_H
 
@@ -28,6 +30,13 @@ struct proj_simdev *proj_simdev_create(struct sim_rotor *rotor, const struct geo
 				       uint64_t link_bytes_per_sec);
 /* Accepts NULL. */
 void proj_simdev_destroy(struct proj_simdev *dev);
+
+/* Makes dev a device of protocol version 1.minor (by default the latest,
+ * PROJWIRE_VERSION_MINOR): GET_INFO says so, and below 2 it stalls
+ * SWAP_HALF as an unknown request (UNSUPPORTED), as a 1.0 or 1.1 device
+ * does. Delta records are taken at any minor (a 1.0 device would reject
+ * them: hosts send them to none). */
+void proj_simdev_set_minor(struct proj_simdev *dev, uint8_t minor);
 
 /* EP0: one control transfer with its OUT data stage (out, out_len); an IN
  * reply goes to in (in_cap bytes). Returns the reply length, or -EPIPE when

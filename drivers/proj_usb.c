@@ -42,7 +42,9 @@ struct proj_usb {
 
 	/* Buffers as far as our requests and the device's events tell. */
 	uint32_t shown, pending;
+	bool pending_half; /* the pending swap is a SWAP_HALF one */
 	bool swap_deferred;
+	bool half_refused;                        /* the device stalled SWAP_HALF as unknown: SWAP only */
 	uint64_t begin_end[PROJWIRE_MAX_BUFFERS]; /* stream position after its latest VOLUME_BEGIN */
 	uint8_t evq[EVQ_SIZE];                    /* event bytes received, not yet handled */
 	size_t evq_len;
@@ -114,7 +116,7 @@ static int get_status(struct proj_usb *u)
 static void reset_state(struct proj_usb *u)
 {
 	u->shown = u->pending = PROJWIRE_NO_BUFFER;
-	u->swap_deferred = false;
+	u->pending_half = u->swap_deferred = u->half_refused = false;
 	memset(u->begin_end, 0, sizeof(u->begin_end));
 	memset(&u->status, 0, sizeof(u->status));
 	u->evq_len = 0;
@@ -168,8 +170,9 @@ static void transport_opened(void *data, const char *path)
 {
 	struct proj_usb *u = data;
 	u->arrivals++;
-	log_info("usb projector %s: version %u.%u, %ux%u, %u images/rev, %u buffers", path, u->info.version_major,
-		 u->info.version_minor, u->info.width, u->info.height, u->info.images_per_rev, u->info.buffers);
+	log_info("usb projector %s: version %u.%u, %ux%u, %u images/rev, %u buffers, swaps at %s starts", path,
+		 u->info.version_major, u->info.version_minor, u->info.width, u->info.height, u->info.images_per_rev,
+		 u->info.buffers, projwire_info_half_turn_swaps(&u->info) ? "half-turn" : "revolution");
 }
 
 static void transport_arrived(void *data)
@@ -229,6 +232,7 @@ static int usb_get_info(struct projector *p, struct projector_info *out)
 	projwire_info_to_geometry(&u->info, &out->geom);
 	out->buffers = u->info.buffers;
 	out->link_bytes_per_sec = u->info.link_bytes_per_sec;
+	out->half_turn_swaps = projwire_info_half_turn_swaps(&u->info) && !u->half_refused;
 	return 0;
 }
 
@@ -293,8 +297,18 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 
 static int send_swap(struct proj_usb *u)
 {
-	struct projwire_ctrl c = { .request = PROJWIRE_REQ_SWAP, .buffer = u->pending };
+	struct projwire_ctrl c = { .request = u->pending_half ? PROJWIRE_REQ_SWAP_HALF : PROJWIRE_REQ_SWAP,
+				   .buffer = u->pending };
 	int r = ctrl(u, &c, NULL);
+	if (r == -EOPNOTSUPP && u->pending_half) {
+		/* A device that says 1.2 and mirrored must take it; one that
+		 * does not gets revolution swaps from now on. */
+		log_warn("usb projector: device refused SWAP_HALF; swapping at revolution starts only");
+		u->half_refused = true;
+		u->pending_half = false;
+		c.request = PROJWIRE_REQ_SWAP;
+		r = ctrl(u, &c, NULL);
+	}
 	if (r < 0)
 		u->pending = PROJWIRE_NO_BUFFER;
 	return r;
@@ -303,9 +317,8 @@ static int send_swap(struct proj_usb *u)
 /* A SWAP may overtake the bulk data of its volume, but not the
  * VOLUME_BEGIN: before that the device holds the buffer's old contents and
  * would show those. So the request waits until that record is through. */
-static int usb_swap(struct projector *p, uint32_t buffer)
+static int swap(struct proj_usb *u, uint32_t buffer, bool half)
 {
-	struct proj_usb *u = (struct proj_usb *)p;
 	if (!usbt_is_ready(u->t))
 		return -ENODEV;
 	if (buffer >= u->info.buffers)
@@ -313,10 +326,24 @@ static int usb_swap(struct projector *p, uint32_t buffer)
 	if (buffer == u->shown || u->pending != PROJWIRE_NO_BUFFER)
 		return -EBUSY;
 	u->pending = buffer;
+	u->pending_half = half;
 	if (usbt_out_done(u->t) >= u->begin_end[buffer])
 		return send_swap(u);
 	u->swap_deferred = true;
 	return 0;
+}
+
+static int usb_swap(struct projector *p, uint32_t buffer)
+{
+	return swap((struct proj_usb *)p, buffer, false);
+}
+
+/* SWAP_HALF only to a device of 1.2 or later with mirrored geometry; to
+ * any other, SWAP as usb_swap() sends it. */
+static int usb_swap_half(struct projector *p, uint32_t buffer)
+{
+	struct proj_usb *u = (struct proj_usb *)p;
+	return swap(u, buffer, projwire_info_half_turn_swaps(&u->info) && !u->half_refused);
 }
 
 static int usb_get_fd(struct projector *p)
@@ -331,7 +358,10 @@ static void handle_event(struct proj_usb *u, const struct projwire_event *ev)
 		u->shown = ev->buffer;
 		if (u->pending == ev->buffer)
 			u->pending = PROJWIRE_NO_BUFFER;
-		if (l && l->swapped)
+		bool half = ev->boundary & PROJWIRE_SWAPPED_HALF_TURN;
+		if (l && l->swapped_at)
+			l->swapped_at(u->base.listener_data, ev->buffer, ev->time_ns, ev->seq, half);
+		else if (l && l->swapped)
 			l->swapped(u->base.listener_data, ev->buffer, ev->time_ns, ev->seq);
 		return;
 	}
@@ -446,6 +476,7 @@ static const struct projector_impl usb_impl = {
 	.set_timing = usb_set_timing,
 	.upload = usb_upload,
 	.swap = usb_swap,
+	.swap_half = usb_swap_half,
 	.get_fd = usb_get_fd,
 	.dispatch = usb_dispatch,
 	.shown = usb_shown,

@@ -1,9 +1,23 @@
 /* Projectors: a volumetric frame buffer holding 2 or 3 volume buffers. The
  * daemon uploads a volume into a free buffer and asks for a swap; the device
- * shows that buffer from the next revolution start and reports the swap.
+ * shows that buffer from the next revolution start (with swap_half(), on a
+ * device that can, from the next half-turn start) and reports the swap.
  * Backends: "sim" (a simulated projector speaking the projector wire
  * protocol of proto/projector.md through drivers/projwire) and "usb" (a
- * real one through libusb, proj_usb.c). */
+ * real one through libusb, proj_usb.c).
+ *
+ * Boundaries. With period P and index time I as last given to set_timing(),
+ * image k of a revolution starts at I + m * P + P * k / N (m whole). A
+ * revolution start is the start of image 0: I + m * P. On mirrored geometry
+ * (a volume of N/2 images shown twice a revolution, image k + N/2 being
+ * image k mirrored) the first image of the volume also comes round at the
+ * start of image N/2: the half-turn start I + m * P + P / 2. "Half-turn
+ * starts" are both kinds: every I + j * P / 2. Before the first set_timing()
+ * they are the device's own (nominal speed, unknown phase). The simulated
+ * projector uses its rotor's true revolution and half-turn starts, which
+ * these predict to the sync estimator's precision. A volume shown from
+ * boundary T is shown whole from there: its image k at T + P * k / N, for
+ * k < N/2 and then mirrored (or for k < N when not mirrored). */
 #ifndef SPINDLE_PROJECTOR_H
 #define SPINDLE_PROJECTOR_H
 
@@ -20,6 +34,13 @@ struct projector_info {
 	struct geometry geom;
 	uint32_t buffers;            /* volume buffers, 2 or 3 */
 	uint64_t link_bytes_per_sec; /* sustained upload rate, 0 = unknown */
+	/* swap_half() swaps at half-turn starts: the device speaks protocol
+	 * 1.2 or later and its geometry is mirrored. A new volume can then be
+	 * shown every half revolution (twice the rate of swap()); when false,
+	 * swap_half() is swap(). It may differ after arrived(), and turns
+	 * false if a device that claims it refuses a half-turn swap (that
+	 * swap is then made at the revolution start). */
+	bool half_turn_swaps;
 };
 
 /* Counters for status; every field 0 when unknown. */
@@ -27,7 +48,7 @@ struct projector_stats {
 	bool present;         /* a device is attached and set up */
 	uint64_t revolutions; /* revolution starts the device saw */
 	uint64_t swaps;
-	uint64_t underruns;     /* swaps that missed a revolution start for want of data */
+	uint64_t underruns;     /* swaps that missed their first boundary for want of data */
 	uint64_t bytes_sent;    /* bulk OUT bytes the host completed, since creation */
 	uint64_t device_errors; /* ERROR events and stalled requests */
 	uint64_t arrivals;      /* times a device was set up (hot-plug included) */
@@ -39,9 +60,19 @@ struct projector_stats {
 
 /* Listener callbacks run from dispatch() only, never from another call. */
 struct projector_listener {
-	/* buffer, holding volume seq, is shown from the revolution that
-	 * started at time_ns. */
+	/* buffer, holding volume seq, is shown from time_ns on: the boundary
+	 * the swap took effect at. For swap() a revolution start; for
+	 * swap_half() on a device with half_turn_swaps a half-turn start,
+	 * either a revolution start or the start of image N/2 (see
+	 * "Boundaries" above), whichever came first with the upload
+	 * complete. The buffer shown before is free (uploadable) from this
+	 * call on. Not called when swapped_at is set. */
 	void (*swapped)(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq);
+	/* Optional; when set, called instead of swapped(), with the same
+	 * arguments and which boundary time_ns is: half_turn true for the
+	 * start of image N/2 (the middle of a revolution, only ever after
+	 * swap_half()), false for a revolution start. */
+	void (*swapped_at)(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq, bool half_turn);
 	/* The device refused or lost what was sent to buffer
 	 * (PROJWIRE_NO_BUFFER: no buffer concerned); err is a negative errno.
 	 * The buffer's content is unknown from now on and a swap pending on it
@@ -74,8 +105,26 @@ struct projector_impl {
 	 * -ENODEV with no device. */
 	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base);
 	/* Shows buffer from the next revolution start after its upload is
-	 * complete; swapped() reports it. */
+	 * complete; swapped() reports it. 0; -EINVAL (no such buffer),
+	 * -EBUSY (buffer shown, or a swap pending: one at a time), -ENODATA
+	 * (nothing, or a failed volume, uploaded there), -ENODEV. (The USB
+	 * backend holds a request back until the upload's first record is
+	 * out; a refusal then comes through error().) An upload not complete
+	 * by the next revolution start counts one underrun and shows from the
+	 * first revolution start after it is. */
 	int (*swap)(struct projector *p, uint32_t buffer);
+	/* swap(), but at half-turn granularity when get_info() says
+	 * half_turn_swaps: buffer is shown from the next half-turn start
+	 * (the next start of image 0 or of image N/2) after its upload is
+	 * complete, so a volume can be swapped in every half revolution. The
+	 * same returns and rules as swap(): one swap pending at a time (either
+	 * kind), the previously shown buffer busy until swapped() reports
+	 * this one; an upload not complete by the next half-turn start counts
+	 * one underrun and shows from the first half-turn start after it is.
+	 * swapped() (swapped_at()) gives the boundary. Without
+	 * half_turn_swaps (an older device, or one not mirrored) it is swap()
+	 * exactly, and the device never sees a half-turn request. */
+	int (*swap_half)(struct projector *p, uint32_t buffer);
 	/* A pollable fd for the event loop (-1 if none) and its handler. */
 	int (*get_fd)(struct projector *p);
 	int (*dispatch)(struct projector *p);
@@ -103,6 +152,12 @@ struct proj_sim_config {
 	uint32_t buffers;                /* 2 or 3 */
 	uint64_t link_bytes_per_sec;     /* modelled link rate, 0 = unlimited */
 	const struct sim_faults *faults; /* its unplug events; NULL = none */
+	/* The device's protocol version 1.minor, for tests of the fallback:
+	 * 0 = the latest (PROJWIRE_VERSION_MINOR, 2: half-turn swaps); 1 = a
+	 * 1.1 device, which stalls SWAP_HALF (so swap_half() never sends it
+	 * one); above the latest, create fails (EINVAL). The model takes
+	 * delta volumes at any minor. */
+	uint8_t version_minor;
 };
 
 /* A simulated projector on the simulated rotor. Starts blanked. NULL + errno
@@ -129,7 +184,7 @@ struct projector *proj_usb_create(const struct proj_usb_config *cfg, const struc
 struct proj_sim_stats {
 	uint64_t revolutions; /* revolution starts seen */
 	uint64_t swaps;
-	uint64_t underruns; /* swaps that missed a revolution start for want of data */
+	uint64_t underruns; /* swaps that missed their first boundary for want of data */
 	uint64_t bytes;     /* wire bytes received */
 	/* Measured by the device model against the true rotor (see
 	 * drivers/proj_sim_meter.h): slice angle error in slices (-1 until

@@ -91,6 +91,7 @@ size_t projwire_ctrl_encode(const struct projwire_ctrl *c, uint16_t iface, uint8
 		len = PROJWIRE_TIMING_SIZE;
 		break;
 	case PROJWIRE_REQ_SWAP:
+	case PROJWIRE_REQ_SWAP_HALF:
 		s.value = (uint16_t)c->buffer;
 		break;
 	case PROJWIRE_REQ_RESET_STREAM:
@@ -125,6 +126,7 @@ int projwire_ctrl_decode(const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t
 	case PROJWIRE_REQ_SET_TIMING:
 	case PROJWIRE_REQ_SWAP:
 	case PROJWIRE_REQ_RESET_STREAM:
+	case PROJWIRE_REQ_SWAP_HALF:
 		break;
 	default:
 		return -EOPNOTSUPP;
@@ -148,6 +150,7 @@ int projwire_ctrl_decode(const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t
 			return -EINVAL;
 		return 0;
 	case PROJWIRE_REQ_SWAP:
+	case PROJWIRE_REQ_SWAP_HALF:
 		if (s.value >= PROJWIRE_MAX_BUFFERS)
 			return -EINVAL;
 		out->buffer = s.value;
@@ -188,6 +191,11 @@ void projwire_info_to_geometry(const struct projwire_info *info, struct geometry
 		.half_height = info->half_height,
 		.rpm = info->nominal_rpm,
 	};
+}
+
+bool projwire_info_half_turn_swaps(const struct projwire_info *info)
+{
+	return info->version_minor >= 2 && (info->flags & PROJWIRE_INFO_MIRRORED);
 }
 
 void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g, uint32_t buffers,
@@ -376,7 +384,7 @@ size_t projwire_event_encode(const struct projwire_event *ev, uint8_t out[PROJWI
 	if (ev->type == PROJWIRE_EV_SWAPPED) {
 		header_encode(out, ev->type, 24);
 		le_put32(out + 8, ev->buffer);
-		le_put32(out + 12, 0);
+		le_put32(out + 12, ev->boundary); /* reserved (0) before 1.2 */
 		le_put64(out + 16, (uint64_t)ev->time_ns);
 		le_put64(out + 24, ev->seq);
 		return PROJWIRE_HEADER_SIZE + 24;
@@ -404,6 +412,8 @@ int projwire_event_decode(const uint8_t *in, size_t len, struct projwire_event *
 	out->type = in[2];
 	if (out->type == PROJWIRE_EV_SWAPPED) {
 		out->buffer = le_get32(in + 8);
+		/* Bits a later minor version may define are ignored. */
+		out->boundary = le_get32(in + 12) & PROJWIRE_SWAPPED_HALF_TURN;
 		out->time_ns = (int64_t)le_get64(in + 16);
 		out->seq = le_get64(in + 24);
 	} else {

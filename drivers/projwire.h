@@ -1,4 +1,4 @@
-/* The projector wire protocol (proto/projector.md, version 1.1): one codec for
+/* The projector wire protocol (proto/projector.md, version 1.2): one codec for
  * both ends. The host side (the USB driver, the simulated projector's host
  * half) uses the encoders; the device side (the simulated projector's device
  * model, device firmware tests) uses the strict, incremental decoder and the
@@ -18,7 +18,7 @@
 #include "volume.h"
 
 #define PROJWIRE_VERSION_MAJOR 1
-#define PROJWIRE_VERSION_MINOR 1 /* 1.1: delta volumes */
+#define PROJWIRE_VERSION_MINOR 2 /* 1.1: delta volumes; 1.2: half-turn swaps */
 
 /* USB interface descriptor of a Spindle projector. */
 #define PROJWIRE_USB_CLASS 0xff
@@ -62,6 +62,7 @@ enum projwire_request {
 	PROJWIRE_REQ_SET_TIMING = 0x11,
 	PROJWIRE_REQ_SWAP = 0x12,
 	PROJWIRE_REQ_RESET_STREAM = 0x13,
+	PROJWIRE_REQ_SWAP_HALF = 0x14, /* 1.2: SWAP from the next half-turn start */
 };
 
 /* bmRequestType: vendor request to the interface, device-to-host or not. */
@@ -106,7 +107,7 @@ struct projwire_ctrl {
 	enum projwire_request request;
 	union {
 		bool blank;                    /* SET_BLANK */
-		uint32_t buffer;               /* SWAP */
+		uint32_t buffer;               /* SWAP, SWAP_HALF */
 		struct projwire_timing timing; /* SET_TIMING */
 	};
 };
@@ -140,14 +141,19 @@ struct projwire_info {
 void projwire_info_encode(const struct projwire_info *info, uint8_t out[PROJWIRE_INFO_SIZE]);
 int projwire_info_decode(const uint8_t *in, size_t len, struct projwire_info *out);
 
+/* Whether a device of this info takes SWAP_HALF: version 1.2 or later and
+ * mirrored (section 1). A host sends it to no other. */
+bool projwire_info_half_turn_swaps(const struct projwire_info *info);
+
 /* Between device info and geometry. */
 void projwire_info_from_geometry(struct projwire_info *info, const struct geometry *g, uint32_t buffers,
 				 uint64_t link_bytes_per_sec);
 void projwire_info_to_geometry(const struct projwire_info *info, struct geometry *g);
 
 #define PROJWIRE_STATUS_BLANKED 0x01
-#define PROJWIRE_STATUS_TIMING 0x02  /* SET_TIMING received */
-#define PROJWIRE_STATUS_PENDING 0x04 /* a swap awaits its revolution start */
+#define PROJWIRE_STATUS_TIMING 0x02       /* SET_TIMING received */
+#define PROJWIRE_STATUS_PENDING 0x04      /* a swap awaits its revolution start */
+#define PROJWIRE_STATUS_PENDING_HALF 0x08 /* 1.2: ... a half-turn start (SWAP_HALF) */
 
 enum projwire_buffer_state {
 	PROJWIRE_BUF_EMPTY = 0,   /* never written */
@@ -246,12 +252,16 @@ void projwire_decoder_get_stats(const struct projwire_decoder *d, struct projwir
 
 /* ---- Bulk IN events (device -> host) ---- */
 
+/* SWAPPED boundary flags (1.2; a 1.0 or 1.1 device sends 0). */
+#define PROJWIRE_SWAPPED_HALF_TURN 0x01 /* time_ns is the start of image N/2, not of image 0 */
+
 struct projwire_event {
-	uint8_t type;    /* PROJWIRE_EV_* */
-	uint32_t buffer; /* PROJWIRE_NO_BUFFER when none */
-	int64_t time_ns; /* SWAPPED: revolution start, host CLOCK_MONOTONIC */
-	uint64_t seq;    /* volume sequence number of that buffer */
-	uint32_t error;  /* ERROR: enum projwire_error */
+	uint8_t type;      /* PROJWIRE_EV_* */
+	uint32_t buffer;   /* PROJWIRE_NO_BUFFER when none */
+	int64_t time_ns;   /* SWAPPED: the boundary it took effect at, host CLOCK_MONOTONIC */
+	uint64_t seq;      /* volume sequence number of that buffer */
+	uint32_t error;    /* ERROR: enum projwire_error */
+	uint32_t boundary; /* SWAPPED: PROJWIRE_SWAPPED_* (decode keeps the bits it knows) */
 };
 
 /* Returns the bytes written, at most PROJWIRE_EVENT_MAX. */

@@ -135,9 +135,9 @@ static bool seg_reaches(const struct sim_rotor *r, size_t i, double p)
 	return s->w0 > 0.0 || s->a > 0.0 || p <= s->p0;
 }
 
-int64_t sim_rotor_index_time(const struct sim_rotor *r, int64_t n)
+/* The first whole nanosecond at which the rotor is at position p. */
+static int64_t position_time(const struct sim_rotor *r, double p)
 {
-	double p = (double)n;
 	for (size_t i = 0; i < r->nseg; i++) {
 		if (!seg_reaches(r, i, p))
 			continue;
@@ -147,6 +147,35 @@ int64_t sim_rotor_index_time(const struct sim_rotor *r, int64_t n)
 		return r->seg[i].ts + (int64_t)dt;
 	}
 	return SIM_ROTOR_NEVER;
+}
+
+int64_t sim_rotor_index_time(const struct sim_rotor *r, int64_t n)
+{
+	return position_time(r, (double)n);
+}
+
+int64_t sim_rotor_half_turn_time(const struct sim_rotor *r, int64_t h)
+{
+	/* h / 2 is exact in a double: even h gives index_time(h / 2) to the
+	 * nanosecond. */
+	return position_time(r, 0.5 * (double)h);
+}
+
+int64_t sim_rotor_next_half_turn(const struct sim_rotor *r, int64_t t, bool *second)
+{
+	/* From the position, then checked against the half-turn times, as
+	 * revolution() does. */
+	int64_t h = (int64_t)floor(2.0 * seg_pos(seg_at(r, t), t));
+	if (sim_rotor_half_turn_time(r, h + 1) <= t)
+		h++;
+	else if (sim_rotor_half_turn_time(r, h) > t)
+		h--;
+	int64_t at = sim_rotor_half_turn_time(r, h);
+	if (at != t)
+		at = sim_rotor_half_turn_time(r, ++h);
+	if (second)
+		*second = at != SIM_ROTOR_NEVER && (h & 1);
+	return at;
 }
 
 /* Revolution number at t: from the position, then checked against the

@@ -58,6 +58,17 @@ int64_t sim_rotor_band_cross(const struct sim_rotor *r, int64_t t, double lo, do
 /* The time of the first revolution start (angle 0) at or after t;
  * SIM_ROTOR_NEVER when the rotor stops for good before the next one. */
 int64_t sim_rotor_next_index(const struct sim_rotor *r, int64_t t);
+/* Half-turn starts: the revolution starts (angle 0) and the times the rotor
+ * is half a turn past them (angle pi), where a mirrored display starts
+ * image N/2, the first image of its volume mirrored. Half-turn h is at
+ * position h / 2 revolutions since creation: even h is revolution h / 2's
+ * start, to the nanosecond of sim_rotor_index_time(). Its time, as
+ * index_time() (SIM_ROTOR_NEVER when the rotor never gets there). */
+int64_t sim_rotor_half_turn_time(const struct sim_rotor *r, int64_t h);
+/* The first half-turn start at or after t (SIM_ROTOR_NEVER as
+ * next_index()); *second, when given, is true for angle pi (the middle of
+ * a revolution), false for a revolution start. */
+int64_t sim_rotor_next_half_turn(const struct sim_rotor *r, int64_t t, bool *second);
 /* True angle in radians [0, 2*pi) at time t. */
 double sim_rotor_angle(const struct sim_rotor *r, int64_t t);
 

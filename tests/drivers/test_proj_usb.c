@@ -25,6 +25,7 @@
 #include "proj_usb_priv.h"
 #include "projector.h"
 #include "projwire.h"
+#include "sim_rotor.h"
 #include "usb_emul.h"
 #include "volume_util.h"
 
@@ -53,6 +54,7 @@ struct events {
 	int64_t time_ns;
 	uint64_t seq;
 	int err, gone_err;
+	bool half; /* swapped_at()'s half_turn */
 };
 
 static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
@@ -91,6 +93,20 @@ static const struct projector_listener listener = {
 	.arrived = on_arrived,
 };
 
+static void on_swapped_at(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq, bool half_turn)
+{
+	on_swapped(data, buffer, time_ns, seq);
+	((struct events *)data)->half = half_turn;
+}
+
+/* The same, told which boundary each swap took. */
+static const struct projector_listener half_listener = {
+	.swapped_at = on_swapped_at,
+	.error = on_error,
+	.gone = on_gone,
+	.arrived = on_arrived,
+};
+
 struct rig {
 	struct usb_emul *emul;
 	struct projector *p;
@@ -99,7 +115,8 @@ struct rig {
 	int fds; /* before the projector: umockdev's own come and go apart */
 };
 
-static void rig_init(struct rig *r, const struct geometry *g, const struct geometry *dev_geom, uint8_t minor)
+static void rig_init_with(struct rig *r, const struct geometry *g, const struct geometry *dev_geom, uint8_t minor,
+			  const struct projector_listener *l)
 {
 	*r = (struct rig){ .cfg = { .geom = *g } };
 	r->emul = usb_emul_create();
@@ -107,8 +124,13 @@ static void rig_init(struct rig *r, const struct geometry *g, const struct geome
 	if (dev_geom)
 		CHECK_EQ(usb_emul_plug(r->emul, dev_geom, 3, minor), 0);
 	r->fds = count_fds();
-	r->p = proj_usb_create(&r->cfg, &listener, &r->ev);
+	r->p = proj_usb_create(&r->cfg, l, &r->ev);
 	CHECK(r->p);
+}
+
+static void rig_init(struct rig *r, const struct geometry *g, const struct geometry *dev_geom, uint8_t minor)
+{
+	rig_init_with(r, g, dev_geom, minor, &listener);
 }
 
 static void rig_finish(struct rig *r)
@@ -309,6 +331,156 @@ static void test_delta(void)
 {
 	check_delta(1);
 	check_delta(0);
+}
+
+/* ---- Half-turn swaps (1.2) ---- */
+
+/* Turns the loop until the emulated rotor is between from and to
+ * (fractions of a revolution) past a revolution start. */
+static void wait_phase(struct projector *p, const struct sim_rotor *rotor, double from, double to)
+{
+	int64_t period = sim_rotor_period_ns(rotor), deadline = now_ns() + 2000000000LL;
+	for (;;) {
+		int64_t t = now_ns();
+		CHECK(t < deadline);
+		int64_t start = sim_rotor_index_time(rotor, sim_rotor_revolution(rotor, t));
+		double f = (double)(t - start) / (double)period;
+		if (f >= from && f < to)
+			return;
+		turn(p);
+	}
+}
+
+/* The boundary a swap asked at t takes on the emulated device, its data
+ * being through: the next half-turn start, or revolution start. */
+static int64_t boundary_after(const struct sim_rotor *rotor, int64_t t, bool half)
+{
+	return half ? sim_rotor_next_half_turn(rotor, t, NULL) : sim_rotor_next_index(rotor, t);
+}
+
+/* swap_half() to a device of version 1.minor, mirrored or not: SWAP_HALF
+ * and swaps at half-turn starts from a 1.2 mirrored device; to any other
+ * SWAP and revolution starts only, SWAP_HALF never sent. Requests are made
+ * just past a revolution start (where the two differ: the middle comes
+ * first) and just past a middle. */
+static void check_half_turns(uint8_t minor, bool mirrored)
+{
+	struct geometry g = geom;
+	g.mirrored = mirrored;
+	struct rig r;
+	rig_init_with(&r, &g, &g, minor, &half_listener);
+	struct projector *p = r.p;
+	const struct sim_rotor *rotor = usb_emul_rotor(r.emul);
+	bool want = minor >= 2 && mirrored;
+	struct projector_info info;
+	CHECK_EQ(p->impl->get_info(p, &info), 0);
+	CHECK_EQ(info.half_turn_swaps, want);
+	CHECK_EQ(p->impl->blank(p, false), 0);
+	struct volume *vol[3];
+	for (int i = 0; i < 3; i++) {
+		vol[i] = volume_create(&g);
+		CHECK(vol[i]);
+		random_volume(vol[i], 2, 300 + (uint64_t)i);
+	}
+	int pinned = 0, middles = 0, rounds = 8;
+	struct usb_emul_stats es;
+	for (int i = 0; i < rounds; i++) {
+		uint32_t b = (uint32_t)i % 3;
+		struct volume *v = vol[b];
+		v->seq = 300 + (uint64_t)i;
+		wait_phase(p, rotor, i % 2 ? 0.55 : 0.05, i % 2 ? 0.65 : 0.15);
+		usb_emul_get_stats(r.emul, &es);
+		uint64_t requests = es.swaps + es.swap_halves;
+		int swaps = r.ev.swaps;
+		int64_t asked = now_ns();
+		CHECK(p->impl->upload(p, b, v, NULL) > 0);
+		CHECK_EQ(p->impl->swap_half(p, b), 0);
+		/* The request goes out once VOLUME_BEGIN is through, which for
+		 * a volume of one bulk transfer is all of it: no underrun. */
+		for (int64_t deadline = asked + 1000000000LL; es.swaps + es.swap_halves == requests;) {
+			CHECK(now_ns() < deadline);
+			turn(p);
+			usb_emul_get_stats(r.emul, &es);
+		}
+		int64_t sent = now_ns();
+		wait_for(p, &r.ev.swaps, swaps, 2000);
+		int64_t t = r.ev.time_ns, lo = boundary_after(rotor, asked, want),
+			hi = boundary_after(rotor, sent, want);
+		CHECK_EQ(r.ev.buffer, b);
+		CHECK_EQ(r.ev.seq, v->seq);
+		CHECK_MSG(t >= lo && t <= hi, "swap at %lld, first boundary after the request %lld, after it went %lld",
+			  (long long)t, (long long)lo, (long long)hi);
+		bool second;
+		CHECK_EQ(sim_rotor_next_half_turn(rotor, t, &second), t);
+		CHECK_EQ(r.ev.half, second);
+		CHECK(want || !second);
+		pinned += lo == hi;
+		middles += second;
+		CHECK(usb_emul_shows(r.emul, v));
+	}
+	usb_emul_get_stats(r.emul, &es);
+	CHECK_EQ(es.swap_halves, want ? (uint64_t)rounds : 0); /* a 1.1 device never gets it */
+	CHECK_EQ(es.swaps, want ? 0 : (uint64_t)rounds);
+	CHECK_EQ(es.stalls, 0);
+	CHECK_EQ(r.ev.errors, 0);
+	run_for(p, 600); /* a keepalive GET_STATUS: the device's counters */
+	struct projector_stats st;
+	p->impl->get_stats(p, &st);
+	CHECK_EQ(st.swaps, (uint64_t)rounds);
+	CHECK_EQ(st.underruns, 0);
+	printf("half-turn swaps, device 1.%u%s: %d swaps, %d at the middle of a revolution, %d pinned to the "
+	       "first boundary after the request\n",
+	       (unsigned)minor, mirrored ? " mirrored" : " not mirrored", rounds, middles, pinned);
+	for (int i = 0; i < 3; i++)
+		volume_destroy(vol[i]);
+	rig_finish(&r);
+}
+
+/* A device that says 1.2 and mirrored but stalls SWAP_HALF as unknown:
+ * the driver swaps at the revolution start instead, and from then on. */
+static void test_half_turn_refused(void)
+{
+	struct rig r;
+	rig_init_with(&r, &geom, &geom, 2, &half_listener);
+	struct projector *p = r.p;
+	const struct sim_rotor *rotor = usb_emul_rotor(r.emul);
+	usb_emul_set_minor(r.emul, 1);
+	struct projector_info info;
+	CHECK_EQ(p->impl->get_info(p, &info), 0);
+	CHECK(info.half_turn_swaps);
+	struct volume *vol = volume_create(&geom);
+	CHECK(vol);
+	random_volume(vol, 2, 401);
+	CHECK(p->impl->upload(p, 0, vol, NULL) > 0);
+	CHECK_EQ(p->impl->swap_half(p, 0), 0);
+	wait_for(p, &r.ev.swaps, 0, 2000);
+	CHECK_EQ(r.ev.buffer, 0);
+	CHECK(!r.ev.half);
+	CHECK_EQ(sim_rotor_next_index(rotor, r.ev.time_ns), r.ev.time_ns);
+	CHECK_EQ(p->impl->get_info(p, &info), 0);
+	CHECK(!info.half_turn_swaps);
+	random_volume(vol, 2, 402);
+	CHECK(p->impl->upload(p, 1, vol, NULL) > 0);
+	CHECK_EQ(p->impl->swap_half(p, 1), 0);
+	wait_for(p, &r.ev.swaps, 1, 2000);
+	CHECK_EQ(r.ev.seq, 402);
+	CHECK(!r.ev.half);
+	struct usb_emul_stats es;
+	usb_emul_get_stats(r.emul, &es);
+	CHECK_EQ(es.swap_halves, 1); /* asked once, refused, never again */
+	CHECK_EQ(es.stalls, 1);
+	CHECK_EQ(es.swaps, 2);
+	CHECK_EQ(r.ev.errors, 0);
+	volume_destroy(vol);
+	rig_finish(&r);
+}
+
+static void test_half_turns(void)
+{
+	check_half_turns(2, true);
+	check_half_turns(1, true);
+	check_half_turns(2, false);
+	test_half_turn_refused();
 }
 
 static void test_error_events(void)
@@ -764,6 +936,7 @@ int main(int argc, char **argv)
 	test_upload_swap();
 	test_in_flight(large);
 	test_delta();
+	test_half_turns();
 	test_error_events();
 	test_keepalive();
 	test_duplicate_arrival();

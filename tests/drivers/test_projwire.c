@@ -446,6 +446,9 @@ static void test_control(void)
 	c.request = PROJWIRE_REQ_SWAP;
 	c.buffer = 2;
 	ctrl_round_trip(&c);
+	c.request = PROJWIRE_REQ_SWAP_HALF;
+	c.buffer = 3;
+	ctrl_round_trip(&c);
 	memset(&c, 0, sizeof(c));
 	c.request = PROJWIRE_REQ_SET_TIMING;
 	c.timing = (struct projwire_timing){ 33333333, 123456789012345, 123456789099999 };
@@ -466,6 +469,24 @@ static void test_control(void)
 	s = (struct projwire_setup){ PROJWIRE_RT_OUT, PROJWIRE_REQ_SWAP, PROJWIRE_MAX_BUFFERS, 0, 0 };
 	projwire_setup_encode(&s, setup);
 	CHECK_EQ(projwire_ctrl_decode(setup, NULL, 0, &out), -EINVAL);
+	s = (struct projwire_setup){ PROJWIRE_RT_OUT, PROJWIRE_REQ_SWAP_HALF, PROJWIRE_MAX_BUFFERS, 0, 0 };
+	projwire_setup_encode(&s, setup);
+	CHECK_EQ(projwire_ctrl_decode(setup, NULL, 0, &out), -EINVAL);
+	s = (struct projwire_setup){ PROJWIRE_RT_IN, PROJWIRE_REQ_SWAP_HALF, 1, 0, 0 };
+	projwire_setup_encode(&s, setup);
+	CHECK_EQ(projwire_ctrl_decode(setup, NULL, 0, &out), -EINVAL); /* wrong direction */
+	s = (struct projwire_setup){ PROJWIRE_RT_OUT, PROJWIRE_REQ_SWAP_HALF, 1, 0, 4 };
+	projwire_setup_encode(&s, setup);
+	CHECK_EQ(projwire_ctrl_decode(setup, data, 4, &out), -EINVAL); /* no data stage */
+
+	/* SWAP_HALF (1.2) byte for byte: 41 14 bb 00 ii 00 00 00. */
+	c = (struct projwire_ctrl){ .request = PROJWIRE_REQ_SWAP_HALF, .buffer = 2 };
+	CHECK_EQ(projwire_ctrl_encode(&c, 3, setup, data), 0);
+	static const uint8_t swap_half[PROJWIRE_SETUP_SIZE] = { 0x41, 0x14, 0x02, 0x00, 0x03, 0x00, 0x00, 0x00 };
+	CHECK(!memcmp(setup, swap_half, sizeof(swap_half)));
+	CHECK_EQ(projwire_ctrl_decode(setup, NULL, 0, &out), 0);
+	CHECK_EQ(out.request, PROJWIRE_REQ_SWAP_HALF);
+	CHECK_EQ(out.buffer, 2);
 	s = (struct projwire_setup){ PROJWIRE_RT_IN, PROJWIRE_REQ_GET_INFO, 0, 0, 8 };
 	projwire_setup_encode(&s, setup);
 	CHECK_EQ(projwire_ctrl_decode(setup, NULL, 0, &out), -EINVAL);
@@ -501,7 +522,73 @@ static bool status_equal(const struct projwire_status *a, const struct projwire_
 static bool event_equal(const struct projwire_event *a, const struct projwire_event *b)
 {
 	return a->type == b->type && a->buffer == b->buffer && a->time_ns == b->time_ns && a->seq == b->seq &&
-	       a->error == b->error;
+	       a->error == b->error && a->boundary == b->boundary;
+}
+
+/* 1.2: SWAPPED's boundary field, the status flag, who gets SWAP_HALF. */
+static void test_half_turn_wire(void)
+{
+	struct projwire_event ev = {
+		.type = PROJWIRE_EV_SWAPPED,
+		.buffer = 1,
+		.time_ns = 0x0102030405060708,
+		.seq = 77,
+		.boundary = PROJWIRE_SWAPPED_HALF_TURN,
+	}, ev2;
+	uint8_t eb[PROJWIRE_EVENT_MAX];
+	CHECK_EQ(projwire_event_encode(&ev, eb), 32);
+	static const uint8_t want[32] = {
+		0x53, 0x50, 0x81, 0x00, 0x18, 0x00, 0x00, 0x00, /* header: SWAPPED, 24 bytes */
+		0x01, 0x00, 0x00, 0x00,                         /* buffer */
+		0x01, 0x00, 0x00, 0x00,                         /* boundary: half turn */
+		0x08, 0x07, 0x06, 0x05, 0x04, 0x03, 0x02, 0x01, /* time */
+		77,   0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x00, /* sequence number */
+	};
+	CHECK(!memcmp(eb, want, sizeof(want)));
+	CHECK_EQ(projwire_event_decode(eb, sizeof(eb), &ev2), 32);
+	CHECK(event_equal(&ev, &ev2));
+	/* A revolution start, and what a 1.1 device sends (the field was
+	 * reserved): 0. */
+	eb[12] = 0;
+	CHECK_EQ(projwire_event_decode(eb, sizeof(eb), &ev2), 32);
+	CHECK_EQ(ev2.boundary, 0);
+	ev.boundary = 0;
+	CHECK(event_equal(&ev, &ev2));
+	/* Bits a later version may define are ignored, not an error. */
+	le_put32(eb + 12, 0x80000003u);
+	CHECK_EQ(projwire_event_decode(eb, sizeof(eb), &ev2), 32);
+	CHECK_EQ(ev2.boundary, PROJWIRE_SWAPPED_HALF_TURN);
+	/* ERROR events have no boundary. */
+	struct projwire_event err = { .type = PROJWIRE_EV_ERROR, .buffer = 2, .error = PROJWIRE_ERR_NOT_READY };
+	CHECK_EQ(projwire_event_decode(eb, projwire_event_encode(&err, eb), &ev2), 24);
+	CHECK_EQ(ev2.boundary, 0);
+
+	struct projwire_status st = { .flags = PROJWIRE_STATUS_PENDING | PROJWIRE_STATUS_PENDING_HALF,
+				      .shown = 0,
+				      .pending = 1 },
+			       st2;
+	uint8_t sb[PROJWIRE_STATUS_SIZE];
+	projwire_status_encode(&st, sb);
+	CHECK_EQ(sb[4], 0x0c);
+	CHECK_EQ(projwire_status_decode(sb, sizeof(sb), &st2), 0);
+	CHECK_EQ(st2.flags, PROJWIRE_STATUS_PENDING | PROJWIRE_STATUS_PENDING_HALF);
+
+	/* Half-turn swaps: 1.2 or later, and mirrored. */
+	struct projwire_info info;
+	projwire_info_from_geometry(&info, &geom, 3, 0);
+	CHECK_EQ(info.version_minor, 2);
+	CHECK(projwire_info_half_turn_swaps(&info));
+	uint8_t ib[PROJWIRE_INFO_SIZE];
+	projwire_info_encode(&info, ib);
+	CHECK_EQ(ib[1], 2);
+	info.version_minor = 1;
+	CHECK(!projwire_info_half_turn_swaps(&info));
+	info.version_minor = 3;
+	CHECK(projwire_info_half_turn_swaps(&info));
+	struct geometry flat = geom;
+	flat.mirrored = false;
+	projwire_info_from_geometry(&info, &flat, 3, 0);
+	CHECK(!projwire_info_half_turn_swaps(&info));
 }
 
 static void test_info_status_events(void)
@@ -550,6 +637,7 @@ static void test_info_status_events(void)
 	CHECK(event_equal(&err, &ev2));
 	eb[0] = 0;
 	CHECK_EQ(projwire_event_decode(eb, n, &ev2), -EPROTO);
+	test_half_turn_wire();
 }
 
 static void test_crc_and_errors(void)

@@ -9,7 +9,40 @@
 #define RPM 730.0
 #define SEC 1000000000LL
 
-/* revolution() and index_time() agree around every index in [from, to]. */
+/* The half-turn starts of revolution n (starting at index time t): the
+ * first is the revolution start itself, the second where the rotor is half
+ * a turn on; next_half_turn() finds each and says which it is. */
+static void check_half_turns(const struct sim_rotor *r, int64_t n, int64_t t)
+{
+	bool second = true;
+	CHECK_EQ(sim_rotor_half_turn_time(r, 2 * n), t);
+	CHECK_EQ(sim_rotor_next_half_turn(r, t, &second), t);
+	CHECK(!second);
+	CHECK_EQ(sim_rotor_next_half_turn(r, t - 1, &second), t);
+	CHECK(!second);
+	int64_t h = sim_rotor_half_turn_time(r, 2 * n + 1);
+	if (h == SIM_ROTOR_NEVER) {
+		CHECK_EQ(sim_rotor_next_half_turn(r, t + 1, NULL), SIM_ROTOR_NEVER);
+		return;
+	}
+	CHECK(h > t);
+	CHECK_EQ(sim_rotor_next_half_turn(r, t + 1, &second), h);
+	CHECK(second);
+	CHECK_EQ(sim_rotor_next_half_turn(r, h, &second), h);
+	CHECK(second);
+	CHECK_EQ(sim_rotor_next_half_turn(r, h - 1, NULL), h);
+	CHECK_EQ(sim_rotor_revolution(r, h), n);
+	double a = sim_rotor_angle(r, h);
+	CHECK_MSG(a >= M_PI && a < M_PI + 1e-6, "angle %g at half-turn %lld", a, (long long)(2 * n + 1));
+	CHECK(sim_rotor_angle(r, h - 1) < M_PI);
+	int64_t next = sim_rotor_index_time(r, n + 1);
+	CHECK(next == SIM_ROTOR_NEVER || next > h);
+	CHECK_EQ(sim_rotor_next_half_turn(r, h + 1, &second), next);
+	CHECK(next == SIM_ROTOR_NEVER || !second);
+}
+
+/* revolution() and index_time() agree around every index in [from, to];
+ * so do the half-turn starts. */
 static void check_consistent(const struct sim_rotor *r, int64_t from, int64_t to)
 {
 	int64_t n = sim_rotor_revolution(r, from);
@@ -21,6 +54,7 @@ static void check_consistent(const struct sim_rotor *r, int64_t from, int64_t to
 		CHECK_EQ(sim_rotor_next_index(r, t - 1), t);
 		double a = sim_rotor_angle(r, t);
 		CHECK_MSG(a < 1e-6 || a > 2 * M_PI - 1e-6, "angle %g at index %lld", a, (long long)n);
+		check_half_turns(r, n, t);
 	}
 }
 
@@ -44,8 +78,11 @@ static void test_steady_exact(void)
 	CHECK(r);
 	int64_t t0 = sim_rotor_start(r), p = sim_rotor_period_ns(r);
 	CHECK_EQ(p, llround(60e9 / RPM));
-	for (int64_t n = -3; n < 100000; n += 997)
+	for (int64_t n = -3; n < 100000; n += 997) {
 		CHECK_EQ(sim_rotor_index_time(r, n), t0 + n * p);
+		/* The middle of each: the first whole nanosecond at p / 2. */
+		CHECK_EQ(sim_rotor_half_turn_time(r, 2 * n + 1), t0 + n * p + (p + 1) / 2);
+	}
 	check_consistent(r, t0 - 2 * p, t0 + 20 * p);
 	CHECK(fabs(sim_rotor_rpm_at(r, t0 + SEC) - 60e9 / (double)p) < 1e-9);
 	CHECK_EQ(sim_rotor_band_cross(r, t0, RPM * 0.9, RPM * 1.1, false), SIM_ROTOR_NEVER);

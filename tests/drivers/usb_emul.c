@@ -44,7 +44,6 @@ struct usb_emul {
 	GPtrArray *clients; /* device node opens umockdev may still serve */
 	struct sim_rotor *rotor;
 	struct proj_simdev *dev; /* NULL: unplugged */
-	uint8_t minor;
 	bool lit, attached;
 	int64_t last_ctrl;
 	struct urb_fifo out, in, done; /* bulk OUT and IN waiting; completed, to reap */
@@ -116,13 +115,16 @@ static void control_urb(struct usb_emul *e, struct usbdevfs_urb *urb)
 	bool in = s.request_type & 0x80;
 	watchdog(e, now_ns(), true);
 	e->st.controls++;
+	if (s.request == PROJWIRE_REQ_SWAP)
+		e->st.swaps++;
+	if (s.request == PROJWIRE_REQ_SWAP_HALF)
+		e->st.swap_halves++;
 	int r = proj_simdev_control(e->dev, setup, setup + 8, in ? 0 : s.length, setup + 8, s.length);
 	if (r == -EPIPE) {
+		e->st.stalls++;
 		complete(e, urb, -EPIPE, 0);
 		return;
 	}
-	if (s.request == PROJWIRE_REQ_GET_INFO && r >= 2)
-		setup[8 + 1] = e->minor;
 	if (s.request == PROJWIRE_REQ_SET_BLANK && s.request_type == PROJWIRE_RT_OUT && r >= 0)
 		e->lit = s.value == 0;
 	complete(e, urb, r < 0 ? -EPROTO : 0, r < 0 ? 0 : in ? r : s.length);
@@ -337,9 +339,9 @@ int usb_emul_plug(struct usb_emul *e, const struct geometry *geom, uint32_t buff
 	struct proj_simdev *dev = proj_simdev_create(e->rotor, geom, buffers, 0);
 	if (!dev)
 		return -errno;
+	proj_simdev_set_minor(dev, minor);
 	pthread_mutex_lock(&e->lock);
 	e->dev = dev;
-	e->minor = minor;
 	e->lit = false;
 	e->inject_len = 0;
 	e->st = (struct usb_emul_stats){ .urbs_outstanding = e->st.urbs_outstanding };
@@ -406,6 +408,19 @@ void usb_emul_inject_event(struct usb_emul *e, const uint8_t *bytes, size_t len)
 		e->inject_len = len;
 	}
 	pthread_mutex_unlock(&e->lock);
+}
+
+void usb_emul_set_minor(struct usb_emul *e, uint8_t minor)
+{
+	pthread_mutex_lock(&e->lock);
+	if (e->dev)
+		proj_simdev_set_minor(e->dev, minor);
+	pthread_mutex_unlock(&e->lock);
+}
+
+const struct sim_rotor *usb_emul_rotor(const struct usb_emul *e)
+{
+	return e->rotor;
 }
 
 void usb_emul_get_stats(struct usb_emul *e, struct usb_emul_stats *out)

@@ -25,6 +25,9 @@ struct usb_emul_stats {
 	int urbs_outstanding;    /* submitted and not yet reaped, now */
 	uint64_t bulk_bytes;     /* bulk OUT bytes the device took since plugged */
 	uint64_t controls;       /* control requests since plugged */
+	uint64_t swaps;          /* ... of them SWAP */
+	uint64_t swap_halves;    /* ... of them SWAP_HALF (1.2) */
+	uint64_t stalls;         /* ... of them stalled */
 	int64_t max_ctrl_gap_ns; /* longest silence on EP0 while lit */
 	int watchdog_darkened;   /* times the 2 s watchdog darkened the device */
 	int unknown_ioctls;
@@ -36,9 +39,10 @@ struct usb_emul *usb_emul_create(void);
 /* Unplugs what is plugged and frees. */
 void usb_emul_destroy(struct usb_emul *e);
 
-/* Plugs a projector of geom with buffers volume buffers reporting version
- * 1.minor (the model itself speaks 1.0; minor only changes GET_INFO), at
- * bus path "1-2". Dark, every buffer empty. Returns 0 or negative errno. */
+/* Plugs a projector of geom with buffers volume buffers speaking version
+ * 1.minor (proj_simdev_set_minor(): GET_INFO says so, and below 2 it stalls
+ * SWAP_HALF as unknown; it takes delta records at any minor), at bus path
+ * "1-2". Dark, every buffer empty. Returns 0 or negative errno. */
 int usb_emul_plug(struct usb_emul *e, const struct geometry *geom, uint32_t buffers, uint8_t minor);
 /* Pulls it out: URBs in flight complete with -ENODEV, later ioctls fail
  * with ENODEV, and a remove uevent goes out. */
@@ -47,6 +51,15 @@ void usb_emul_unplug(struct usb_emul *e);
 /* Announces the device again ("add") without touching it: a duplicate
  * hot-plug arrival. */
 void usb_emul_announce_again(struct usb_emul *e);
+
+/* Makes the plugged device speak 1.minor from now on, whatever its GET_INFO
+ * said: a device that claims what it does not do. */
+void usb_emul_set_minor(struct usb_emul *e, uint8_t minor);
+
+/* The rotor the device turns with (real time, 1800 rpm), whose true
+ * revolution and half-turn starts its swaps take. */
+struct sim_rotor;
+const struct sim_rotor *usb_emul_rotor(const struct usb_emul *e);
 
 /* Whether the device shows (lit) exactly vol. */
 bool usb_emul_shows(struct usb_emul *e, const struct volume *vol);
