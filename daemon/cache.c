@@ -17,10 +17,11 @@
 #define CREATE_AFTER 1
 #define MAX_BACKOFF 6 /* waits of up to 64 volumes */
 /* Hits a cached volume must have had when its object changes for the
- * caching to have paid: a volume rendered alone costs about what a few
- * volumes of rendering the object among others do. Fewer, and the object
- * backs off; as many, and the back-off wears off by one. */
-#define PAYOFF_HITS 4
+ * caching to have paid: rendering the object alone once costs about what
+ * rendering it among the others does (S4 in bench/README.md: 1 gave 1.57x
+ * the full render, 2 1.44x, 4 1.30x). Fewer, and the object backs off; as
+ * many, and the back-off wears off by one. */
+#define PAYOFF_HITS 1
 /* Volumes an object may be missing from the scene (a hidden layer) before
  * its entry goes. */
 #define IDLE_VOLUMES 24

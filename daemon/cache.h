@@ -13,7 +13,7 @@
  * - use: while it stays unchanged the volume is composed from the entry
  *   and the object is not rendered;
  * - idle: a changed object loses its volume; if that volume did not pay
- *   (fewer than a few hits), the object must stay unchanged longer before
+ *   (not a single hit), the object must stay unchanged longer before
  *   it is cached again (a saturating back-off that doubles the wait, and
  *   wears off by one each time a cached volume pays), so an object that
  *   keeps changing stops being cached; the budget's evictions back off the
