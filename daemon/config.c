@@ -30,6 +30,7 @@ void config_defaults(struct config *cfg)
 		.max_primitives = 8u << 20,
 		.max_scene_primitives = 16u << 20,
 		.cache = true,
+		.half_turn_swaps = true,
 		.cache_budget = 256ull << 20,
 		.exclusive = POLICY_ADMIN,
 	};
@@ -203,6 +204,8 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u64(&cfg->max_scene_primitives, value, 0, 1ull << 32);
 	if (!strcmp(key, "cache"))
 		return set_bool(&cfg->cache, value);
+	if (!strcmp(key, "half-turn-swaps"))
+		return set_bool(&cfg->half_turn_swaps, value);
 	if (!strcmp(key, "cache-budget"))
 		return set_u64(&cfg->cache_budget, value, 0, UINT64_MAX / 2);
 	if (!strcmp(key, "exclusive"))

@@ -26,6 +26,8 @@ struct devices {
 	struct sync_estimator *est;
 	struct projector *proj;
 	sd_event_source *sync_source, *proj_source, *check_timer, *rate_timer;
+	sd_event_source *half_timer; /* the half-turn start after a revolution start */
+	int64_t half_ns;             /* when it fires */
 	bool blanked;
 	bool present;                     /* a projector is attached: gone() and arrived() say */
 	int64_t max_err_ns;               /* the estimator's fit error the projector is lit at */
@@ -95,6 +97,8 @@ static int on_check(sd_event_source *s, uint64_t usec, void *data)
 	return 0;
 }
 
+static void arm_half_turn(struct devices *dev, int64_t edge_ns);
+
 static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 {
 	struct devices *dev = data;
@@ -119,8 +123,10 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 			update_light(dev, ts[i]);
 		}
 		/* An accepted edge starts a revolution; a glitch does not. */
-		if (!dev->blanked && st->edge_ns == ts[i])
+		if (!dev->blanked && st->edge_ns == ts[i]) {
 			dev->listener->revolution(dev->data, ts[i]);
+			arm_half_turn(dev, ts[i]);
+		}
 	}
 	if (n > 0) {
 		/* The timing first: a device lit without it places slices
@@ -133,6 +139,36 @@ static int on_sync(sd_event_source *s, int fd, uint32_t revents, void *data)
 	}
 	arm_check(dev);
 	return 0;
+}
+
+static int on_half_turn(sd_event_source *s, uint64_t usec, void *data)
+{
+	struct devices *dev = data;
+	if (!dev->blanked && sync_estimator_state(dev->est)->locked && dev->listener->half_turn)
+		dev->listener->half_turn(dev->data, dev->half_ns);
+	return 0;
+}
+
+bool devices_half_turns(const struct devices *dev)
+{
+	struct projector_info info;
+	return dev->cfg->half_turn_swaps && dev->present && dev->proj->impl->get_info(dev->proj, &info) == 0 &&
+	       info.half_turn_swaps;
+}
+
+/* With half-turn swaps, the half-turn start of the revolution that started
+ * at edge_ns is a boundary too: the estimator's prediction of it (the
+ * projector's own clock comes from the same timing). */
+static void arm_half_turn(struct devices *dev, int64_t edge_ns)
+{
+	const struct sync_state *st = sync_estimator_state(dev->est);
+	if (!dev->half_timer || st->period_ns <= 0 || !devices_half_turns(dev))
+		return;
+	int64_t half = st->period_ns / 2, first = st->phase_ns + half;
+	int64_t k = edge_ns > first ? (edge_ns - first + st->period_ns - 1) / st->period_ns : 0;
+	dev->half_ns = first + k * st->period_ns;
+	sd_event_source_set_time(dev->half_timer, (uint64_t)dev->half_ns / 1000);
+	sd_event_source_set_enabled(dev->half_timer, SD_EVENT_ONESHOT);
 }
 
 static void on_swapped(void *data, uint32_t buffer, int64_t time_ns, uint64_t seq)
@@ -308,6 +344,10 @@ static int add_sources(struct devices *dev)
 	r = sd_event_add_time(e, &dev->check_timer, CLOCK_MONOTONIC, 0, 1000, on_check, dev);
 	if (r < 0 || (r = sd_event_source_set_enabled(dev->check_timer, SD_EVENT_OFF)) < 0)
 		return r;
+	r = sd_event_add_time(e, &dev->half_timer, CLOCK_MONOTONIC, 0, 100, on_half_turn, dev);
+	if (r < 0 || (r = sd_event_source_set_enabled(dev->half_timer, SD_EVENT_OFF)) < 0)
+		return r;
+	sd_event_source_set_priority(dev->half_timer, SD_EVENT_PRIORITY_IMPORTANT);
 	r = sd_event_add_time_relative(e, &dev->rate_timer, CLOCK_MONOTONIC, 1000000, 10000, on_rate, dev);
 	if (r < 0)
 		return r;
@@ -379,6 +419,7 @@ void devices_destroy(struct devices *dev)
 	sd_event_source_disable_unref(dev->proj_source);
 	sd_event_source_disable_unref(dev->check_timer);
 	sd_event_source_disable_unref(dev->rate_timer);
+	sd_event_source_disable_unref(dev->half_timer);
 	sync_destroy(dev->sync);
 	sim_rotor_destroy(dev->rotor);
 	sync_estimator_destroy(dev->est);
@@ -388,6 +429,16 @@ void devices_destroy(struct devices *dev)
 bool devices_lit(const struct devices *dev)
 {
 	return !dev->blanked;
+}
+
+int64_t devices_next_boundary(const struct devices *dev, int64_t now, int64_t *period_ns)
+{
+	int64_t next = devices_next_revolution(dev, now, period_ns);
+	if (!next || !devices_half_turns(dev))
+		return next;
+	int64_t half = *period_ns / 2;
+	*period_ns = half;
+	return next - half > now ? next - half : next;
 }
 
 int64_t devices_next_revolution(const struct devices *dev, int64_t now, int64_t *period_ns)

@@ -25,6 +25,11 @@ struct devices_listener {
 	/* A revolution started at time_ns (an accepted index edge), the
 	 * projector lit. */
 	void (*revolution)(void *data, int64_t time_ns);
+	/* With half-turn swaps (devices_half_turns()): the half-turn start of
+	 * the revolution in progress, as the sync estimator predicts it, the
+	 * projector lit: the volume on display is shown anew from there, and
+	 * a new one could have been. */
+	void (*half_turn)(void *data, int64_t time_ns);
 	/* A batch of index edges was taken and the projector is lit: the
 	 * volume on display is whole at a revolution start. */
 	void (*synced)(void *data);
@@ -76,5 +81,13 @@ void devices_get_status(struct devices *dev, struct devices_status *out);
  * CLOCK_MONOTONIC), with the period in *period_ns; 0 when dark or not
  * locked. */
 int64_t devices_next_revolution(const struct devices *dev, int64_t now, int64_t *period_ns);
+/* Whether volumes are swapped in at half-turn starts: the key
+ * half-turn-swaps is on, and the projector attached can (a mirrored device
+ * speaking projector protocol 1.2: drivers/projector.h). */
+bool devices_half_turns(const struct devices *dev);
+/* Like devices_next_revolution(), for the boundaries a swap can take:
+ * half-turn starts when devices_half_turns() (then *period_ns is half a
+ * revolution), else revolution starts. */
+int64_t devices_next_boundary(const struct devices *dev, int64_t now, int64_t *period_ns);
 
 #endif

@@ -77,9 +77,10 @@ bool frames_shown(struct frames *f, uint64_t seq, int64_t time_ns, bool lit);
 /* The projector was lit at time_ns: a volume swapped in while dark is
  * shown now. Returns whether there was one. */
 bool frames_lit(struct frames *f, int64_t time_ns);
-/* A revolution started at time_ns, the projector lit. swap_pending: a
- * newer volume may be swapped in at this very start, and its report
- * answers the frames instead. Cheap when nothing waits. */
+/* A boundary (a revolution start, or with half-turn swaps a half-turn
+ * start) at time_ns, the projector lit. swap_pending: a newer volume may
+ * be swapped in at this very start, and its report answers the frames
+ * instead. Cheap when nothing waits. */
 void frames_revolution(struct frames *f, int64_t time_ns, bool swap_pending);
 
 /* Whether a capture waits. */

@@ -222,7 +222,7 @@ static void keep_rendered(struct pipeline *p)
 static int64_t render_start_time(struct pipeline *p, int64_t now)
 {
 	int64_t period = 0;
-	int64_t next = devices_next_revolution(p->cfg.devices, now, &period);
+	int64_t next = devices_next_boundary(p->cfg.devices, now, &period);
 	if (!next)
 		return 0;
 	int64_t render = (int64_t)p->stats.last_render_us * 1000;
@@ -263,7 +263,10 @@ static void pipeline_kick(struct pipeline *p)
 	if (p->ready && p->uploaded < 0)
 		upload_ready(p);
 	if (p->uploaded >= 0 && p->pending < 0) {
-		int r = p->proj->impl->swap(p->proj, (uint32_t)p->uploaded);
+		/* At the next half-turn start where the device can
+		 * (devices_half_turns()), else the next revolution start. */
+		int r = devices_half_turns(p->cfg.devices) ? p->proj->impl->swap_half(p->proj, (uint32_t)p->uploaded)
+							   : p->proj->impl->swap(p->proj, (uint32_t)p->uploaded);
 		if (r == 0) {
 			p->pending = p->uploaded;
 			p->uploaded = -1;

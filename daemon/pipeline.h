@@ -1,6 +1,7 @@
 /* The volume pipeline: committed scene -> snapshot -> render (on a worker
  * thread) -> upload into a free projector buffer -> swap at the next
- * revolution start -> shown. At most one render runs and one swap is
+ * boundary (half-turn start where the devices can, devices_half_turns();
+ * else revolution start) -> shown. At most one render runs and one swap is
  * pending at a time; a volume is never uploaded into the buffer on show or
  * the one awaiting its swap, so nothing is ever shown half-written. */
 #ifndef SPINDLE_PIPELINE_H
@@ -75,7 +76,7 @@ void pipeline_device_error(struct pipeline *p, uint32_t buffer, int err);
 void pipeline_projector_gone(struct pipeline *p);
 void pipeline_projector_arrived(struct pipeline *p);
 /* Whether a swap was asked for and not yet reported: a newer volume may
- * be shown from the next revolution start on. */
+ * be shown from the next boundary on. */
 bool pipeline_swap_pending(const struct pipeline *p);
 /* When the render in flight started (ns, CLOCK_MONOTONIC), 0 when none
  * runs. Accepts NULL. */

@@ -270,6 +270,11 @@ static void revolution(void *data, int64_t time_ns)
 		frames_revolution(&srv->frames, time_ns, pipeline_swap_pending(srv->pipe));
 }
 
+static void half_turn(void *data, int64_t time_ns)
+{
+	revolution(data, time_ns); /* a boundary as good as a revolution start */
+}
+
 /* A capture takes the volume on display at a revolution start. */
 static void synced(void *data)
 {
@@ -315,6 +320,7 @@ static const struct devices_listener devices_listener = {
 	.version = DEVICES_LISTENER_VERSION,
 	.lit = projector_lit,
 	.revolution = revolution,
+	.half_turn = half_turn,
 	.synced = synced,
 	.state_changed = devices_state_changed,
 	.swapped = swapped,

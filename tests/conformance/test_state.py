@@ -5,7 +5,7 @@ version 1 client. The simulated rotor stalls (sim-faults stall=) and spins
 up again: locked and blanked change, and the rpm with them."""
 import time
 
-from harness import check, run, with_daemon, w
+from harness import Daemon, case, check, run, with_daemon, w
 
 LOCKED, BLANKED, PRESENT = w.STATUS['locked'], w.STATUS['blanked'], w.STATUS['projector_present']
 
@@ -66,6 +66,52 @@ def state_steady(d):
         c.pump(0.1)
     check(len(states(c)) - n <= 1, f'steady rotor: {states(c)[n - 1:]}')
     c.close()
+
+
+def frame_times(d, frames=40):
+    """A layer moved at every frame, committed as soon as the last frame
+    is done: the frames' presentation times, and the revolution period."""
+    c = d.conn()
+    dev = next(e for e in c.log if e.name == 'display.device')
+    period = 60e9 / dev['rpm']
+    buf = c.buffer(w.vertices([(-0.3, -0.3, 0.1), (0.3, 0.3, 0.1)]))
+    lst, layer = c.create('create_list'), c.create('create_layer')
+    c.req(lst, 'list.draw', w.MODE['lines'], buf, 0, 2, 0)
+    c.req(layer, 'layer.set_list', lst)
+    times = []
+    for f in range(frames):
+        y = 0.01 * (f % 50)
+        c.req(layer, 'layer.set_transform', [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, y, 0, 1])
+        times.append(c.frame_commit()['time_ns'])
+    c.close()
+    return times, period
+
+
+def halves(times, period):
+    """Each gap between presentation times in half revolutions (they all
+    fall on boundaries of the simulated rotor, to its timing precision)."""
+    gaps = [(b - a) / (period / 2) for a, b in zip(times, times[1:])]
+    check(all(abs(g - round(g)) < 0.05 for g in gaps), f'gaps in half revolutions: {gaps}')
+    return [round(g) for g in gaps]
+
+
+@case
+def half_turn_frames():
+    """The simulated projector (protocol 1.2, mirrored) takes a new volume
+    at every half-turn start: frames are shown from the middle of a
+    revolution too. With half-turn-swaps = false, only from revolution
+    starts."""
+    for setting, want_odd in (('half-turn-swaps=true', True), ('half-turn-swaps=false', False)):
+        d = Daemon(setting)
+        try:
+            times, period = frame_times(d)
+        finally:
+            d.stop()
+        gaps = halves(times, period)
+        odd = sum(g % 2 for g in gaps)
+        check(odd > 0 if want_odd else odd == 0, f'{setting}: gaps in half revolutions {gaps}')
+        print(f'  {setting}: {len(times)} frames over {(times[-1] - times[0]) / period:.1f} revolutions, '
+              f'{odd} of {len(gaps)} gaps an odd number of half turns')
 
 
 if __name__ == '__main__':
