@@ -256,6 +256,10 @@ static int display_get_status(void *target)
 		client_sent(c, proto_ev_display_limits(c->conn, 1, &lim));
 	}
 	if (c->version >= 4) {
+		struct proto_display_service_args svc;
+		c->env->listener->service(c->env->data, &svc);
+		client_sent(c, proto_ev_display_service(c->conn, 1, svc.watchdog_ms, svc.watchdog_fed,
+							svc.watchdog_withheld, svc.max_client_fds, svc.refused_fds));
 		struct proto_display_composition_args comp;
 		c->env->listener->composition(c->env->data, &comp);
 		client_sent(c, proto_ev_display_composition(c->conn, 1, &comp));
@@ -338,6 +342,8 @@ static void client_read(struct client *c)
 	for (int i = 0; i < CLIENT_READS_PER_WAKEUP && !c->dead; i++) {
 		int n = proto_conn_read(c->conn, &err);
 		if (n == -EPROTO) {
+			if (proto_conn_over_fd_cap(c->conn))
+				c->env->totals->refused_fds++;
 			client_fail(c, 0, err.code, "%s", err.text);
 			return;
 		}

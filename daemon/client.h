@@ -36,6 +36,8 @@ struct client_listener {
 	/* The daemon's limits and what they did, for display.get_status
 	 * (version 3). */
 	void (*limits)(void *data, struct proto_display_limits_args *out);
+	/* The watchdog and the fd cap, for display.get_status (version 4). */
+	void (*service)(void *data, struct proto_display_service_args *out);
 	/* What the object cache did, for display.get_status (version 4). */
 	void (*composition)(void *data, struct proto_display_composition_args *out);
 };
@@ -51,6 +53,7 @@ struct client_totals {
 	uint64_t vertices;     /* every client's vertices held (as c->vertices counts them) */
 	uint32_t mappings;     /* memfd buffers mapped */
 	uint64_t refused_memory, refused_mappings;
+	uint64_t refused_fds; /* clients disconnected over max-client-fds */
 };
 
 /* What every client shares, set up by the daemon and outliving them. */

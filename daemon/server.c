@@ -161,6 +161,21 @@ static void client_status(void *data, struct proto_display_status_args *out)
 	server_get_status(data, out);
 }
 
+static void client_service(void *data, struct proto_display_service_args *out)
+{
+	struct server *srv = data;
+	struct watchdog_stats ws = { 0 };
+	if (srv->watchdog)
+		watchdog_get_stats(srv->watchdog, &ws);
+	*out = (struct proto_display_service_args){
+		.watchdog_ms = (uint32_t)(ws.interval_ns / 1000000),
+		.watchdog_fed = ws.fed,
+		.watchdog_withheld = ws.withheld,
+		.max_client_fds = srv->cfg.max_client_fds,
+		.refused_fds = srv->totals.refused_fds,
+	};
+}
+
 static void client_composition(void *data, struct proto_display_composition_args *out)
 {
 	server_get_composition(data, out);
@@ -177,6 +192,7 @@ static const struct client_listener client_listener = {
 	.status = client_status,
 	.limits = client_limits,
 	.composition = client_composition,
+	.service = client_service,
 };
 
 /* ---- the stage, frames and captures ---- */

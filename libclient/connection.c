@@ -159,8 +159,23 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 		.limits = sp->limits,
 		.composition_known = sp->composition_known,
 		.composition = sp->composition,
+		.service = sp->service,
 	};
 	sp->status_serial++;
+	return 0;
+}
+
+/* Comes before status, which takes it along. */
+static int on_service(void *target, const struct proto_display_service_args *a)
+{
+	struct spindle *sp = target;
+	sp->service = (struct spindle_service){
+		.watchdog_ms = a->watchdog_ms,
+		.watchdog_fed = a->watchdog_fed,
+		.watchdog_withheld = a->watchdog_withheld,
+		.max_client_fds = a->max_client_fds,
+		.refused_fds = a->refused_fds,
+	};
 	return 0;
 }
 
@@ -246,6 +261,7 @@ static const struct proto_display_events display_events = {
 	.refused = on_refused,
 	.limits = on_limits,
 	.composition = on_composition,
+	.service = on_service,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)

@@ -48,6 +48,7 @@ struct spindle {
 	struct spindle_limits limits; /* from the limits event before status (version 3) */
 	bool limits_known;
 	struct spindle_composition composition; /* from the composition event before status (version 4) */
+	struct spindle_service service;         /* from the service event before status (version 4) */
 	bool composition_known;
 	uint64_t status_serial;
 	struct spindle_state state; /* version 2: the last state event */

@@ -26,6 +26,7 @@ struct proto_conn {
 	size_t head, tail;
 	int in_fds[PROTO_MAX_QUEUED_FDS];
 	unsigned in_fd_count, max_in_fds;
+	bool over_fd_cap;
 	unsigned consumed_fds; /* fds of the last message handed out */
 	/* Bytes to send in out[out_head, out_tail), with their fds. */
 	uint8_t *out;
@@ -50,6 +51,11 @@ struct proto_conn *proto_conn_create(int fd, size_t max_out)
 void proto_conn_set_max_fds(struct proto_conn *conn, unsigned max)
 {
 	conn->max_in_fds = max < 1 ? 1 : max > PROTO_MAX_QUEUED_FDS ? PROTO_MAX_QUEUED_FDS : max;
+}
+
+bool proto_conn_over_fd_cap(const struct proto_conn *conn)
+{
+	return conn->over_fd_cap;
 }
 
 static void drop_in_fds(struct proto_conn *conn, unsigned n)
@@ -101,6 +107,7 @@ static int take_rights(struct proto_conn *conn, struct cmsghdr *cmsg, struct pro
 			conn->in_fds[conn->in_fd_count++] = fds[i];
 		} else {
 			close(fds[i]);
+			conn->over_fd_cap = true;
 			r = proto_fail(err, PROTO_ERR_FD, "more than %u file descriptors ahead of their messages",
 				       conn->max_in_fds);
 		}

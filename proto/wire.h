@@ -61,6 +61,8 @@ int proto_conn_get_fd(const struct proto_conn *conn);
 /* How many received fds the connection may hold ahead of their messages
  * (1 to PROTO_MAX_QUEUED_FDS, the default; clamped). More is an error. */
 void proto_conn_set_max_fds(struct proto_conn *conn, unsigned max);
+/* Whether the peer sent more fds than that (the read then failed). */
+bool proto_conn_over_fd_cap(const struct proto_conn *conn);
 
 /* Receives what the socket has. Returns bytes received (> 0), 0 when
  * nothing was available, -EPIPE when the peer closed, -EPROTO for bad

@@ -141,6 +141,14 @@ static void print_status(const struct spindle_status *st)
 	       (unsigned long long)l->refused_mappings);
 	if (!st->composition_known)
 		return;
+	const struct spindle_service *s = &st->service;
+	printf("client fds: at most %u each; %llu clients disconnected over it\n", s->max_client_fds,
+	       (unsigned long long)s->refused_fds);
+	if (s->watchdog_ms)
+		printf("watchdog: %u ms, fed %llu times, withheld %llu times\n", s->watchdog_ms,
+		       (unsigned long long)s->watchdog_fed, (unsigned long long)s->watchdog_withheld);
+	else
+		printf("watchdog: none\n");
 	const struct spindle_composition *c = &st->composition;
 	if (!c->cache) {
 		printf("object cache: off\n");

@@ -297,6 +297,8 @@ def client_fd_cap(d):
     ok.close()
     wit.check()
     settle_fds(d, before)
+    svc = service(d.conn())
+    check(svc['max_client_fds'] == 8 and svc['refused_fds'] == 1, f'counted (spindlectl status): {svc}')
 
 
 @case
@@ -324,6 +326,9 @@ def watchdog():
         check('making progress again' in log, 'fed again')
         fed = sm.feeds(t1, time.monotonic())
         check(fed >= 4, f'fed {fed} times in the second after')
+        svc = service(d.conn())
+        check(svc['watchdog_ms'] == 400 and svc['watchdog_withheld'] >= 1 and svc['watchdog_fed'] >= 8,
+              f'counted (spindlectl status): {svc}')
         wit.check()
         print(f'  watchdog: 400 ms, fed {fed} times in the second after a 0.5 s stop')
     finally:
@@ -337,6 +342,14 @@ def limits(c):
     lim = c.wait('display.limits')
     c.wait('display.status')
     return lim
+
+
+def service(c):
+    """display.service, which comes before status (version 4)."""
+    c.req(1, 'display.get_status')
+    svc = c.wait('display.service')
+    c.wait('display.status')
+    return svc
 
 
 def memfd_buffer(c, size):

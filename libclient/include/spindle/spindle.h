@@ -92,6 +92,15 @@ struct spindle_status {
 		uint32_t mappings, mapping_budget;   /* memfd buffers mapped, max-mappings */
 		uint64_t refused_mappings;           /* clients refused over max-mappings */
 	} limits;
+	/* The daemon's safeguards as a service: systemd's watchdog, fed only
+	 * while it makes progress, and max-client-fds; from a daemon
+	 * speaking protocol 4 (when composition_known). */
+	struct spindle_service {
+		uint32_t watchdog_ms; /* WatchdogSec; 0: none asked for */
+		uint64_t watchdog_fed, watchdog_withheld;
+		uint32_t max_client_fds;
+		uint64_t refused_fds; /* clients disconnected over it */
+	} service;
 	/* What the object cache and compositor did (spindled(8), key cache);
 	 * from a daemon speaking protocol 4, else composition_known is false
 	 * and they are 0. */
