@@ -48,7 +48,8 @@ struct entry {
 	struct scene_draw *draws;
 	struct vdata **refs;
 	uint32_t draw_count;
-	struct rle_volume *vol; /* its rendered volume, or NULL */
+	struct rle_volume *vol;    /* its rendered volume, or NULL */
+	enum render_engine engine; /* what rendered it */
 };
 
 struct cache {
@@ -71,7 +72,10 @@ struct cache {
 	uint32_t use_count, create_count, array_cap;
 	struct scene_draw *rest;
 	uint32_t rest_count, rest_cap, rest_objects;
-	struct rle_volume **created; /* creates[i]'s volume, made by the render */
+	struct rle_volume **created;    /* creates[i]'s volume, made by the render */
+	enum render_engine *created_by; /* and what rendered it */
+	bool mixed;                     /* the last render's parts came from different engines */
+	enum render_engine engine;      /* of the last composition, or of the whole render when mixed */
 	struct volume *rest_vol, *tmp;
 	struct compose_source *sources;
 	uint32_t source_cap;
@@ -150,6 +154,7 @@ void cache_destroy(struct cache *c)
 	free(c->uses);
 	free(c->creates);
 	free(c->created);
+	free(c->created_by);
 	free(c->rest);
 	free(c->sources);
 	volume_destroy(c->prev);
@@ -311,6 +316,10 @@ static int grow_plan(struct cache *c, uint32_t objects)
 	if (!v)
 		return -ENOMEM;
 	c->created = v;
+	enum render_engine *by = realloc(c->created_by, cap * sizeof(*by));
+	if (!by)
+		return -ENOMEM;
+	c->created_by = by;
 	struct compose_source *s = realloc(c->sources, (cap + 2) * sizeof(*s));
 	if (!s)
 		return -ENOMEM;
@@ -450,6 +459,16 @@ static void add_footprint(struct cache *c, const struct compose_source *src)
 	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
 }
 
+/* Segments and triangles of scene, at most what binning keeps. */
+static uint64_t scene_prims(const struct scene *s)
+{
+	uint64_t n = 0;
+	for (uint32_t i = 0; i < s->draw_count; i++)
+		if (s->draws[i].prim != SCENE_POINTS)
+			n += s->draws[i].count / (s->draws[i].prim == SCENE_LINES ? 2 : 3);
+	return n;
+}
+
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
 	if (!c->planned)
@@ -465,8 +484,23 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		c->compose_us = 0;
 		return err;
 	}
+	/* A scene the renderer would hand to another engine whole is
+	 * rendered whole: its parts would each stay native. */
+	if (r->native_prims && scene_prims(scene) > r->native_prims) {
+		err = render_volume(r, scene, out);
+		c->mixed = true;
+		c->engine = r->stats.engine;
+		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
+		c->compose_us = 0;
+		return err;
+	}
 	unsigned n = 0;
 	c->rest_rendered = false;
+	/* Every part must come from one engine (a GL renderer may hand a
+	 * scene to its CPU fallback: too large, or for good): OR is exact
+	 * only among volumes of one. */
+	enum render_engine engine = c->prev_valid ? c->engine : 0;
+	bool mixed = false;
 	if (c->rest_count) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
 		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
@@ -474,6 +508,8 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		c->sources[n] = (struct compose_source){ .vol = c->rest_vol };
 		add_footprint(c, &c->sources[n++]);
 		c->rest_rendered = true;
+		mixed |= engine && r->stats.engine != engine;
+		engine = r->stats.engine;
 	}
 	for (uint32_t i = 0; i < c->create_count; i++) {
 		const struct entry *e = c->creates[i];
@@ -482,12 +518,29 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 			return err;
 		if (!(c->created[i] = rle_volume_encode(c->tmp)))
 			return -ENOMEM;
+		c->created_by[i] = r->stats.engine;
+		mixed |= engine && r->stats.engine != engine;
+		engine = r->stats.engine;
 		c->sources[n] = (struct compose_source){ .rle = c->created[i] };
 		add_footprint(c, &c->sources[n++]);
 	}
 	int64_t t1 = now_ns();
-	for (uint32_t i = 0; i < c->use_count; i++)
+	for (uint32_t i = 0; i < c->use_count; i++) {
+		mixed |= engine && c->uses[i]->engine != engine;
+		engine = c->uses[i]->engine;
 		c->sources[n++] = (struct compose_source){ .rle = c->uses[i]->vol };
+	}
+	c->mixed = mixed;
+	if (mixed) {
+		/* The whole scene, as the renderer renders it; what came from
+		 * another engine is dropped afterwards (cache_done()). */
+		err = render_volume(r, scene, out);
+		c->engine = r->stats.engine;
+		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
+		c->compose_us = 0;
+		return err;
+	}
+	c->engine = engine;
 	/* The last composition, patched where something may have changed
 	 * (or composed whole when there is none), then handed out. */
 	if (c->prev_valid)
@@ -523,10 +576,24 @@ void cache_done(struct cache *c, int result)
 		}
 		return;
 	}
+	if (c->mixed) {
+		/* Rendered whole after all: nothing came from the cache. */
+		c->stats.hits -= c->use_count;
+		c->stats.misses += c->use_count;
+		/* Only what the renderer's engine now gives may be composed. */
+		for (uint32_t i = 0; i < c->count; i++)
+			if (c->entries[i]->vol && c->entries[i]->engine != c->engine)
+				drop_volume(c, c->entries[i]);
+	}
 	for (uint32_t i = 0; i < c->create_count; i++) {
-		c->creates[i]->vol = c->created[i];
+		if (c->mixed && c->created_by[i] != c->engine) {
+			rle_volume_free(c->created[i]);
+		} else {
+			c->creates[i]->vol = c->created[i];
+			c->creates[i]->engine = c->created_by[i];
+			c->stats.creates++;
+		}
 		c->created[i] = NULL;
-		c->stats.creates++;
 	}
 	if (c->prev_valid) {
 		/* What the composition holds; the rest is composed anew next

@@ -168,6 +168,7 @@ static int cpu_render(struct renderer *base, const struct scene *scene, struct v
 		return err;
 	volume_clear(out);
 	memset(&base->stats, 0, sizeof(base->stats));
+	base->stats.engine = RENDER_ENGINE_CPU;
 	base->stats.threads = pool_workers(r->pool);
 	err = bin_build(&r->bins, scene, r->pool);
 	int64_t binned = now_ns();

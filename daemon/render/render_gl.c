@@ -122,6 +122,10 @@ static int check_limits(struct render_gl *r)
 	for (r->tex_shift = 12; (1u << r->tex_shift) > (uint32_t)max_tex; r->tex_shift--)
 		;
 	r->tex_width = 1u << r->tex_shift;
+	/* More than the primitive texture holds (or max_prims) renders on
+	 * the CPU (upload()). */
+	uint64_t fits = (uint64_t)max_tex * r->tex_width / GL_PRIM_TEXELS;
+	r->base.native_prims = r->opts.max_prims && r->opts.max_prims < fits ? r->opts.max_prims : fits;
 	return 0;
 }
 
@@ -477,6 +481,7 @@ static int render_on_cpu(struct render_gl *r, const struct scene *scene, struct 
 static void set_stats(struct render_gl *r, uint64_t t0, uint64_t t1)
 {
 	struct render_stats *st = &r->base.stats;
+	st->engine = RENDER_ENGINE_GL;
 	st->total_ns = (uint64_t)now_ns() - t0;
 	st->bin_ns = t1 - t0;
 	st->pack_ns = r->wait_ns + r->copy_ns;

@@ -16,16 +16,25 @@ struct renderer;
 /* What the last render cost and produced. Times in ns; the per-stage times
  * are summed over the threads that ran them (divide by threads for a wall
  * share), total_ns is wall time. */
+/* What produced a volume. Renderers of one engine give bit-identical
+ * volumes; of different engines, not (a GL renderer that hands a scene to
+ * its CPU fallback gives the CPU renderer's volume). */
+enum render_engine {
+	RENDER_ENGINE_CPU = 1,
+	RENDER_ENGINE_GL = 2,
+};
+
 struct render_stats {
-	uint64_t total_ns;     /* wall: the whole render_volume() call */
-	uint64_t bin_ns;       /* transform + outcodes + binning + sort */
-	uint64_t raster_ns;    /* sectioning and conservative raster */
-	uint64_t pack_ns;      /* halftone + pack + canvas clear */
-	uint64_t prims;        /* primitives after transform (finite) */
-	uint64_t prim_images;  /* (primitive, image) pairs sectioned */
-	uint64_t canvas_tiles; /* tiles halftoned (something touched them) */
-	uint64_t tiles;        /* non-empty tiles packed */
-	unsigned threads;      /* threads that rendered images */
+	enum render_engine engine; /* of the last volume */
+	uint64_t total_ns;         /* wall: the whole render_volume() call */
+	uint64_t bin_ns;           /* transform + outcodes + binning + sort */
+	uint64_t raster_ns;        /* sectioning and conservative raster */
+	uint64_t pack_ns;          /* halftone + pack + canvas clear */
+	uint64_t prims;            /* primitives after transform (finite) */
+	uint64_t prim_images;      /* (primitive, image) pairs sectioned */
+	uint64_t canvas_tiles;     /* tiles halftoned (something touched them) */
+	uint64_t tiles;            /* non-empty tiles packed */
+	unsigned threads;          /* threads that rendered images */
 };
 
 /* CPU renderer variants, for tests and benchmarks: every variant gives
@@ -65,6 +74,9 @@ struct renderer_impl {
 struct renderer {
 	const struct renderer_impl *impl;
 	struct geometry geom;
+	/* Scenes of more segments and triangles than this are rendered by
+	 * another engine (a GL renderer's CPU fallback); 0: no limit. */
+	uint64_t native_prims;
 	struct render_stats stats; /* of the last render */
 };
 

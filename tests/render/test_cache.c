@@ -358,6 +358,14 @@ int main(void)
 		run(r, 64u << 20, 60, 5 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0);
 		render_destroy(r);
+		/* Scenes over max_prims go to the CPU fallback, single objects
+		 * stay on GL: parts of two engines are never composed. */
+		o.no_fallback = false;
+		o.max_prims = 64;
+		r = render_gl_create(&small, &o);
+		CHECK(r != NULL);
+		run(r, 64u << 20, 40, 7 + (uint64_t)i, &t);
+		render_destroy(r);
 	}
 	return check_done();
 }
