@@ -134,7 +134,6 @@ void rle_volume_free(struct rle_volume *r)
 struct compose_worker {
 	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
 	uint8_t *touched; /* tiles_per_image flags */
-	unsigned *cand;   /* patching: the sources that touch the image's dirty tiles */
 	int err;
 };
 
@@ -144,7 +143,6 @@ struct compose {
 	uint32_t tiles_per_image, mask_bytes, image_count;
 	struct compose_worker *w;
 	struct volume *tmp; /* patching builds images here, then exchanges them */
-	unsigned cand_cap;
 	/* Per call: */
 	const uint8_t *dirty;
 	struct volume *out;
@@ -192,7 +190,6 @@ void compose_destroy(struct compose *c)
 	for (unsigned i = 0; c->w && i < c->workers; i++) {
 		free(c->w[i].tiles);
 		free(c->w[i].touched);
-		free(c->w[i].cand);
 	}
 	free(c->w);
 	volume_destroy(c->tmp);
@@ -319,15 +316,6 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 
 /* ---- patching ---- */
 
-/* Which stored tile t is: the set bits of mask below t. */
-static uint32_t tile_index(const uint8_t *mask, uint32_t t)
-{
-	uint32_t i = 0, byte = t / 8;
-	for (uint32_t b = 0; b < byte; b++)
-		i += (uint32_t)__builtin_popcount(mask[b]);
-	return i + (uint32_t)__builtin_popcount(mask[byte] & ((1u << (t % 8)) - 1));
-}
-
 static bool bit(const uint8_t *mask, uint32_t t)
 {
 	return (mask[t / 8] >> (t % 8)) & 1;
@@ -340,44 +328,56 @@ static const uint8_t *source_mask(const struct compose_source *s, uint32_t k)
 	return s->rle->images[k].tile_count ? s->rle->images[k].data : NULL;
 }
 
-/* ORs source s's tile t of image k (present in its mask) into dst. */
-static int or_source_tile(const struct compose *c, const struct compose_source *s, uint32_t k, uint32_t t, uint8_t *dst)
+/* The stored tiles of mask before tile t, by 64-bit words. */
+static uint32_t count_before(const uint8_t *mask, uint32_t mask_bytes, uint32_t t)
 {
-	if (s->vol) {
-		const struct volume_image *img = &s->vol->images[k];
-		or_tile(dst, img->tiles + (size_t)tile_index(img->mask, t) * VOLUME_TILE_BYTES);
-		return 0;
+	uint32_t n = 0, b = 0;
+	for (; b + 8 <= t / 8; b += 8) {
+		uint64_t v;
+		memcpy(&v, mask + b, 8);
+		n += (uint32_t)__builtin_popcountll(v);
 	}
-	const struct rle_image *img = &s->rle->images[k];
-	uint32_t i = tile_index(img->data, t), off;
-	size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
-	memcpy(&off, img->data + c->mask_bytes + i * sizeof(uint32_t), sizeof(off));
-	if (head + off >= img->len || !or_coded_tile(img->data + head + off, img->len - head - off, dst))
-		return -EINVAL;
+	for (; b < t / 8; b++)
+		n += (uint32_t)__builtin_popcount(mask[b]);
+	return n + (uint32_t)__builtin_popcount(mask[t / 8] & ((1u << (t % 8)) - 1));
+}
+
+/* ORs source s's tiles of image k that lie in dirty into w's dense image. */
+static int gather_dirty(const struct compose *c, struct compose_worker *w, const struct compose_source *s, uint32_t k,
+			const uint8_t *dirty)
+{
+	const uint8_t *mask = source_mask(s, k);
+	const uint8_t *tiles = s->vol ? s->vol->images[k].tiles : NULL;
+	const struct rle_image *img = s->rle ? &s->rle->images[k] : NULL;
+	size_t head = img ? c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t) : 0;
+	for (uint32_t b = 0; b < c->mask_bytes; b++) {
+		uint32_t both = mask[b] & dirty[b];
+		if (!both)
+			continue;
+		/* The stored index of the first tile of this byte. */
+		uint32_t base = count_before(mask, c->mask_bytes, b * 8);
+		for (; both; both &= both - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctz(both), t = b * 8 + bitno;
+			uint32_t i = base + (uint32_t)__builtin_popcount(mask[b] & ((1u << bitno) - 1));
+			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+			w->touched[t] = 1;
+			if (tiles) {
+				or_tile(dst, tiles + (size_t)i * VOLUME_TILE_BYTES);
+				continue;
+			}
+			uint32_t off;
+			memcpy(&off, img->data + c->mask_bytes + i * sizeof(uint32_t), sizeof(off));
+			if (head + off >= img->len ||
+			    !or_coded_tile(img->data + head + off, img->len - head - off, dst))
+				return -EINVAL;
+		}
+	}
 	return 0;
 }
 
-static bool overlaps(const uint8_t *a, const uint8_t *b, uint32_t n)
-{
-	for (uint32_t i = 0; i < n; i++)
-		if (a[i] & b[i])
-			return true;
-	return false;
-}
-
-static bool tile_zero(const uint8_t *tile)
-{
-	uint64_t acc = 0;
-	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += 8) {
-		uint64_t v;
-		memcpy(&v, tile + i, 8);
-		acc |= v;
-	}
-	return acc == 0;
-}
-
 /* Image k of c->out anew: its clean tiles kept, its dirty ones composed
- * from the sources, built in c->tmp's image k and exchanged. */
+ * from the sources (gathered into w's dense image first), built in
+ * c->tmp's image k and exchanged. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
@@ -386,39 +386,31 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 		dirty_count += (uint32_t)__builtin_popcount(dirty[b]);
 	if (!dirty_count)
 		return 0;
-	/* The sources with a tile in a dirty place. */
-	unsigned m = 0;
-	for (unsigned s = 0; s < c->n; s++) {
-		const uint8_t *mask = source_mask(&c->src[s], k);
-		if (mask && overlaps(mask, dirty, c->mask_bytes))
-			w->cand[m++] = s;
-	}
+	int err = 0;
+	for (unsigned s = 0; s < c->n && err == 0; s++)
+		if (source_mask(&c->src[s], k))
+			err = gather_dirty(c, w, &c->src[s], k, dirty);
 	struct volume_image *old = &c->out->images[k];
 	volume_image_clear(c->tmp, k);
-	int err = volume_image_reserve(c->tmp, k, old->tile_count + dirty_count);
+	if (err == 0)
+		err = volume_image_reserve(c->tmp, k, old->tile_count + dirty_count);
 	uint32_t i = 0; /* old's next stored tile */
-	for (uint32_t t = 0; t < c->tiles_per_image && err == 0; t++) {
+	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
 		bool had = bit(old->mask, t);
 		if (!bit(dirty, t)) {
-			if (had)
+			if (had && err == 0)
 				err = volume_image_append(c->tmp, k, t, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
 			i += had;
 			continue;
 		}
 		i += had;
-		uint8_t *dst = volume_image_next(c->tmp, k);
-		if (!dst) {
-			err = -ENOMEM;
-			break;
-		}
-		memset(dst, 0, VOLUME_TILE_BYTES);
-		for (unsigned j = 0; j < m && err == 0; j++) {
-			const struct compose_source *s = &c->src[w->cand[j]];
-			if (bit(source_mask(s, k), t))
-				err = or_source_tile(c, s, k, t, dst);
-		}
-		if (err == 0 && !tile_zero(dst))
-			err = volume_image_push(c->tmp, k, t);
+		if (!w->touched[t])
+			continue;
+		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+		if (err == 0)
+			err = volume_image_append(c->tmp, k, t, tile); /* skips an all-zero tile */
+		memset(tile, 0, VOLUME_TILE_BYTES);
+		w->touched[t] = 0;
 	}
 	if (err == 0)
 		volume_image_exchange(c->tmp, k, c->out, k);
@@ -445,15 +437,6 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
 	int err = check_sources(c, vol, src, n);
 	if (err < 0)
 		return err;
-	if (n > c->cand_cap) {
-		for (unsigned i = 0; i < c->workers; i++) {
-			unsigned *cand = realloc(c->w[i].cand, n * sizeof(*cand));
-			if (!cand)
-				return -ENOMEM;
-			c->w[i].cand = cand;
-		}
-		c->cand_cap = n;
-	}
 	c->out = vol;
 	c->src = src;
 	c->n = n;
