@@ -440,6 +440,12 @@ def privilege_drop():
     try:
         d = Daemon('user=nobody')
         try:
+            # The socket listens before the drop (the kernel queues
+            # connections): a roundtrip is served only once the loop runs,
+            # after the drop.
+            c = d.conn()
+            c.sync()
+            c.close()
             st = proc_status(d.pid)
             check(st['Uid'].split() == [str(NOBODY)] * 4, f'Uid: {st["Uid"]}')
             check(st['Gid'].split()[:3] == [str(NOBODY)] * 3, f'Gid: {st["Gid"]}')
