@@ -33,7 +33,12 @@ struct stage_layer {
 	/* The committed draws of the layer's list (the layer holds a
 	 * reference to the list), or NULL: no list. */
 	const struct draw_array *draws;
-	float transform[16];
+	float transform[16]; /* as the client set it */
+	/* The same as a base turned about the axis by whole images
+	 * (turn.h): transform is, within TURN_TOLERANCE, base turned by
+	 * turn images. */
+	float base[16];
+	uint32_t turn;
 	int32_t priority;
 	bool visible;
 	bool exclusive;

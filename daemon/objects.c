@@ -11,7 +11,9 @@
 
 #include "client.h"
 #include "config.h"
+#include "geometry.h"
 #include "stage.h"
+#include "turn.h"
 
 static const float identity[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
 
@@ -520,6 +522,7 @@ int objects_create_layer(struct client *c, uint32_t id)
 	memcpy(y->pending.transform, identity, sizeof(identity));
 	y->pending.visible = true;
 	memcpy(y->committed.transform, identity, sizeof(identity));
+	memcpy(y->committed.base, identity, sizeof(identity));
 	y->committed.visible = true;
 	y->committed.owner = c;
 	int r = object_register(c, &y->base, id, PROTO_IFACE_LAYER);
@@ -680,6 +683,12 @@ static void layer_commit(struct layer *y)
 	struct stage_layer *s = &y->committed;
 	s->draws = l ? &l->committed : NULL;
 	memcpy(s->transform, y->pending.transform, sizeof(s->transform));
+	/* A turn of the base by whole images keeps the base: the cache can
+	 * reuse the layer's render shifted (turn.h). */
+	if (!turn_find(s->base, s->transform, y->base.client->env->geom->images_per_rev, &s->turn)) {
+		memcpy(s->base, s->transform, sizeof(s->base));
+		s->turn = 0;
+	}
 	s->priority = y->pending.priority;
 	s->visible = y->pending.visible;
 	s->exclusive = y->pending.exclusive;

@@ -1,0 +1,36 @@
+/* Turns about the axis by whole images (turn.h). */
+#include "turn.h"
+
+#include <math.h>
+
+bool turn_find(const float base[16], const float t[16], uint32_t n, uint32_t *steps)
+{
+	if (n == 0)
+		return false;
+	/* Each column's (x, z) turns by the angle: cross and dot products
+	 * summed over the columns give it, weighted by their lengths. */
+	double cross = 0, dot = 0, norm = 0, scale = 1;
+	for (int c = 0; c < 4; c++) {
+		double bx = base[c * 4], bz = base[c * 4 + 2], tx = t[c * 4], tz = t[c * 4 + 2];
+		cross += bx * tz - bz * tx;
+		dot += bx * tx + bz * tz;
+		norm += bx * bx + bz * bz;
+	}
+	for (int i = 0; i < 16; i++)
+		if (fabs(t[i]) > scale)
+			scale = fabs(t[i]);
+	if (norm < 1e-12)
+		return false;
+	double step = 2 * M_PI / n;
+	long m = lround(atan2(cross, dot) / step);
+	double a = m * step, ca = cos(a), sa = sin(a);
+	for (int c = 0; c < 4; c++) {
+		double bx = base[c * 4], bz = base[c * 4 + 2];
+		double want[4] = { ca * bx - sa * bz, base[c * 4 + 1], sa * bx + ca * bz, base[c * 4 + 3] };
+		for (int r = 0; r < 4; r++)
+			if (fabs(want[r] - t[c * 4 + r]) > TURN_TOLERANCE * scale)
+				return false;
+	}
+	*steps = (uint32_t)(((m % (long)n) + (long)n) % (long)n);
+	return true;
+}
