@@ -4,6 +4,7 @@
 #ifndef SPINDLE_SCENE_H
 #define SPINDLE_SCENE_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 enum scene_prim {
@@ -22,10 +23,34 @@ struct scene_draw {
 				* pixel square around its voxel (columns
 				* u - (s-1)/2 .. u + s/2, rows likewise, clipped
 				* to the image); 0 counts as 1. At most 16. */
+	uint16_t turn;           /* 0 .. N-1: shown turned about the y axis by
+				* turn * 2 pi / N (azimuths increasing:
+				* x' = x cos a - z sin a, z' = x sin a + z cos a),
+				* as an image index shift (below); more than
+				* N-1 counts modulo N. 0: as it is. */
 	const uint8_t *prim_rgb; /* NULL, or one colour per primitive (3 bytes
 				  * each, alpha applied) used instead of rgb;
 				  * immutable while the scene lives */
 };
+
+/* A draw with turn m lights, in volume image k, exactly what it would light
+ * with turn 0 in image j = k - m (docs/rendering.md, "Turns"): unmirrored,
+ * j is taken mod N; mirrored (M = N/2 images a volume), j is brought into
+ * [0, M) by adding or subtracting M, each time flipping the mirror, and
+ * when the flips are odd the columns are mirrored (u -> W-1-u). Rows never
+ * change. Its colours combine by MAX with everything else before the
+ * halftone, which keeps image k's phase. So a render of an object unturned
+ * gives its render at any turn, bit for bit, by shifting (and mirroring)
+ * images, as long as its colours' halftone does not depend on the phase
+ * (channels 0 or 255) or the unturned canvas is kept. The GL renderers
+ * hand a scene with any turn to their CPU fallback (render_gl.h). */
+static inline bool scene_has_turn(const struct scene_draw *draws, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++)
+		if (draws[i].turn)
+			return true;
+	return false;
+}
 
 /* A retained object: the draws of one layer (its list placed by its
  * transform), the unit the object cache keeps (cache.h). Renderers draw

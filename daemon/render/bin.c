@@ -10,6 +10,14 @@
 #include "pool.h"
 
 #define KEY_NONE UINT32_MAX
+/* A staged primitive's key holds its sort key (class * M + first) in the
+ * low KEY_BITS bits and its turn (mod N) above them: sort keys are below
+ * 15 * 16384 < 2^18 (M <= 16384, so at most 15 classes) and turns below
+ * N <= 16384 = 2^14, so no key is KEY_NONE. Point keys are images. */
+#define KEY_BITS 18
+#define KEY_MASK ((1u << KEY_BITS) - 1)
+_Static_assert(BIN_MAX_CLASSES * 16384u <= (1u << KEY_BITS) && 16384u <= (1u << (32 - KEY_BITS)),
+	       "sort key and turn share a staged key");
 
 /* The first primitive and first point item of a draw. */
 struct draw_base {
@@ -41,7 +49,7 @@ struct bin_work {
 	size_t stage_points_cap;
 	uint32_t *hist; /* threads x (prim keys + point keys) */
 	size_t hist_cap;
-	size_t prim_cap, point_cap; /* of the sorted arrays */
+	size_t prim_cap, point_cap, turn_cap; /* of the sorted arrays */
 };
 
 static uint32_t prim_keys(const struct bin_set *b)
@@ -93,6 +101,7 @@ void bin_finish(struct bin_set *b)
 	slot_table_finish(&b->slots);
 	free(b->dir);
 	free(b->prims);
+	free(b->prim_turn);
 	free(b->prim_start);
 	free(b->points);
 	free(b->point_start);
@@ -169,6 +178,12 @@ static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool n
 	return *len < N;
 }
 
+/* The turn of a draw, mod N (no division for the usual 0). */
+static inline uint32_t draw_turn(const struct bin_set *b, const struct scene_draw *d)
+{
+	return d->turn ? d->turn % b->geom.images_per_rev : 0;
+}
+
 static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t first, uint32_t count)
 {
 	if (count >= b->images) {
@@ -209,6 +224,24 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 	}
 }
 
+/* Turns the staged records of a segment or triangle by turn (1 .. N-1):
+ * the range shifts by turn mod M (every image stays 0 .. M-1), and the turn
+ * goes above the sort key for the scatter to keep (bin_set.prim_turn). */
+static void turn_prims(const struct bin_set *b, uint32_t turn, struct stage_prim *s)
+{
+	uint32_t M = b->images;
+	for (int i = 0; i < 2; i++) {
+		if (s[i].key == KEY_NONE)
+			continue;
+		uint32_t was = s[i].rec.first, first = was;
+		if (s[i].rec.count < M) {
+			first = (was + turn % M) % M;
+			s[i].rec.first = (uint16_t)first;
+		}
+		s[i].key = (s[i].key - was + first) | turn << KEY_BITS; /* class * M + first */
+	}
+}
+
 /* The record of a point in volume image k: its voxel, colour and size. */
 static void point_key(const struct bin_set *b, const double p[3], uint32_t k, const struct bin_point *look,
 		      struct stage_point *s)
@@ -218,6 +251,28 @@ static void point_key(const struct bin_set *b, const double p[3], uint32_t k, co
 	s->rec.u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
 	s->rec.v = (uint16_t)geometry_row(g, p[1]);
 	s->key = k;
+}
+
+/* Turns the staged records of a point by turn (1 .. N-1): what image k
+ * held goes to image k + turn (mod N), and where that is M or more (a
+ * mirrored device) to image k + turn - M mirrored: u -> W-1-u, and an even
+ * square flagged to reach the other way (bin_point_columns()); an odd one
+ * is its own mirror. */
+static void turn_points(const struct bin_set *b, uint32_t turn, struct stage_point *s)
+{
+	const struct geometry *g = &b->geom;
+	for (int i = 0; i < 2; i++) {
+		if (s[i].key == KEY_NONE)
+			continue;
+		uint32_t j = (s[i].key + turn) % g->images_per_rev; /* key < M <= N, turn < N */
+		if (j >= b->images) {
+			j -= b->images;
+			s[i].rec.u = (uint16_t)(g->width - 1 - s[i].rec.u);
+			if (s[i].rec.size % 2 == 0)
+				s[i].rec.size |= BIN_POINT_MIRRORED;
+		}
+		s[i].key = j;
+	}
 }
 
 /* scene.h: 0 counts as 1, and sizes are capped. */
@@ -270,8 +325,9 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 }
 
 /* Runs body for every item i of one kind (points or not) in [c.lo, c.hi),
- * with d its draw, nv its vertex count, xyz_ its vertices and rgb_ its
- * colour (the draw's, or the item's own from prim_rgb). */
+ * with d its draw, nv its vertex count, xyz_ its vertices, rgb_ its colour
+ * (the draw's, or the item's own from prim_rgb) and turn_ its draw's turn
+ * mod N. */
 #define BASE_(db, points) ((points) ? (db).point : (db).prim)
 #define FOR_ITEMS(b, points, c, d, nv, i, body)                                                                    \
 	do {                                                                                                       \
@@ -283,6 +339,7 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 			if (nv == 0 || !d->xyz || (nv == 1) != (points))                                           \
 				continue;                                                                          \
 			uint64_t n_ = d->count / (uint32_t)nv;                                                     \
+			const uint32_t turn_ = draw_turn(b, d);                                                    \
 			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;    \
 			uint64_t hi_ =                                                                             \
 				BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi; \
@@ -295,13 +352,14 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 		}                                                                                                  \
 	} while (0)
 
-/* Adds the keys of a staged pair to a histogram. */
-static inline void count_keys(uint32_t *hist, uint32_t k0, uint32_t k1)
+/* Adds the keys of a staged pair to a histogram (mask: KEY_MASK for
+ * primitives, whose keys carry their turn). */
+static inline void count_keys(uint32_t *hist, uint32_t k0, uint32_t k1, uint32_t mask)
 {
 	if (k0 != KEY_NONE)
-		hist[k0]++;
+		hist[k0 & mask]++;
 	if (k1 != KEY_NONE)
-		hist[k1]++;
+		hist[k1 & mask]++;
 }
 
 static void count_job(void *arg, unsigned t)
@@ -314,13 +372,17 @@ static void count_job(void *arg, unsigned t)
 	FOR_ITEMS(b, false, c, d, nv, i, {
 		struct stage_prim *s = &w->stage_prims[2 * i];
 		bin_one_prim(b, d, xyz_, nv, rgb_, s);
-		count_keys(hist, s[0].key, s[1].key);
+		if (turn_)
+			turn_prims(b, turn_, s);
+		count_keys(hist, s[0].key, s[1].key, KEY_MASK);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
 	FOR_ITEMS(b, true, c, d, nv, i, {
 		struct stage_point *s = &w->stage_points[2 * i];
 		bin_one_point(b, d, xyz_, rgb_, s);
-		count_keys(hist + pk, s[0].key, s[1].key);
+		if (turn_)
+			turn_points(b, turn_, s);
+		count_keys(hist + pk, s[0].key, s[1].key, UINT32_MAX);
 	});
 }
 
@@ -335,9 +397,20 @@ static void scatter_job(void *arg, unsigned t)
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	/* Indexed, not pointer-stepped: a scene without lines or triangles
 	 * (or points) has no staging array at all. */
-	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
-		if (w->stage_prims[i].key != KEY_NONE)
-			b->prims[off[w->stage_prims[i].key]++] = w->stage_prims[i].rec;
+	if (!b->turned) {
+		for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+			if (w->stage_prims[i].key != KEY_NONE)
+				b->prims[off[w->stage_prims[i].key]++] = w->stage_prims[i].rec;
+	} else {
+		for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++) {
+			uint32_t key = w->stage_prims[i].key;
+			if (key == KEY_NONE)
+				continue;
+			uint32_t o = off[key & KEY_MASK]++;
+			b->prims[o] = w->stage_prims[i].rec;
+			b->prim_turn[o] = (uint16_t)(key >> KEY_BITS);
+		}
+	}
 	c = chunk_of(w->point_items, w->threads, t);
 	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
 		if (w->stage_points[i].key != KEY_NONE)
@@ -364,6 +437,7 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 {
 	struct bin_work *w = b->work;
 	uint32_t draws = scene ? scene->draw_count : 0;
+	b->turned = false;
 	int r = grow((void **)&w->base, &w->base_cap, draws, sizeof(*w->base));
 	if (r < 0)
 		return r;
@@ -376,10 +450,12 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 		w->base[i] = (struct draw_base){ w->prim_items, w->point_items };
 		if (nv == 0 || !d->xyz)
 			continue;
-		if (nv == 1)
+		if (nv == 1) {
 			w->point_items += d->count;
-		else
+		} else {
 			w->prim_items += d->count / (uint32_t)nv;
+			b->turned |= draw_turn(b, d) != 0;
+		}
 	}
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
 		return -E2BIG;
@@ -448,7 +524,8 @@ int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
 	uint64_t prims = 0, points = 0;
 	prefix(b, &prims, &points);
 	if ((r = grow((void **)&b->prims, &w->prim_cap, prims, sizeof(struct bin_prim))) < 0 ||
-	    (r = grow((void **)&b->points, &w->point_cap, points, sizeof(struct bin_point))) < 0)
+	    (r = grow((void **)&b->points, &w->point_cap, points, sizeof(struct bin_point))) < 0 ||
+	    (b->turned && (r = grow((void **)&b->prim_turn, &w->turn_cap, prims, sizeof(uint16_t))) < 0))
 		return r;
 	b->prim_count = (uint32_t)prims;
 	b->point_count = (uint32_t)points;

@@ -12,10 +12,17 @@
  * at binning time to the voxel they light, sorted by image.
  *
  * Conservative: a primitive is in the range of every image whose bow tie it
- * meets (sometimes one more); the renderer's sectioning decides exactly. */
+ * meets (sometimes one more); the renderer's sectioning decides exactly.
+ *
+ * Turns (scene.h, scene_draw.turn): a turned draw's primitives keep their
+ * vertices; their image range is shifted by the turn (mod M) and the turn
+ * is kept beside each (prim_turn), from which the renderer takes the image
+ * whose wedge it sections by and whether it writes mirrored
+ * (bin_turn_source()). Points are shifted and mirrored at binning. */
 #ifndef SPINDLE_BIN_H
 #define SPINDLE_BIN_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -26,8 +33,11 @@
 struct pool;
 
 /* A segment (nverts 2) or triangle (3) in volume space, with the volume
- * images it may light: first, first + 1, ..., first + count - 1 (mod M).
- * rgb is its own colour: the draw's, or its entry of the draw's prim_rgb. */
+ * images it may light: first, first + 1, ..., first + count - 1 (mod M),
+ * already shifted by its draw's turn. rgb is its own colour: the draw's, or
+ * its entry of the draw's prim_rgb. The GL renderer uploads these words as
+ * they are (render_gl_priv.h); the turn, which only the CPU renderer draws,
+ * is kept apart (bin_set.prim_turn). */
 struct bin_prim {
 	float v[3][3];
 	uint8_t nverts;
@@ -41,12 +51,18 @@ struct bin_prim {
 /* A point, already reduced to the voxel (u, v) of its image. It lights the
  * size x size square of columns u - (size-1)/2 .. u + size/2 and rows
  * v - (size-1)/2 .. v + size/2 of that volume image, clipped to the image
- * (bin_point_span()); size is 1..BIN_POINT_MAX_SIZE. */
+ * (bin_point_span()); size is 1..BIN_POINT_MAX_SIZE. A point of a turned
+ * draw shown mirrored has u mirrored already, and an even square the flag
+ * BIN_POINT_MIRRORED in size: its columns are then the mirror of the
+ * unturned square's, u - size/2 .. u + (size-1)/2 (bin_point_columns()).
+ * Only the CPU renderer draws turned points. */
 struct bin_point {
 	uint16_t u, v;
 	uint8_t rgb[3];
 	uint8_t size;
 };
+
+#define BIN_POINT_MIRRORED 0x80
 
 /* A contiguous run of b->prims that image k must look at; entries whose
  * range does not hold k are skipped with bin_prim_in_image(). */
@@ -70,7 +86,11 @@ struct bin_set {
 
 	uint32_t prim_count;
 	struct bin_prim *prims; /* sorted by (class, first) */
-	uint32_t *prim_start;   /* classes * M + 1 offsets into prims */
+	/* Some segment or triangle has a turn: then prim_turn[i] is prims[i]'s
+	 * turn mod N (0 for most), else prim_turn is not written. */
+	bool turned;
+	uint16_t *prim_turn;
+	uint32_t *prim_start; /* classes * M + 1 offsets into prims */
 	uint32_t point_count;
 	struct bin_point *points; /* sorted by image */
 	uint32_t *point_start;    /* M + 1 offsets into points */
@@ -98,6 +118,30 @@ static inline void bin_point_span(uint32_t i, uint32_t size, uint32_t n, uint32_
 	uint32_t before = (size - 1) / 2, after = size / 2;
 	*lo = i > before ? i - before : 0;
 	*hi = i + after < n ? i + after : n - 1;
+}
+
+/* The columns of a binned point's square (size and BIN_POINT_MIRRORED),
+ * clipped to 0 .. n - 1. */
+static inline void bin_point_columns(const struct bin_point *p, uint32_t n, uint32_t *lo, uint32_t *hi)
+{
+	uint32_t size = p->size & ~(uint32_t)BIN_POINT_MIRRORED;
+	if (!(p->size & BIN_POINT_MIRRORED)) {
+		bin_point_span(p->u, size, n, lo, hi);
+		return;
+	}
+	uint32_t before = size / 2, after = (size - 1) / 2;
+	*lo = p->u > before ? p->u - before : 0;
+	*hi = p->u + after < n ? p->u + after : n - 1;
+}
+
+/* The volume image whose unturned content a primitive with turn t (mod N)
+ * shows in volume image k, and in *mirror whether mirrored (u -> W-1-u):
+ * j = k - t mod N; on a mirrored device j >= M is image j - M mirrored. */
+static inline uint32_t bin_turn_source(const struct bin_set *b, uint32_t k, uint32_t t, bool *mirror)
+{
+	uint32_t j = k >= t ? k - t : k + b->geom.images_per_rev - t;
+	*mirror = j >= b->images; /* never unmirrored: M = N */
+	return *mirror ? j - b->images : j;
 }
 
 static inline int bin_prim_in_image(const struct bin_set *b, const struct bin_prim *p, uint32_t k)

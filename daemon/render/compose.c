@@ -7,20 +7,20 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "halftone.h"
 #include "pool.h"
 
 #define MAX_LITERAL 128
 #define MAX_ZEROS 128
 
-/* Codes one tile into out (room for VOLUME_TILE_BYTES + its control bytes,
- * at most VOLUME_TILE_BYTES + VOLUME_TILE_BYTES / MAX_LITERAL + 1);
- * returns the bytes written. */
-static size_t encode_tile(const uint8_t *tile, uint8_t *out)
+/* Codes one tile of size bytes into out (room for size + size /
+ * MAX_LITERAL + 1); returns the bytes written. */
+static size_t encode_tile(const uint8_t *tile, size_t size, uint8_t *out)
 {
 	size_t o = 0, i = 0;
-	while (i < VOLUME_TILE_BYTES) {
+	while (i < size) {
 		size_t n = 0;
-		while (i + n < VOLUME_TILE_BYTES && tile[i + n] == 0 && n < MAX_ZEROS)
+		while (i + n < size && tile[i + n] == 0 && n < MAX_ZEROS)
 			n++;
 		if (n > 0) {
 			out[o++] = (uint8_t)(127 + n);
@@ -29,8 +29,8 @@ static size_t encode_tile(const uint8_t *tile, uint8_t *out)
 		}
 		/* Literals up to the next pair of zeros (a lone zero is cheaper
 		 * kept literal than coded). */
-		while (i + n < VOLUME_TILE_BYTES && n < MAX_LITERAL &&
-		       !(tile[i + n] == 0 && (i + n + 1 == VOLUME_TILE_BYTES || tile[i + n + 1] == 0)))
+		while (i + n < size && n < MAX_LITERAL &&
+		       !(tile[i + n] == 0 && (i + n + 1 == size || tile[i + n + 1] == 0)))
 			n++;
 		out[o++] = (uint8_t)(n - 1);
 		memcpy(out + o, tile + i, n);
@@ -40,12 +40,13 @@ static size_t encode_tile(const uint8_t *tile, uint8_t *out)
 	return o;
 }
 
-/* ORs one coded tile into dst; returns the coded bytes read, or 0 when the
- * code is broken (it never is for what encode_tile() wrote). */
-static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
+/* ORs one coded tile of size bytes into dst; returns the coded bytes
+ * read, or 0 when the code is broken (it never is for what encode_tile()
+ * wrote). */
+static size_t or_coded(const uint8_t *in, size_t avail, uint8_t *dst, size_t size)
 {
 	size_t o = 0, i = 0;
-	while (o < VOLUME_TILE_BYTES) {
+	while (o < size) {
 		if (i >= avail)
 			return 0;
 		uint8_t c = in[i++];
@@ -54,69 +55,101 @@ static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 			continue;
 		}
 		size_t n = (size_t)c + 1;
-		if (i + n > avail || o + n > VOLUME_TILE_BYTES)
+		if (i + n > avail || o + n > size)
 			return 0;
 		for (size_t j = 0; j < n; j++)
 			dst[o + j] |= in[i + j];
 		i += n;
 		o += n;
 	}
-	return o == VOLUME_TILE_BYTES ? i : 0;
+	return o == size ? i : 0;
 }
 
-struct rle_volume *rle_volume_encode(const struct volume *vol)
+static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
+{
+	return or_coded(in, avail, dst, VOLUME_TILE_BYTES);
+}
+
+struct rle_volume *rle_volume_new(uint32_t image_count, uint32_t mask_bytes, uint32_t tiles_per_image,
+				  uint32_t tile_bytes)
 {
 	struct rle_volume *r = calloc(1, sizeof(*r));
 	if (!r)
 		return NULL;
-	r->image_count = vol->image_count;
-	r->mask_bytes = vol->mask_bytes;
-	r->tiles_per_image = volume_tiles_per_image(vol);
-	r->images = calloc(vol->image_count, sizeof(*r->images));
-	if (!r->images)
-		goto fail;
-	r->bytes = sizeof(*r) + vol->image_count * sizeof(*r->images);
-	uint8_t *tmp = NULL;
-	size_t tmp_cap = 0;
+	r->image_count = image_count;
+	r->mask_bytes = mask_bytes;
+	r->tiles_per_image = tiles_per_image;
+	r->tile_bytes = tile_bytes;
+	r->images = calloc(image_count, sizeof(*r->images));
+	if (!r->images) {
+		free(r);
+		return NULL;
+	}
+	return r;
+}
+
+int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, const uint8_t *tiles, uint32_t count,
+			 struct rle_scratch *s)
+{
+	struct rle_image *img = &r->images[k];
+	free(img->data);
+	*img = (struct rle_image){ 0 };
+	if (!count)
+		return 0;
+	size_t head = r->mask_bytes + (size_t)count * sizeof(uint32_t);
+	size_t need = head + (size_t)count * (r->tile_bytes + r->tile_bytes / MAX_LITERAL + 1);
+	if (need > s->cap) {
+		uint8_t *t = realloc(s->buf, need);
+		if (!t)
+			return -ENOMEM;
+		s->buf = t;
+		s->cap = need;
+	}
+	memcpy(s->buf, mask, r->mask_bytes);
+	size_t len = head;
+	for (uint32_t i = 0; i < count; i++) {
+		uint32_t off = (uint32_t)(len - head);
+		memcpy(s->buf + r->mask_bytes + i * sizeof(uint32_t), &off, sizeof(off));
+		len += encode_tile(tiles + (size_t)i * r->tile_bytes, r->tile_bytes, s->buf + len);
+	}
+	uint8_t *data = malloc(len);
+	if (!data)
+		return -ENOMEM;
+	memcpy(data, s->buf, len);
+	*img = (struct rle_image){ .tile_count = count, .len = (uint32_t)len, .data = data };
+	return 0;
+}
+
+void rle_volume_sum(struct rle_volume *r)
+{
+	r->tiles = 0;
+	r->bytes = sizeof(*r) + r->image_count * sizeof(*r->images);
+	for (uint32_t k = 0; k < r->image_count; k++) {
+		r->tiles += r->images[k].tile_count;
+		r->bytes += r->images[k].len;
+	}
+	r->packed_bytes = r->tiles * r->tile_bytes;
+}
+
+struct rle_volume *rle_volume_encode(const struct volume *vol)
+{
+	struct rle_volume *r =
+		rle_volume_new(vol->image_count, vol->mask_bytes, volume_tiles_per_image(vol), VOLUME_TILE_BYTES);
+	if (!r)
+		return NULL;
+	struct rle_scratch s = { 0 };
 	for (uint32_t k = 0; k < vol->image_count; k++) {
 		const struct volume_image *img = &vol->images[k];
-		if (!img->tile_count)
-			continue;
-		size_t head = vol->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
-		size_t need = head + (size_t)img->tile_count * (VOLUME_TILE_BYTES + 4);
-		if (need > tmp_cap) {
-			uint8_t *t = realloc(tmp, need);
-			if (!t) {
-				free(tmp);
-				goto fail;
-			}
-			tmp = t;
-			tmp_cap = need;
+		if (rle_volume_set_image(r, k, img->mask, img->tiles, img->tile_count, &s) < 0) {
+			free(s.buf);
+			rle_volume_free(r);
+			errno = ENOMEM;
+			return NULL;
 		}
-		memcpy(tmp, img->mask, vol->mask_bytes);
-		size_t len = head;
-		for (uint32_t i = 0; i < img->tile_count; i++) {
-			uint32_t off = (uint32_t)(len - head);
-			memcpy(tmp + vol->mask_bytes + i * sizeof(uint32_t), &off, sizeof(off));
-			len += encode_tile(img->tiles + (size_t)i * VOLUME_TILE_BYTES, tmp + len);
-		}
-		uint8_t *data = malloc(len);
-		if (!data) {
-			free(tmp);
-			goto fail;
-		}
-		memcpy(data, tmp, len);
-		r->images[k] = (struct rle_image){ .tile_count = img->tile_count, .len = (uint32_t)len, .data = data };
-		r->tiles += img->tile_count;
-		r->bytes += len;
 	}
-	free(tmp);
-	r->packed_bytes = r->tiles * VOLUME_TILE_BYTES;
+	free(s.buf);
+	rle_volume_sum(r);
 	return r;
-fail:
-	rle_volume_free(r);
-	errno = ENOMEM;
-	return NULL;
 }
 
 void rle_volume_free(struct rle_volume *r)
@@ -143,6 +176,9 @@ struct compose {
 	uint32_t tiles_per_image, mask_bytes, image_count;
 	struct compose_worker *w;
 	struct volume *tmp; /* patching builds images here, then exchanges them */
+	struct geometry geom;
+	halftone_fn halftone;
+	const struct turned_source *turned;
 	/* Per call: */
 	const uint8_t *dirty;
 	struct volume *out;
@@ -162,6 +198,8 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 		return NULL;
 	}
 	c->pool = pool;
+	c->geom = *geom;
+	c->halftone = halftone_pick(NULL);
 	c->workers = pool ? pool_workers(pool) : 1;
 	c->tiles_per_image = volume_tiles_per_image(probe);
 	c->mask_bytes = probe->mask_bytes;
@@ -286,7 +324,8 @@ static int check_sources(const struct compose *c, const struct volume *out, cons
 		if (src[s].vol && src[s].vol->image_count != c->image_count)
 			return -EINVAL;
 		if (src[s].rle &&
-		    (src[s].rle->image_count != c->image_count || src[s].rle->mask_bytes != c->mask_bytes))
+		    (src[s].rle->image_count != c->image_count || src[s].rle->mask_bytes != c->mask_bytes ||
+		     src[s].rle->tile_bytes != VOLUME_TILE_BYTES))
 			return -EINVAL;
 	}
 	return 0;
@@ -462,6 +501,135 @@ void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_b
 		for (uint32_t b = 0; mask && b < mask_bytes; b++)
 			d[b] |= mask[b];
 	}
+}
+
+/* ---- turned canvases ---- */
+
+bool compose_can_turn(const struct compose *c)
+{
+	return c->halftone && (!c->geom.mirrored || c->geom.width % VOLUME_TILE == 0);
+}
+
+/* Canvas tile src mirrored left to right into dst (rows stay). */
+static void mirror_canvas(const uint8_t *src, uint8_t *dst)
+{
+	for (uint32_t row = 0; row < 3 * VOLUME_TILE; row++) {
+		const uint8_t *s = src + (size_t)row * HALFTONE_ROW_BYTES;
+		uint8_t *d = dst + (size_t)row * HALFTONE_ROW_BYTES;
+		for (uint32_t x = 0; x < VOLUME_TILE; x++)
+			d[halftone_pos(VOLUME_TILE - 1 - x)] = s[halftone_pos(x)];
+	}
+}
+
+/* Image k of every turned source into w's dense image, then packed into
+ * c->out. */
+static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
+{
+	uint32_t n_img = c->geom.images_per_rev, m_img = c->image_count;
+	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	struct halftone_table thr;
+	bool have_thr = false;
+	uint8_t buf[CANVAS_TILE_BYTES], mirrored[HALFTONE_TILE_BYTES], packed[VOLUME_TILE_BYTES];
+	uint32_t count = 0;
+	for (unsigned s = 0; s < c->n; s++) {
+		const struct rle_volume *cv = c->turned[s].canvas;
+		int64_t j = (int64_t)k - (int64_t)(c->turned[s].turn % n_img);
+		bool mirror = false;
+		if (c->geom.mirrored) {
+			while (j < 0) {
+				j += m_img;
+				mirror = !mirror;
+			}
+		} else if (j < 0) {
+			j += n_img;
+		}
+		const struct rle_image *img = &cv->images[j];
+		if (!img->tile_count)
+			continue;
+		if (!have_thr) {
+			halftone_table_init(&thr, k);
+			have_thr = true;
+		}
+		size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+		const uint8_t *code = img->data + head;
+		size_t avail = img->len - head;
+		FOR_EACH_TILE(img->data, c->mask_bytes, t, i)
+		{
+			(void)i;
+			memset(buf, 0, sizeof(buf));
+			size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+			if (!used)
+				return -EINVAL;
+			code += used;
+			avail -= used;
+			uint32_t rows;
+			memcpy(&rows, buf, sizeof(rows));
+			const uint8_t *canvas = buf + sizeof(rows);
+			uint32_t to = t;
+			if (mirror) {
+				mirror_canvas(canvas, mirrored);
+				canvas = mirrored;
+				to = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
+			}
+			if (!c->halftone(canvas, rows, &thr, packed))
+				continue;
+			count += !w->touched[to];
+			w->touched[to] = 1;
+			or_tile(w->tiles + (size_t)to * VOLUME_TILE_BYTES, packed);
+		}
+	}
+	if (!count)
+		return 0;
+	int err = volume_image_reserve(c->out, k, count);
+	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
+		if (!w->touched[t])
+			continue;
+		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+		if (err == 0)
+			err = volume_image_append(c->out, k, t, tile);
+		memset(tile, 0, VOLUME_TILE_BYTES);
+		w->touched[t] = 0;
+	}
+	return err;
+}
+
+static void turn_job(void *arg, unsigned index)
+{
+	struct compose *c = arg;
+	struct compose_worker *w = &c->w[index];
+	for (;;) {
+		uint32_t k = atomic_fetch_add(&c->next_image, 1);
+		if (k >= c->image_count)
+			break;
+		int err = turn_image(c, w, k);
+		if (err < 0 && w->err == 0)
+			w->err = err;
+	}
+}
+
+int compose_turned(struct compose *c, struct volume *out, const struct turned_source *src, unsigned n)
+{
+	if (!compose_can_turn(c) || out->image_count != c->image_count)
+		return -EINVAL;
+	for (unsigned s = 0; s < n; s++)
+		if (src[s].canvas->tile_bytes != CANVAS_TILE_BYTES || src[s].canvas->image_count != c->image_count)
+			return -EINVAL;
+	volume_clear(out);
+	c->out = out;
+	c->turned = src;
+	c->n = n;
+	atomic_store(&c->next_image, 0);
+	for (unsigned i = 0; i < c->workers; i++)
+		c->w[i].err = 0;
+	if (c->pool)
+		pool_run(c->pool, turn_job, c);
+	else
+		turn_job(c, 0);
+	int err = 0;
+	for (unsigned i = 0; i < c->workers && !err; i++)
+		err = c->w[i].err;
+	c->out = NULL;
+	return err;
 }
 
 int rle_volume_decode(const struct rle_volume *r, struct volume *out)

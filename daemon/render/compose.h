@@ -37,14 +37,38 @@ struct rle_image {
 
 struct rle_volume {
 	uint32_t image_count, mask_bytes, tiles_per_image;
+	uint32_t tile_bytes;   /* VOLUME_TILE_BYTES, or CANVAS_TILE_BYTES for a canvas */
 	uint64_t tiles;        /* stored tiles, all images */
 	uint64_t bytes;        /* memory held, structures included */
-	uint64_t packed_bytes; /* what the tiles take packed (tiles * 384) */
+	uint64_t packed_bytes; /* what the tiles take uncoded (tiles * tile_bytes) */
 	struct rle_image *images;
 };
 
+/* A tile of a canvas volume: an object rendered before the halftone, as
+ * the CPU renderer's canvas holds it (halftone.h: planes R, G, B of 32
+ * rows of 32 bytes, pixel x at byte x ^ 7), after a uint32_t whose bit y
+ * says row y may be non-zero. */
+#define CANVAS_TILE_BYTES (4 + 3 * 32 * 32)
+
 /* Compresses vol. NULL + errno (ENOMEM). */
 struct rle_volume *rle_volume_encode(const struct volume *vol);
+
+/* An empty coded volume with tiles of tile_bytes, filled image by image
+ * with rle_volume_set_image() (from several threads, each its own
+ * images), then rle_volume_sum(). NULL on failure. */
+struct rle_volume *rle_volume_new(uint32_t image_count, uint32_t mask_bytes, uint32_t tiles_per_image,
+				  uint32_t tile_bytes);
+/* Work space for coding, kept between calls; free(buf) when done. */
+struct rle_scratch {
+	uint8_t *buf;
+	size_t cap;
+};
+/* Image k: count tiles (count * tile_bytes bytes) in the order of mask's
+ * set bits. 0 or -ENOMEM. */
+int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, const uint8_t *tiles, uint32_t count,
+			 struct rle_scratch *s);
+/* Counts tiles and bytes once every image is set. */
+void rle_volume_sum(struct rle_volume *r);
 /* Accepts NULL. */
 void rle_volume_free(struct rle_volume *r);
 /* Expands r into out (same geometry; cleared first). 0 or -ENOMEM/-EINVAL. */
@@ -80,6 +104,24 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
  * -ENOMEM/-EINVAL (vol is then unusable). */
 int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
 		  unsigned n);
+
+/* A canvas volume (an object rendered unturned, before the halftone)
+ * shown turned about the axis by turn images, as scene.h defines a draw's
+ * turn: image k of it is image j = k - turn of the canvas, j brought into
+ * the volume's images by adding or subtracting the image count M, each
+ * time mirrored (columns u -> W-1-u) on a mirrored geometry (M = N/2), and
+ * halftoned at image k's phase. */
+struct turned_source {
+	const struct rle_volume *canvas;
+	uint32_t turn;
+};
+
+/* Whether compose_turned() can turn canvases of this geometry: on a
+ * mirrored one the width must be whole tiles. */
+bool compose_can_turn(const struct compose *c);
+/* out = the OR of the n turned sources (out is cleared first). 0 or
+ * -ENOMEM/-EINVAL. */
+int compose_turned(struct compose *c, struct volume *out, const struct turned_source *src, unsigned n);
 
 /* dirty |= the footprint of src (its masks), image by image. */
 void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src);

@@ -3,7 +3,10 @@
  * Per volume, a persistent pool of workers transforms and bins the scene
  * (bin.h); then the workers take images one at a time, light the points
  * binned there, section the primitives of the image's runs into an 8-bit
- * canvas, and halftone and pack only the tiles something touched. */
+ * canvas, and halftone and pack only the tiles something touched. A turned
+ * draw's primitives are sectioned by the wedge of the image they show
+ * unturned, and written mirrored where that image is shown mirrored
+ * (scene.h, bin_turn_source()). */
 #include "render_cpu.h"
 
 #include <errno.h>
@@ -14,6 +17,7 @@
 #include <unistd.h>
 
 #include "bin.h"
+#include "compose.h"
 #include "halftone.h"
 #include "log.h"
 #include "pool.h"
@@ -30,11 +34,40 @@ struct render_cpu {
 	struct pool *pool;
 	struct cpu_worker *workers;
 	struct bin_set bins;
+	struct section_wedge *wedges; /* per volume image */
 	halftone_fn halftone;
 	/* Per render: */
 	struct volume *out;
+	struct rle_volume *canvas_out; /* render_canvas(): canvases, not packed images */
 	atomic_uint next_image;
+	/* render_canvas()'s work space, one per worker (made at its first
+	 * call): an image's touched tiles with their row masks, and its mask. */
+	struct canvas_stage {
+		uint8_t *tiles, *mask;
+		struct rle_scratch rle;
+	} * stage;
+	unsigned stages;
 };
+
+/* Copies the touched tiles of image k's canvas, with their row masks, into
+ * r->canvas_out (coded) and leaves the canvas all zero again. */
+static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canvas_stage *st, uint32_t k)
+{
+	struct section_canvas *c = &w->canvas;
+	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
+	memset(st->mask, 0, r->canvas_out->mask_bytes);
+	for (uint32_t t = 0; t < tiles; t++) {
+		if (!c->rows[t])
+			continue;
+		uint8_t *dst = st->tiles + (size_t)n++ * CANVAS_TILE_BYTES;
+		memcpy(dst, &c->rows[t], sizeof(uint32_t));
+		memcpy(dst + sizeof(uint32_t), c->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES);
+		st->mask[t / 8] |= (uint8_t)(1u << (t % 8));
+		w->canvas_tiles++;
+		section_canvas_clear_tile(c, t);
+	}
+	return rle_volume_set_image(r->canvas_out, k, st->mask, st->tiles, n, &st->rle);
+}
 
 /* Halftones and packs the touched tiles of image k in increasing order and
  * leaves the canvas all zero again, whether or not packing succeeded. */
@@ -74,8 +107,8 @@ static void light_point(struct section_canvas *c, const struct bin_point *p)
 		return;
 	}
 	uint32_t u0, u1, v0, v1;
-	bin_point_span(p->u, p->size, c->geom.width, &u0, &u1);
-	bin_point_span(p->v, p->size, c->geom.height, &v0, &v1);
+	bin_point_columns(p, c->geom.width, &u0, &u1);
+	bin_point_span(p->v, p->size & ~(uint32_t)BIN_POINT_MIRRORED, c->geom.height, &v0, &v1);
 	for (uint32_t v = v0; v <= v1; v++)
 		section_span(c, v, u0, u1, p->rgb);
 }
@@ -89,10 +122,8 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i]);
-	struct section_wedge wedge;
 	struct bin_run runs[2 * BIN_MAX_CLASSES];
 	unsigned n = bin_runs(b, k, runs);
-	section_wedge_init(&wedge, &r->base.geom, k);
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
 			const struct bin_prim *p = &b->prims[i];
@@ -102,7 +133,14 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 			for (int a = 0; a < p->nverts; a++)
 				for (int e = 0; e < 3; e++)
 					v[a][e] = p->v[a][e];
-			section_prim(c, &wedge, (const double(*)[3])v, p->nverts, p->rgb);
+			if (!b->turned || !b->prim_turn[i]) {
+				section_prim(c, &r->wedges[k], (const double(*)[3])v, p->nverts, p->rgb);
+			} else { /* what it lights unturned in its source image */
+				bool mirror;
+				uint32_t src = bin_turn_source(b, k, b->prim_turn[i], &mirror);
+				section_prim_mirror(c, &r->wedges[src], (const double(*)[3])v, p->nverts, p->rgb,
+						    mirror);
+			}
 			w->prim_images++;
 			drawn++;
 		}
@@ -124,7 +162,12 @@ static void image_job(void *arg, unsigned index)
 		uint64_t drawn = raster_image(r, w, k);
 		int64_t t1 = now_ns();
 		/* Nothing drawn: the canvas is all zero, the image empty. */
-		int err = drawn ? pack_image(r, w, k) : 0;
+		int err;
+		if (r->canvas_out)
+			err = drawn ? canvas_image(r, w, &r->stage[index], k)
+				    : rle_volume_set_image(r->canvas_out, k, NULL, NULL, 0, NULL);
+		else
+			err = drawn ? pack_image(r, w, k) : 0;
 		w->raster_ns += (uint64_t)(t1 - t0);
 		w->pack_ns += (uint64_t)(now_ns() - t1);
 		if (err < 0 && w->err == 0)
@@ -159,14 +202,12 @@ static int collect(struct render_cpu *r)
 	return err;
 }
 
-static int cpu_render(struct renderer *base, const struct scene *scene, struct volume *out)
+/* Renders scene into out, or into canvas (render_canvas()). */
+static int render_to(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
 {
-	struct render_cpu *r = (struct render_cpu *)base;
+	struct renderer *base = &r->base;
 	int64_t start = now_ns();
-	int err = check_output(r, out);
-	if (err < 0)
-		return err;
-	volume_clear(out);
+	int err = 0;
 	memset(&base->stats, 0, sizeof(base->stats));
 	base->stats.engine = RENDER_ENGINE_CPU;
 	base->stats.threads = pool_workers(r->pool);
@@ -181,14 +222,51 @@ static int cpu_render(struct renderer *base, const struct scene *scene, struct v
 		r->workers[i] = (struct cpu_worker){ .canvas = c };
 	}
 	r->out = out;
+	r->canvas_out = canvas;
 	atomic_store(&r->next_image, 0);
 	if (r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
 		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
 	else
 		pool_run(r->pool, image_job, r);
 	r->out = NULL;
+	r->canvas_out = NULL;
 	err = collect(r);
 	base->stats.total_ns = (uint64_t)(now_ns() - start);
+	return err;
+}
+
+static int cpu_render(struct renderer *base, const struct scene *scene, struct volume *out)
+{
+	struct render_cpu *r = (struct render_cpu *)base;
+	int err = check_output(r, out);
+	if (err < 0)
+		return err;
+	volume_clear(out);
+	return render_to(r, scene, out, NULL);
+}
+
+static int cpu_render_canvas(struct renderer *base, const struct scene *scene, struct rle_volume *out)
+{
+	struct render_cpu *r = (struct render_cpu *)base;
+	uint32_t tiles_x = (base->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	uint32_t tiles = tiles_x * ((base->geom.height + VOLUME_TILE - 1) / VOLUME_TILE);
+	if (out->tile_bytes != CANVAS_TILE_BYTES || out->image_count != r->bins.images || out->tiles_per_image != tiles)
+		return -EINVAL;
+	if (!r->stage) {
+		unsigned n = pool_workers(r->pool);
+		r->stage = calloc(n, sizeof(*r->stage));
+		r->stages = r->stage ? n : 0;
+		for (unsigned i = 0; r->stage && i < n; i++) {
+			r->stage[i].tiles = malloc((size_t)tiles * CANVAS_TILE_BYTES);
+			r->stage[i].mask = malloc(out->mask_bytes);
+			if (!r->stage[i].tiles || !r->stage[i].mask)
+				return -ENOMEM; /* freed with the renderer */
+		}
+		if (!r->stage)
+			return -ENOMEM;
+	}
+	int err = render_to(r, scene, NULL, out);
+	rle_volume_sum(out);
 	return err;
 }
 
@@ -199,6 +277,13 @@ static void cpu_destroy(struct renderer *base)
 	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++)
 		section_canvas_finish(&r->workers[i].canvas);
 	free(r->workers);
+	for (unsigned i = 0; i < r->stages; i++) {
+		free(r->stage[i].tiles);
+		free(r->stage[i].mask);
+		free(r->stage[i].rle.buf);
+	}
+	free(r->stage);
+	free(r->wedges);
 	bin_finish(&r->bins);
 	free(r);
 }
@@ -206,6 +291,7 @@ static void cpu_destroy(struct renderer *base)
 static const struct renderer_impl cpu_impl = {
 	.name = "cpu",
 	.render = cpu_render,
+	.render_canvas = cpu_render_canvas,
 	.destroy = cpu_destroy,
 };
 
@@ -244,8 +330,12 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom, const struc
 	r->halftone = halftone;
 	unsigned n = pick_threads(geom, opts->threads);
 	r->workers = calloc(n, sizeof(*r->workers));
-	if (!r->workers || bin_init(&r->bins, geom) < 0)
+	uint32_t images = geometry_images_per_volume(geom);
+	r->wedges = calloc(images, sizeof(*r->wedges));
+	if (!r->workers || !r->wedges || bin_init(&r->bins, geom) < 0)
 		goto err_free;
+	for (uint32_t k = 0; k < images; k++)
+		section_wedge_init(&r->wedges[k], geom, k);
 	for (unsigned i = 0; i < n; i++) {
 		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
 			goto err_free;

@@ -15,7 +15,8 @@
  * mark the tile rows they touch. gl_pack.c then halftones and packs the
  * touched tiles of the batch on the GPU and collects the non-empty ones
  * while the GPU draws the next batch. This file: set-up, upload, drawing,
- * the render and its failures. */
+ * the render and its failures. A scene with a turned draw (scene.h) is
+ * rendered whole by the CPU renderer. */
 #include "render_gl.h"
 
 #include <errno.h>
@@ -495,7 +496,9 @@ static void set_stats(struct render_gl *r, uint64_t t0, uint64_t t1)
 static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
 {
 	struct render_gl *r = (struct render_gl *)base;
-	if (r->gl_dead)
+	/* Turned draws (scene.h) are drawn by the CPU renderer only: the whole
+	 * scene goes there, whatever no_fallback says. */
+	if (r->gl_dead || (scene && scene_has_turn(scene->draws, scene->draw_count)))
 		return render_on_cpu(r, scene, out);
 	uint64_t t0 = (uint64_t)now_ns();
 	memset(&r->base.stats, 0, sizeof(r->base.stats));
@@ -553,8 +556,16 @@ static void render_gl_destroy(struct renderer *base)
 	free(r);
 }
 
-static const struct renderer_impl render_egl_impl = { "egl", render_gl_volume, render_gl_destroy };
-static const struct renderer_impl render_osmesa_impl = { "osmesa", render_gl_volume, render_gl_destroy };
+static const struct renderer_impl render_egl_impl = {
+	.name = "egl",
+	.render = render_gl_volume,
+	.destroy = render_gl_destroy,
+};
+static const struct renderer_impl render_osmesa_impl = {
+	.name = "osmesa",
+	.render = render_gl_volume,
+	.destroy = render_gl_destroy,
+};
 
 const char *render_gl_describe(const struct renderer *base)
 {

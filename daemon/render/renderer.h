@@ -12,6 +12,7 @@
 #include "volume.h"
 
 struct renderer;
+struct rle_volume;
 
 /* What the last render cost and produced. Times in ns; the per-stage times
  * are summed over the threads that ran them (divide by threads for a wall
@@ -67,6 +68,13 @@ struct renderer_impl {
 	/* Renders scene into out (same geometry as the renderer; out is
 	 * cleared first). Returns 0 or negative errno; out is then unusable. */
 	int (*render)(struct renderer *r, const struct scene *scene, struct volume *out);
+	/* Optional (the CPU renderer): renders scene up to the halftone, into
+	 * out's images (a coded volume of CANVAS_TILE_BYTES tiles, compose.h,
+	 * of the renderer's geometry; its images are replaced, then summed):
+	 * what the object cache turns (compose_turned()). Halftoned at image
+	 * k's phase, image k of out is image k of render(). 0 or negative
+	 * errno. */
+	int (*render_canvas)(struct renderer *r, const struct scene *scene, struct rle_volume *out);
 	void (*destroy)(struct renderer *r);
 };
 

@@ -136,7 +136,7 @@ struct edges {
 	double s0[SECTION_MAX_VERTS], dsdy[SECTION_MAX_VERTS]; /* s at y0 */
 };
 
-static void edges_init(struct edges *e, const double (*q)[2], int n)
+static inline __attribute__((always_inline)) void edges_init(struct edges *e, const double (*q)[2], int n)
 {
 	e->n = n;
 	for (int i = 0; i < n; i++) {
@@ -180,7 +180,10 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 	}
 }
 
-static void raster_convex(struct section_canvas *c, const double (*q)[2], int n, const uint8_t rgb[3])
+/* The body of project_raster() and project_raster_mirrored(), with mirror
+ * a constant in each: the unmirrored path tests nothing per row. */
+static inline __attribute__((always_inline)) void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
+								const uint8_t rgb[3], bool mirror)
 {
 	const struct geometry *g = &c->geom;
 	double ymin = INFINITY, ymax = -INFINITY;
@@ -207,29 +210,49 @@ static void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
 			edges_cross(&e, yhi, &lo, &hi);
 		if (v != v1)
 			edges_cross(&e, ylo, &lo, &hi);
-		if (lo <= hi)
-			section_span(c, v, geometry_column(g, lo), geometry_column(g, hi), rgb);
+		if (lo <= hi) {
+			uint32_t u0 = geometry_column(g, lo), u1 = geometry_column(g, hi);
+			if (mirror)
+				section_span(c, v, g->width - 1 - u1, g->width - 1 - u0, rgb);
+			else
+				section_span(c, v, u0, u1, rgb);
+		}
 	}
 }
 
 /* Sections the convex polygon v (already inside the lobe's wedge) and
- * rasterises its projection. */
-static void project_raster(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-			   const uint8_t rgb[3])
+ * rasterises its projection (mirrored: project_raster_mirrored()). */
+static inline __attribute__((always_inline)) void project_body(struct section_canvas *c, const struct section_wedge *w,
+							       const double (*v)[3], int n, const uint8_t rgb[3],
+							       bool mirror)
 {
 	double q[SECTION_MAX_VERTS][2];
 	for (int i = 0; i < n; i++) {
 		q[i][0] = v[i][0] * w->dx + v[i][2] * w->dz;
 		q[i][1] = v[i][1];
 	}
-	raster_convex(c, (const double(*)[2])q, n, rgb);
+	raster_convex(c, (const double(*)[2])q, n, rgb, mirror);
+}
+
+static void project_raster(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			   const uint8_t rgb[3])
+{
+	project_body(c, w, v, n, rgb, false);
+}
+
+static void project_raster_mirrored(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3],
+				    int n, const uint8_t rgb[3])
+{
+	project_body(c, w, v, n, rgb, true);
 }
 
 /* One lobe: sign 1 keeps n1.p >= 0 and n2.p >= 0, sign -1 the opposite
  * side. d1, d2 are the vertices' n1.p and n2.p: a primitive wholly inside
- * needs no clipping, one wholly outside either plane nothing. */
-static void section_lobe(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-			 const double *d1, const double *d2, double sign, const uint8_t rgb[3])
+ * needs no clipping, one wholly outside either plane nothing. The body of
+ * section_lobe() and section_lobe_mirrored(), mirror a constant in each. */
+static inline __attribute__((always_inline)) void lobe_body(
+	struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n, const double *d1,
+	const double *d2, double sign, const uint8_t rgb[3], bool mirror)
 {
 	int in1 = 0, in2 = 0;
 	for (int i = 0; i < n; i++) {
@@ -238,17 +261,33 @@ static void section_lobe(struct section_canvas *c, const struct section_wedge *w
 	}
 	if (in1 == 0 || in2 == 0)
 		return;
-	if (in1 == n && in2 == n) {
-		project_raster(c, w, v, n, rgb);
-		return;
-	}
 	double a[SECTION_MAX_VERTS][3], b[SECTION_MAX_VERTS][3];
-	int m = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
-	if (m == 0)
-		return;
-	m = clip_plane((const double(*)[3])a, m, b, sign * w->n2x, sign * w->n2z);
-	if (m > 0)
-		project_raster(c, w, (const double(*)[3])b, m, rgb);
+	const double(*piece)[3] = v;
+	if (in1 != n || in2 != n) {
+		n = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
+		if (n == 0)
+			return;
+		n = clip_plane((const double(*)[3])a, n, b, sign * w->n2x, sign * w->n2z);
+		if (n == 0)
+			return;
+		piece = (const double(*)[3])b;
+	}
+	if (mirror)
+		project_raster_mirrored(c, w, piece, n, rgb);
+	else
+		project_raster(c, w, piece, n, rgb);
+}
+
+static void section_lobe(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			 const double *d1, const double *d2, double sign, const uint8_t rgb[3])
+{
+	lobe_body(c, w, v, n, d1, d2, sign, rgb, false);
+}
+
+static void section_lobe_mirrored(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+				  const double *d1, const double *d2, double sign, const uint8_t rgb[3])
+{
+	lobe_body(c, w, v, n, d1, d2, sign, rgb, true);
 }
 
 void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
@@ -261,4 +300,20 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w, const
 	}
 	section_lobe(c, w, v, n, d1, d2, 1.0, rgb);
 	section_lobe(c, w, v, n, d1, d2, -1.0, rgb);
+}
+
+void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			 const uint8_t rgb[3], bool mirror)
+{
+	if (!mirror) {
+		section_prim(c, w, v, n, rgb);
+		return;
+	}
+	double d1[3], d2[3];
+	for (int i = 0; i < n; i++) {
+		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
+		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
+	}
+	section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb);
+	section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb);
 }

@@ -63,7 +63,12 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 
 /* Sections a segment (n = 2) or triangle (n = 3), vertices in volume space
  * and finite, by both lobes of the wedge's image and lights what it touches,
- * clamped to the image. Degenerate primitives light their section too. */
+ * clamped to the image. Degenerate primitives light their section too.
+ * mirror: lights the mirror image of that instead (columns u0..u1 of a row
+ * become W-1-u1..W-1-u0): a turned primitive (scene.h) shown mirrored. */
+void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			 const uint8_t rgb[3], bool mirror);
+/* section_prim_mirror(c, w, v, n, rgb, false). */
 void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 		  const uint8_t rgb[3]);
 
