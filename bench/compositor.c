@@ -19,6 +19,7 @@
 #include "scenes.h"
 #include "shapes.h"
 #include "snapshot.h"
+#include "turn.h"
 
 #define MAX_OBJECTS 1024
 
@@ -199,19 +200,25 @@ static void animate_orbits(struct bscene *b, uint64_t frame, void *arg)
 			pose(b, or, i, frame);
 }
 
-/* The dragon turned about the axis by one image step per volume. */
+/* The dragon turned about the axis by one image step per volume, as the
+ * daemon draws a layer whose transform is its base turned by whole images
+ * (turn.h: the base stays, the turn is an image shift). */
 static void animate_turntable(struct bscene *b, uint64_t frame, void *arg)
 {
 	const struct geometry *g = arg;
 	double a = 2 * M_PI * (double)frame / g->images_per_rev;
-	float *t = b->draws[0].transform;
-	memset(t, 0, 16 * sizeof(float));
+	float t[16] = { 0 }, base[16] = { 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1 };
 	t[0] = (float)cos(a);
 	t[2] = (float)sin(a);
 	t[5] = 1;
 	t[8] = (float)-sin(a);
 	t[10] = (float)cos(a);
 	t[15] = 1;
+	uint32_t m = 0;
+	if (!turn_find(base, t, g->images_per_rev, &m))
+		abort();
+	memcpy(b->draws[0].transform, base, sizeof(base));
+	b->draws[0].turn = (uint16_t)m;
 }
 
 static const uint8_t orange[3] = { 255, 128, 0 };
@@ -264,7 +271,7 @@ int main(int argc, char **argv)
 	}
 	log_set_level(LOG_LEVEL_WARN);
 	struct renderer *r = render_cpu_create(&g, 0);
-	struct cache *cache = cache_create(&g, 256ull << 20, NULL);
+	struct cache *cache = cache_create(&g, 256ull << 20, NULL, true);
 	if (!r || !cache)
 		return 1;
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
@@ -310,7 +317,7 @@ int main(int argc, char **argv)
 		snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
 		row("dragon (static) + icosahedron", "cache", &res, note);
 		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, NULL);
+		cache = cache_create(&g, 256ull << 20, NULL, true);
 		bscene_free(b);
 
 		/* Turntable: one image step per volume. */
@@ -321,7 +328,7 @@ int main(int argc, char **argv)
 		measure(r, cache, b, animate_turntable, &g, &o, &res);
 		row("dragon turning one image a volume", "cache", &res, "");
 		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, NULL);
+		cache = cache_create(&g, 256ull << 20, NULL, true);
 		bscene_free(b);
 	} else {
 		printf("\n(no dragon: %s)\n", o.dragon ? err : "give dragon_vrip.ply");

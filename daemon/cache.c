@@ -30,6 +30,8 @@ enum role {
 	ROLE_REST,   /* rendered with every other object not cached */
 	ROLE_CREATE, /* rendered alone; its volume kept */
 	ROLE_USE,    /* composed from its volume */
+	ROLE_CANVAS, /* rendered alone, unturned, before the halftone; its canvas kept, then as ROLE_TURNED */
+	ROLE_TURNED, /* composed from its canvas, turned (compose_turned()) */
 };
 
 struct entry {
@@ -50,6 +52,11 @@ struct entry {
 	uint32_t draw_count;
 	struct rle_volume *vol;    /* its rendered volume, or NULL */
 	enum render_engine engine; /* what rendered it */
+	/* Its render unturned, before the halftone (the CPU renderer's
+	 * canvas), or NULL: an object that only turns about the axis by
+	 * whole images is composed from it (cache.h). */
+	struct rle_volume *canvas;
+	uint32_t turn; /* its draws' turn in the planned scene */
 };
 
 struct cache {
@@ -72,6 +79,19 @@ struct cache {
 	uint32_t use_count, create_count, array_cap;
 	struct scene_draw *rest;
 	uint32_t rest_count, rest_cap, rest_objects;
+	/* Turns: whether objects are composed turned from canvases (the
+	 * renderer renders canvases, compose_turned() can turn them); the
+	 * entries composed so (turneds) and those whose canvas the render
+	 * makes first (canvases, made into made_canvas). */
+	bool turns;
+	struct entry **turneds, **canvases;
+	uint32_t turned_count, canvas_count;
+	struct rle_volume **made_canvas;
+	struct turned_source *turned_src;
+	struct volume *turned_vol;   /* what they light this volume */
+	struct scene_draw *unturned; /* a canvas entry's draws with turn 0 */
+	uint32_t unturned_cap;
+	bool turned_rendered;
 	struct rle_volume **created;    /* creates[i]'s volume, made by the render */
 	enum render_engine *created_by; /* and what rendered it */
 	bool mixed;                     /* the last render's parts came from different engines */
@@ -83,7 +103,7 @@ struct cache {
 	struct cache_stats stats;
 };
 
-struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool)
+struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool, bool turns)
 {
 	struct cache *c = calloc(1, sizeof(*c));
 	if (!c)
@@ -91,12 +111,14 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->geom = *geom;
 	c->budget = budget;
 	c->compose = compose_create(geom, pool);
+	c->turns = turns && c->compose && compose_can_turn(c->compose);
+	c->turned_vol = volume_create(geom);
 	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
 	if (c->prev)
 		c->dirty = calloc(c->prev->image_count, c->prev->mask_bytes);
-	if (!c->compose || !c->prev || !c->dirty || !c->rest_vol || !c->tmp) {
+	if (!c->compose || !c->prev || !c->dirty || !c->rest_vol || !c->tmp || !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -124,6 +146,12 @@ static void drop_volume(struct cache *c, struct entry *e)
 	e->vol = NULL;
 }
 
+static void drop_canvas(struct entry *e)
+{
+	rle_volume_free(e->canvas);
+	e->canvas = NULL;
+}
+
 static void release_draws(struct entry *e)
 {
 	for (uint32_t i = 0; i < e->draw_count; i++)
@@ -138,6 +166,7 @@ static void release_draws(struct entry *e)
 static void free_entry(struct cache *c, struct entry *e)
 {
 	drop_volume(c, e);
+	drop_canvas(e);
 	release_draws(e);
 	free(e);
 }
@@ -150,6 +179,14 @@ void cache_destroy(struct cache *c)
 		free_entry(c, c->entries[i]);
 	for (uint32_t i = 0; c->created && i < c->create_count; i++)
 		rle_volume_free(c->created[i]);
+	for (uint32_t i = 0; c->made_canvas && i < c->canvas_count; i++)
+		rle_volume_free(c->made_canvas[i]);
+	free(c->turneds);
+	free(c->canvases);
+	free(c->made_canvas);
+	free(c->turned_src);
+	free(c->unturned);
+	volume_destroy(c->turned_vol);
 	free(c->entries);
 	free(c->uses);
 	free(c->creates);
@@ -204,21 +241,31 @@ static struct entry *lookup_or_add(struct cache *c, uint64_t key)
 	return e;
 }
 
-static bool draw_equal(const struct scene_draw *a, const struct scene_draw *b)
+/* The same but perhaps for the turn. */
+static bool draw_alike(const struct scene_draw *a, const struct scene_draw *b)
 {
 	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->prim_rgb == b->prim_rgb &&
 	       a->point_size == b->point_size && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
 	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
 }
 
-static bool unchanged(const struct entry *e, const struct scene_draw *draws, uint32_t n)
+enum change {
+	CHANGED,
+	SAME,   /* draw for draw the same */
+	TURNED, /* the same but for one turn, common to all its draws, that changed */
+};
+
+static enum change compare(const struct entry *e, const struct scene_draw *draws, uint32_t n)
 {
-	if (e->draw_count != n)
-		return false;
-	for (uint32_t i = 0; i < n; i++)
-		if (!draw_equal(&e->draws[i], &draws[i]))
-			return false;
-	return true;
+	if (e->draw_count != n || n == 0)
+		return CHANGED;
+	bool same_turn = true;
+	for (uint32_t i = 0; i < n; i++) {
+		if (!draw_alike(&e->draws[i], &draws[i]) || draws[i].turn != draws[0].turn)
+			return CHANGED;
+		same_turn &= e->draws[i].turn == draws[i].turn;
+	}
+	return same_turn ? SAME : TURNED;
 }
 
 /* The entry now follows these draws (with references to their data). */
@@ -267,6 +314,8 @@ static uint64_t held(const struct cache *c)
 		b += (uint64_t)e->draw_count * (sizeof(*e->draws) + sizeof(*e->refs));
 		if (e->vol)
 			b += e->vol->bytes;
+		if (e->canvas)
+			b += e->canvas->bytes;
 	}
 	return b;
 }
@@ -283,13 +332,15 @@ static void evict_to(struct cache *c, uint64_t target)
 		struct entry *lru = NULL;
 		for (uint32_t i = 0; i < c->count; i++) {
 			struct entry *e = c->entries[i];
-			if (e->vol && !(c->planned && e->role == ROLE_USE) && (!lru || e->last_used < lru->last_used))
+			bool in_plan = c->planned && (e->role == ROLE_USE || e->role == ROLE_TURNED);
+			if ((e->vol || e->canvas) && !in_plan && (!lru || e->last_used < lru->last_used))
 				lru = e;
 		}
 		if (!lru)
 			break;
-		now -= lru->vol->bytes;
+		now -= (lru->vol ? lru->vol->bytes : 0) + (lru->canvas ? lru->canvas->bytes : 0);
 		drop_volume(c, lru);
+		drop_canvas(lru);
 		lru->reuse = 0;
 		lru->hits = 0;
 		lru->backoff = sat_inc(lru->backoff, MAX_BACKOFF);
@@ -320,6 +371,22 @@ static int grow_plan(struct cache *c, uint32_t objects)
 	if (!by)
 		return -ENOMEM;
 	c->created_by = by;
+	struct entry **tu = realloc(c->turneds, cap * sizeof(*tu));
+	if (!tu)
+		return -ENOMEM;
+	c->turneds = tu;
+	struct entry **ca = realloc(c->canvases, cap * sizeof(*ca));
+	if (!ca)
+		return -ENOMEM;
+	c->canvases = ca;
+	struct rle_volume **mc = realloc(c->made_canvas, cap * sizeof(*mc));
+	if (!mc)
+		return -ENOMEM;
+	c->made_canvas = mc;
+	struct turned_source *ts = realloc(c->turned_src, cap * sizeof(*ts));
+	if (!ts)
+		return -ENOMEM;
+	c->turned_src = ts;
 	struct compose_source *s = realloc(c->sources, (cap + 2) * sizeof(*s));
 	if (!s)
 		return -ENOMEM;
@@ -349,11 +416,12 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 
 /* The role of object e this volume, and its state moved on. room: the
  * budget has room for new entries. */
-static enum role decide(struct cache *c, struct entry *e, bool same, bool room)
+static enum role decide(struct cache *c, struct entry *e, enum change change, bool room)
 {
-	if (!same) {
-		if (e->vol) {
+	if (change == CHANGED || (change == TURNED && !c->turns)) {
+		if (e->vol || e->canvas) {
 			drop_volume(c, e);
+			drop_canvas(e);
 			if (e->hits < PAYOFF_HITS)
 				e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
 			else if (e->backoff)
@@ -364,15 +432,27 @@ static enum role decide(struct cache *c, struct entry *e, bool same, bool room)
 		e->hits = 0;
 		return ROLE_REST;
 	}
+	/* Unchanged, or only turned: reusable. */
 	e->reuse = sat_inc(e->reuse, UINT8_MAX);
+	uint32_t wait = (uint32_t)CREATE_AFTER << e->backoff;
+	bool ripe = e->reuse >= (wait < UINT8_MAX ? wait : UINT8_MAX) && room;
+	if (change == TURNED) {
+		drop_volume(c, e); /* rendered at another turn */
+		if (e->canvas) {
+			e->hits = sat_inc(e->hits, PAYOFF_HITS);
+			return ROLE_TURNED;
+		}
+		return ripe ? ROLE_CANVAS : ROLE_REST;
+	}
 	if (e->vol) {
 		e->hits = sat_inc(e->hits, PAYOFF_HITS);
 		return ROLE_USE;
 	}
-	uint32_t wait = (uint32_t)CREATE_AFTER << e->backoff;
-	if (e->reuse >= (wait < UINT8_MAX ? wait : UINT8_MAX) && room)
+	/* Stopped turning: composed from its canvas until its volume at
+	 * this turn is made. */
+	if (ripe)
 		return ROLE_CREATE;
-	return ROLE_REST;
+	return e->canvas ? ROLE_TURNED : ROLE_REST;
 }
 
 int cache_plan(struct cache *c, const struct snapshot *snap)
@@ -381,6 +461,7 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 	c->planned = false;
 	c->plan_seq++;
 	c->use_count = c->create_count = c->rest_count = c->rest_objects = 0;
+	c->turned_count = c->canvas_count = 0;
 	if (grow_plan(c, s->object_count) < 0)
 		return -ENOMEM;
 	for (uint32_t i = 0; i < c->count; i++)
@@ -393,14 +474,26 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		if (!e)
 			return -ENOMEM;
 		bool fresh = e->draw_count == 0 && !e->draws;
-		bool same = !fresh && unchanged(e, draws, obj->draw_count);
-		if (!same && follow(e, draws, snap->data + obj->first_draw, obj->draw_count) < 0)
+		enum change change = fresh ? CHANGED : compare(e, draws, obj->draw_count);
+		if (change != SAME && follow(e, draws, snap->data + obj->first_draw, obj->draw_count) < 0)
 			return -ENOMEM;
 		e->seen = true;
 		e->absent = 0;
 		e->first_draw = obj->first_draw;
-		e->role = decide(c, e, same, room);
+		e->turn = obj->draw_count ? draws[0].turn : 0;
+		e->role = decide(c, e, change, room);
 		switch (e->role) {
+		case ROLE_TURNED:
+			e->last_used = c->plan_seq;
+			c->turneds[c->turned_count++] = e;
+			c->stats.hits++;
+			c->stats.turned++;
+			break;
+		case ROLE_CANVAS:
+			e->last_used = c->plan_seq;
+			c->canvases[c->canvas_count++] = e;
+			c->stats.misses++;
+			break;
 		case ROLE_USE:
 			e->last_used = c->plan_seq;
 			c->uses[c->use_count++] = e;
@@ -444,6 +537,8 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 	evict_to(c, c->budget);
 	for (uint32_t i = 0; i < c->create_count; i++)
 		c->created[i] = NULL;
+	for (uint32_t i = 0; i < c->canvas_count; i++)
+		c->made_canvas[i] = NULL;
 	return 0;
 }
 
@@ -457,6 +552,46 @@ static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 static void add_footprint(struct cache *c, const struct compose_source *src)
 {
 	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
+}
+
+/* The canvases to make (each object's draws with turn 0, rendered up to
+ * the halftone), then every turned object composed at its turn into
+ * c->turned_vol (the CPU renderer's halftone: RENDER_ENGINE_CPU). */
+static int render_turned(struct cache *c, struct renderer *r, const struct scene *scene)
+{
+	c->turned_rendered = false;
+	if (!c->turned_count && !c->canvas_count)
+		return 0;
+	unsigned n = 0;
+	for (uint32_t i = 0; i < c->canvas_count; i++) {
+		const struct entry *e = c->canvases[i];
+		if (e->draw_count > c->unturned_cap) {
+			struct scene_draw *u = realloc(c->unturned, e->draw_count * sizeof(*u));
+			if (!u)
+				return -ENOMEM;
+			c->unturned = u;
+			c->unturned_cap = e->draw_count;
+		}
+		memcpy(c->unturned, scene->draws + e->first_draw, e->draw_count * sizeof(*c->unturned));
+		for (uint32_t d = 0; d < e->draw_count; d++)
+			c->unturned[d].turn = 0;
+		struct rle_volume *cv = rle_volume_new(c->prev->image_count, c->prev->mask_bytes,
+						       volume_tiles_per_image(c->prev), CANVAS_TILE_BYTES);
+		if (!cv)
+			return -ENOMEM;
+		c->made_canvas[i] = cv;
+		struct scene one = sub_scene(c->unturned, e->draw_count);
+		int err = r->impl->render_canvas(r, &one, cv);
+		if (err < 0)
+			return err;
+		c->turned_src[n++] = (struct turned_source){ .canvas = cv, .turn = e->turn };
+	}
+	for (uint32_t i = 0; i < c->turned_count; i++)
+		c->turned_src[n++] =
+			(struct turned_source){ .canvas = c->turneds[i]->canvas, .turn = c->turneds[i]->turn };
+	int err = compose_turned(c->compose, c->turned_vol, c->turned_src, n);
+	c->turned_rendered = err == 0;
+	return err;
 }
 
 /* Segments and triangles of scene, at most what binning keeps. */
@@ -477,7 +612,7 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	int err;
 	c->composed = false;
 	/* Everything rendered: nothing to compose. */
-	if (c->use_count == 0 && c->create_count == 0) {
+	if (c->use_count == 0 && c->create_count == 0 && c->turned_count == 0 && c->canvas_count == 0) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
 		err = render_volume(r, &rest, out);
 		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
@@ -485,8 +620,10 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		return err;
 	}
 	/* A scene the renderer would hand to another engine whole is
-	 * rendered whole: its parts would each stay native. */
-	if (r->native_prims && scene_prims(scene) > r->native_prims) {
+	 * rendered whole: its parts would each stay native. (A GL renderer
+	 * hands over any scene with a turn.) */
+	if ((r->native_prims && scene_prims(scene) > r->native_prims) ||
+	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count))) {
 		err = render_volume(r, scene, out);
 		c->mixed = true;
 		c->engine = r->stats.engine;
@@ -523,6 +660,14 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		engine = r->stats.engine;
 		c->sources[n] = (struct compose_source){ .rle = c->created[i] };
 		add_footprint(c, &c->sources[n++]);
+	}
+	if ((err = render_turned(c, r, scene)) < 0)
+		return err;
+	if (c->turned_rendered) {
+		c->sources[n] = (struct compose_source){ .vol = c->turned_vol };
+		add_footprint(c, &c->sources[n++]);
+		mixed |= engine && engine != RENDER_ENGINE_CPU;
+		engine = RENDER_ENGINE_CPU;
 	}
 	int64_t t1 = now_ns();
 	for (uint32_t i = 0; i < c->use_count; i++) {
@@ -574,12 +719,17 @@ void cache_done(struct cache *c, int result)
 			rle_volume_free(c->created[i]);
 			c->created[i] = NULL;
 		}
+		for (uint32_t i = 0; i < c->canvas_count; i++) {
+			rle_volume_free(c->made_canvas[i]);
+			c->made_canvas[i] = NULL;
+		}
 		return;
 	}
 	if (c->mixed) {
 		/* Rendered whole after all: nothing came from the cache. */
-		c->stats.hits -= c->use_count;
-		c->stats.misses += c->use_count;
+		c->stats.hits -= c->use_count + c->turned_count;
+		c->stats.turned -= c->turned_count;
+		c->stats.misses += c->use_count + c->turned_count;
 		/* Only what the renderer's engine now gives may be composed. */
 		for (uint32_t i = 0; i < c->count; i++)
 			if (c->entries[i]->vol && c->entries[i]->engine != c->engine)
@@ -595,6 +745,15 @@ void cache_done(struct cache *c, int result)
 		}
 		c->created[i] = NULL;
 	}
+	for (uint32_t i = 0; i < c->canvas_count; i++) {
+		if (c->mixed && c->engine != RENDER_ENGINE_CPU) {
+			rle_volume_free(c->made_canvas[i]);
+		} else {
+			c->canvases[i]->canvas = c->made_canvas[i];
+			c->stats.creates++;
+		}
+		c->made_canvas[i] = NULL;
+	}
 	if (c->prev_valid) {
 		/* What the composition holds; the rest is composed anew next
 		 * time wherever it was. */
@@ -606,9 +765,13 @@ void cache_done(struct cache *c, int result)
 			struct compose_source rest = { .vol = c->rest_vol };
 			add_footprint(c, &rest);
 		}
+		if (c->turned_rendered) {
+			struct compose_source turned = { .vol = c->turned_vol };
+			add_footprint(c, &turned);
+		}
 	}
-	c->stats.last_rendered = c->rest_objects + c->create_count;
-	c->stats.last_reused = c->use_count;
+	c->stats.last_rendered = c->rest_objects + c->create_count + c->canvas_count;
+	c->stats.last_reused = c->use_count + c->turned_count;
 	c->stats.last_render_us = c->render_us;
 	c->stats.last_compose_us = c->compose_us;
 	evict_to(c, c->budget);
@@ -620,8 +783,9 @@ void cache_get_stats(const struct cache *c, struct cache_stats *out)
 	out->objects = c->count;
 	out->cached = 0;
 	for (uint32_t i = 0; i < c->count; i++)
-		out->cached += c->entries[i]->vol != NULL;
+		out->cached += c->entries[i]->vol || c->entries[i]->canvas;
 	out->bytes = held(c);
 	out->budget = c->budget;
-	out->working_bytes = volume_held(c->rest_vol) + volume_held(c->tmp) + volume_held(c->prev);
+	out->working_bytes =
+		volume_held(c->rest_vol) + volume_held(c->tmp) + volume_held(c->prev) + volume_held(c->turned_vol);
 }

@@ -11,7 +11,12 @@
  * - create: once that count says reuse is likely, the object is rendered on
  *   its own and its volume kept, run-length coded (compose.h);
  * - use: while it stays unchanged the volume is composed from the entry
- *   and the object is not rendered;
+ *   and the object is not rendered; an object that only turns about the
+ *   axis by whole images (its layer's turn, turn.h and scene_draw.turn) is
+ *   composed from its canvas, its render unturned before the halftone,
+ *   which compose_turned() shifts to the turn and halftones at each
+ *   image's own phase (made once, when the object is seen turning, by a
+ *   renderer that renders canvases: the CPU renderer);
  * - idle: a changed object loses its volume; if that volume did not pay
  *   (not a single hit), the object must stay unchanged longer before
  *   it is cached again (a saturating back-off that doubles the wait, and
@@ -53,6 +58,7 @@ struct cache_stats {
 	uint64_t budget;        /* cache-budget */
 	uint64_t working_bytes; /* the volumes it renders and composes into (not in bytes) */
 	uint64_t hits;          /* objects composed from the cache, summed over volumes */
+	uint64_t turned;        /* of them, composed turned from a canvas */
 	uint64_t misses;        /* objects rendered, summed over volumes */
 	uint64_t creates;       /* volumes cached */
 	uint64_t invalidations; /* cached volumes dropped because their object changed */
@@ -69,8 +75,10 @@ struct cache;
 
 /* A cache for volumes of geom, holding at most budget bytes. pool (may be
  * NULL) runs the compositions; it stays the caller's and must outlive the
- * cache. NULL + errno. */
-struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool);
+ * cache. turns: the renderer renders canvases (renderer_impl.render_canvas),
+ * so an object that only turns about the axis by whole images is composed
+ * from its canvas, turned. NULL + errno. */
+struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool, bool turns);
 /* Accepts NULL. */
 void cache_destroy(struct cache *c);
 

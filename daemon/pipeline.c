@@ -169,7 +169,8 @@ static void skip_unchanged(struct pipeline *p)
 
 static void start_render(struct pipeline *p)
 {
-	if (snapshot_build(p->building, p->cfg.stage, p->cfg.max_scene_primitives) < 0) {
+	if (snapshot_build(p->building, p->cfg.stage, p->cfg.max_scene_primitives,
+			   p->renderer->impl->render_canvas != NULL) < 0) {
 		log_error("out of memory building the scene; retrying with the next change");
 		return;
 	}
@@ -425,7 +426,7 @@ static int create_cache(struct pipeline *p, const struct geometry *g)
 	p->pool = pool_create(threads);
 	if (!p->pool)
 		return -errno;
-	p->cache = cache_create(g, p->cfg.cache_budget, p->pool);
+	p->cache = cache_create(g, p->cfg.cache_budget, p->pool, p->renderer->impl->render_canvas != NULL);
 	return p->cache ? 0 : -errno;
 }
 

@@ -40,7 +40,7 @@ static int add_object(struct snapshot *snap, const struct stage_layer *y)
 	return 0;
 }
 
-static int add_layer(struct snapshot *snap, const struct stage_layer *y)
+static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool turns)
 {
 	const struct draw_array *a = y->draws;
 	if (a->count && add_object(snap, y) < 0)
@@ -57,7 +57,11 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y)
 			.point_size = d->point_size,
 			.prim_rgb = d->data->prim_rgb,
 		};
-		mat4_mul(sd->transform, y->transform, d->transform);
+		/* With turns, the layer's base and its turn by whole images
+		 * (layer.h): the renderer shifts images instead of turning
+		 * vertices, and the cache reuses what it rendered. */
+		mat4_mul(sd->transform, turns ? y->base : y->transform, d->transform);
+		sd->turn = turns ? (uint16_t)y->turn : 0;
 		for (int c = 0; c < 3; c++)
 			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);
 		snap->data[snap->scene.draw_count++] = vdata_ref(d->data);
@@ -65,7 +69,7 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y)
 	return 0;
 }
 
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget)
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns)
 {
 	snap->scene.draw_count = 0;
 	snap->scene.object_count = 0;
@@ -83,7 +87,7 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 			break;
 		}
 		prims += y->draws->prims;
-		if (add_layer(snap, y) < 0) {
+		if (add_layer(snap, y, turns) < 0) {
 			snapshot_release(snap);
 			return -ENOMEM;
 		}
@@ -96,7 +100,7 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
 {
 	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->point_size == b->point_size &&
-	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       a->turn == b->turn && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
 	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
 }
 

@@ -28,9 +28,12 @@ struct snapshot {
 
 /* Fills snap from the layers the stage shows (stage_shown_layers()), in
  * their order, until budget primitives (max-scene-primitives): the layer
- * that would go over and every later one are left out, whole. 0 or
+ * that would go over and every later one are left out, whole. turns: the
+ * renderer draws turns natively (the CPU renderer), so a layer is drawn as
+ * its base turned by whole images (scene_draw.turn) rather than by the
+ * transform the client gave, which it equals within TURN_TOLERANCE. 0 or
  * -ENOMEM. */
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget);
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns);
 /* Whether a draws exactly what b draws: draw for draw the same primitive,
  * vertex data, transform and colour. Vertex data is compared by identity:
  * safe because b holds references to its data, so none of it can have been

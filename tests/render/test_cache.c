@@ -52,10 +52,12 @@ struct tobj {
 	float transform[16];
 	uint8_t rgb[MAX_DRAWS][3];
 	uint8_t point_size;
+	uint16_t turn; /* scene_draw.turn of its draws */
 };
 
 struct world {
 	const struct geometry *geom;
+	bool turns; /* the renderer draws turns (the daemon gives only those turned layers) */
 	struct tobj obj[MAX_OBJECTS];
 	uint64_t next_key;
 	/* The scene as the daemon's snapshot would carry it. */
@@ -162,7 +164,13 @@ static const char *mutate(struct world *w)
 		create(w, o);
 		return "create";
 	}
-	switch (rnd() % 8) {
+	switch (rnd() % 10) {
+	case 8:
+	case 9: /* turned by whole images, as a layer's turn (turn.h) */
+		if (!w->turns)
+			return "unchanged";
+		o->turn = (uint16_t)((o->turn + 1 + rnd() % 7) % w->geom->images_per_rev);
+		return "spin";
 	case 0:
 		random_transform(o->transform);
 		return "move";
@@ -207,6 +215,7 @@ static void build(struct world *w)
 				.count = o->data[d]->count,
 				.xyz = o->data[d]->xyz,
 				.point_size = o->point_size,
+				.turn = o->turn,
 				.prim_rgb = o->data[d]->prim_rgb,
 			};
 			memcpy(sd->transform, o->transform, sizeof(sd->transform));
@@ -232,8 +241,8 @@ static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t se
 {
 	const struct geometry *g = &r->geom;
 	rng_state = seed;
-	struct world w = { .geom = g };
-	struct cache *c = cache_create(g, budget, NULL);
+	struct world w = { .geom = g, .turns = r->impl->render_canvas != NULL };
+	struct cache *c = cache_create(g, budget, NULL, r->impl->render_canvas != NULL);
 	CHECK(c != NULL);
 	struct volume *composed = volume_create(g), *full = volume_create(g);
 	CHECK(composed && full);
@@ -247,6 +256,9 @@ static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t se
 		const char *what = "unchanged";
 		for (unsigned i = 0; i < changes; i++)
 			what = mutate(&w);
+		/* A turntable: the first object turns a step every volume. */
+		if (w.turns && w.obj[0].alive)
+			w.obj[0].turn = (uint16_t)((w.obj[0].turn + 1) % g->images_per_rev);
 		build(&w);
 		CHECK_EQ(cache_plan(c, &w.snap), 0);
 		int err = cache_render(c, r, &w.snap.scene, composed);
@@ -263,12 +275,12 @@ static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t se
 	cache_get_stats(c, &out->st);
 	out->volumes = steps;
 	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
-	       "misses %llu, creates %llu, invalidations %llu, evictions %llu, expired %llu\n",
+	       "turned %llu, misses %llu, creates %llu, invalidations %llu, evictions %llu, expired %llu\n",
 	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, steps,
 	       out->st.objects, out->st.cached, (unsigned long long)out->st.bytes, (unsigned long long)out->st.hits,
-	       (unsigned long long)out->st.misses, (unsigned long long)out->st.creates,
-	       (unsigned long long)out->st.invalidations, (unsigned long long)out->st.evictions,
-	       (unsigned long long)out->st.expired);
+	       (unsigned long long)out->st.turned, (unsigned long long)out->st.misses,
+	       (unsigned long long)out->st.creates, (unsigned long long)out->st.invalidations,
+	       (unsigned long long)out->st.evictions, (unsigned long long)out->st.expired);
 	CHECK(out->st.bytes <= budget || out->st.cached == 0);
 	cache_destroy(c);
 	for (int i = 0; i < MAX_OBJECTS; i++)
@@ -338,6 +350,7 @@ int main(void)
 	CHECK(cpu != NULL);
 	run(cpu, 64u << 20, 160, 1, &t);
 	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
+	CHECK(t.st.turned > 0);          /* turned objects composed from their canvases */
 	run(cpu, 40u << 10, 120, 2, &t); /* a few entries at a time */
 	CHECK(t.st.evictions > 0);
 	run(cpu, 0, 40, 3, &t); /* nothing may be cached */
