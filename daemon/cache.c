@@ -777,6 +777,11 @@ void cache_done(struct cache *c, int result)
 	evict_to(c, c->budget);
 }
 
+void cache_set_budget(struct cache *c, uint64_t bytes)
+{
+	c->budget = bytes;
+}
+
 void cache_get_stats(const struct cache *c, struct cache_stats *out)
 {
 	*out = c->stats;

@@ -97,5 +97,9 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 void cache_done(struct cache *c, int result);
 
 void cache_get_stats(const struct cache *c, struct cache_stats *out);
+/* A new budget (the loop's thread): new entries are made only within it,
+ * and the cache evicts down to it when the next render is planned and
+ * done. */
+void cache_set_budget(struct cache *c, uint64_t bytes);
 
 #endif

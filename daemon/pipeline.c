@@ -408,6 +408,12 @@ void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out)
 	*out = p->stats;
 }
 
+void pipeline_set_cache_budget(struct pipeline *p, uint64_t bytes)
+{
+	if (p->cache)
+		cache_set_budget(p->cache, bytes);
+}
+
 bool pipeline_get_cache_stats(const struct pipeline *p, struct cache_stats *out)
 {
 	if (!p->cache)

@@ -84,6 +84,8 @@ int64_t pipeline_render_started(struct pipeline *p);
 /* The volume on display as the daemon sent it, or NULL before the first. */
 const struct volume *pipeline_shown(const struct pipeline *p);
 void pipeline_get_stats(const struct pipeline *p, struct pipeline_stats *out);
+/* The object cache's budget from now on (cache_set_budget()). */
+void pipeline_set_cache_budget(struct pipeline *p, uint64_t bytes);
 struct cache_stats;
 /* The object cache's counters; false (out untouched) when it is off. */
 bool pipeline_get_cache_stats(const struct pipeline *p, struct cache_stats *out);

@@ -197,11 +197,25 @@ static const struct client_listener client_listener = {
 
 /* ---- the stage, frames and captures ---- */
 
+/* The object cache yields to the clients: it holds at most what of
+ * memory-budget they leave (and cache-budget), so that clients and cache
+ * together stay within memory-budget; it evicts down to that at the next
+ * volume. */
+static void cache_budget(struct server *srv)
+{
+	const struct client_totals *t = &srv->totals;
+	uint64_t used = t->buffer_bytes + t->vertices * CLIENT_VERTEX_BYTES;
+	uint64_t left = srv->cfg.memory_budget > used ? srv->cfg.memory_budget - used : 0;
+	pipeline_set_cache_budget(srv->pipe, left < srv->cfg.cache_budget ? left : srv->cfg.cache_budget);
+}
+
 static void scene_changed(void *data)
 {
 	struct server *srv = data;
-	if (srv->pipe)
-		pipeline_mark_dirty(srv->pipe);
+	if (!srv->pipe)
+		return;
+	cache_budget(srv);
+	pipeline_mark_dirty(srv->pipe);
 }
 
 static const struct stage_listener stage_listener = {

@@ -4,6 +4,7 @@ did, sent just before status; and the compositor's promise, end to end: a
 volume composed from cached layers is the volume the same commits give
 with the cache off (key cache = false), capture for capture."""
 import math
+import struct
 
 from harness import Daemon, MODE, case, check, lit, run, svol_planes, w
 
@@ -74,6 +75,31 @@ def composition_exact():
     check(0 < comp['cache_bytes'] <= comp['cache_budget'], f'within the budget: {comp}')
     check(comp_off['flags'] == 0 and comp_off['hits'] == 0, f'cache off: {comp_off}')
     print(f'  composition: {comp}')
+
+
+@case
+def cache_yields_to_clients():
+    """The cache holds at most what of memory-budget the clients leave:
+    with 2 MiB in all and a client holding 1.5 MiB of buffers, its budget
+    is the 0.5 MiB left, and it holds no more."""
+    d = Daemon('memory-budget=2097152')
+    try:
+        a = d.conn()
+        buf = a.buffer(struct.pack('<%df' % (3 * 131072), *([0.0] * 3 * 131072)))   # 1.5 MiB of xyz
+        for i, colour in enumerate((0xffffffff, 0xff8000ff)):
+            layer_of(a, [(x + 0.1 * i, y, z) for x, y, z in STATIC], colour)
+        for _ in range(4):
+            a.frame_commit()
+        a.req(1, 'display.get_status')
+        comp = a.wait('display.composition')
+        a.wait('display.status')
+        left = 2097152 - 131072 * 12
+        check(comp['cache_budget'] <= left, f'the budget is what the clients leave ({left}): {comp}')
+        check(comp['cache_bytes'] <= comp['cache_budget'], f'held within it: {comp}')
+        a.req(buf, 'buffer.destroy')
+        a.close()
+    finally:
+        d.stop()
 
 
 if __name__ == '__main__':
