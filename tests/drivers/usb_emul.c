@@ -7,6 +7,7 @@
 #include <dirent.h>
 #include <errno.h>
 #include <ftw.h>
+#include <gio/gio.h>
 #include <limits.h>
 #include <linux/usbdevice_fs.h>
 #include <pthread.h>
@@ -293,6 +294,13 @@ struct usb_emul *usb_emul_create(void)
 	pthread_mutex_init(&e->lock, NULL);
 	e->clients = g_ptr_array_new_with_free_func(g_object_unref);
 	e->rotor = sim_rotor_create(1800.0);
+	/* GLib makes its worker context (an eventfd, which stays, and its thread
+	 * "gmain") with the process's first GTask, and umockdev's worker thread
+	 * makes one at its first accept on a node's socket, at a time of its
+	 * own: perhaps after a test counted this process's fds with the
+	 * testbed in place, which would then see one fd more at the end (one
+	 * nobody leaked). Make it now, in this thread, before the testbed. */
+	g_type_ensure(G_TYPE_TASK);
 	e->testbed = umockdev_testbed_new();
 	char *root = umockdev_testbed_get_root_dir(e->testbed);
 	snprintf(e->node, sizeof(e->node), "%s%s", root, DEV_PATH);

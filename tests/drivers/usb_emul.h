@@ -34,7 +34,8 @@ struct usb_emul_stats {
 };
 
 /* A testbed with no device. Returns NULL when umockdev is not preloaded
- * (the caller skips). */
+ * (the caller skips). GLib's worker context, an fd that stays, is made
+ * before it returns, not later by umockdev's thread (see the .c). */
 struct usb_emul *usb_emul_create(void);
 /* Unplugs what is plugged and frees. */
 void usb_emul_destroy(struct usb_emul *e);
