@@ -73,7 +73,9 @@ static struct vdata *make_data(void)
 	uint32_t per = prim == SCENE_POINTS ? 1 : prim == SCENE_LINES ? 2 : 3;
 	uint32_t prims = 1 + rnd() % 12;
 	uint32_t count = prims * per;
-	struct vdata *v = calloc(1, sizeof(*v) + count * 3 * sizeof(float));
+	/* One block, as draw.c makes it: vdata_unref() frees it whole, prim_rgb
+	 * included, whoever holds the last reference (the cache, often). */
+	struct vdata *v = calloc(1, sizeof(*v) + count * 3 * sizeof(float) + prims * 3);
 	CHECK(v != NULL);
 	v->refs = 1;
 	v->prim = prim;
@@ -87,8 +89,7 @@ static struct vdata *make_data(void)
 		v->xyz[3 * i + 2] = (float)(cz + range(-0.3, 0.3));
 	}
 	if (rnd() % 4 == 0) {
-		v->prim_rgb = malloc(prims * 3);
-		CHECK(v->prim_rgb != NULL);
+		v->prim_rgb = (uint8_t *)(v->xyz + 3 * count);
 		for (uint32_t i = 0; i < prims * 3; i++)
 			v->prim_rgb[i] = (uint8_t)rnd();
 	}
@@ -97,8 +98,6 @@ static struct vdata *make_data(void)
 
 static void free_data(struct vdata *v)
 {
-	if (v && v->refs == 1)
-		free(v->prim_rgb); /* vdata_unref() frees the rest */
 	vdata_unref(v);
 }
 
