@@ -163,41 +163,24 @@ static void row(const char *scene, const char *how, const struct result *r, cons
 /* ---- the scenes ---- */
 
 struct orbiter {
-	struct orbit_params {
-		double radius, y, phase, speed, spin, tilt;
-	} o[MAX_OBJECTS];
+	struct bench_orbit o[MAX_OBJECTS];
 	double volume_s;
 	uint32_t first;  /* objects before first never move */
 	double fraction; /* of the moving ones that move each volume (1: all) */
 	struct rng rng;
 };
 
-static void orbit_init(struct orbit_params *o, struct rng *rng, double h)
+static void pose(struct bscene *b, const struct orbiter *orb, uint32_t i, uint64_t frame)
 {
-	double sign = rng_unit(rng) < 0.5 ? -1 : 1;
-	o->radius = rng_range(rng, 0.1, 0.9);
-	o->y = rng_range(rng, -0.9, 0.9) * h;
-	o->phase = rng_range(rng, 0, 2 * M_PI);
-	o->speed = sign * rng_range(rng, 0.3, 3.0);
-	o->spin = rng_range(rng, -5.0, 5.0);
-	o->tilt = rng_range(rng, 0, M_PI);
-}
-
-static void pose(struct bscene *b, const struct orbiter * or, uint32_t i, uint64_t frame)
-{
-	const struct orbit_params *o = & or->o[i];
-	double t = (double)frame * or->volume_s;
-	double a = o->phase + o->speed * t;
-	double pos[3] = { o->radius * cos(a), o->y, o->radius * sin(a) };
-	mat4_pose(b->draws[i].transform, pos, o->tilt, o->spin * t, 1.0);
+	bench_orbit_pose(&orb->o[i], (double)frame * orb->volume_s, b->draws[i].transform);
 }
 
 static void animate_orbits(struct bscene *b, uint64_t frame, void *arg)
 {
-	struct orbiter * or = arg;
-	for (uint32_t i = or->first; i < b->n; i++)
-		if (or->fraction >= 1 || rng_unit(& or->rng) < or->fraction)
-			pose(b, or, i, frame);
+	struct orbiter *orb = arg;
+	for (uint32_t i = orb->first; i < b->n; i++)
+		if (orb->fraction >= 1 || rng_unit(&orb->rng) < orb->fraction)
+			pose(b, orb, i, frame);
 }
 
 /* The dragon turned about the axis by one image step per volume, as the
@@ -286,20 +269,20 @@ int main(int argc, char **argv)
 
 	struct vbuf ico = { 0 };
 	shape_icosahedron(&ico, 0.03);
-	struct orbiter * or = calloc(1, sizeof(* or));
-	or->volume_s = 1.0 / (g.rpm / 60.0 * (g.mirrored ? 2 : 1));
-	or->rng = rng_seed(0x5350494e444c4534u);
+	struct orbiter *orb = calloc(1, sizeof(*orb));
+	orb->volume_s = 1.0 / (g.rpm / 60.0 * (g.mirrored ? 2 : 1));
+	orb->rng = rng_seed(0x5350494e444c4534u);
 	for (uint32_t i = 0; i < MAX_OBJECTS; i++)
-		orbit_init(& or->o[i], & or->rng, g.half_height);
+		bench_orbit_random(&orb->o[i], &orb->rng, g.half_height);
 	struct result solo, res;
 
 	/* An animated object alone, and beside the static dragon. */
 	struct bscene *b = calloc(1, sizeof(*b));
 	struct scene_draw d = icosahedron(&ico, orange);
 	bscene_add(b, &d);
-	or->first = 0;
-	or->fraction = 1;
-	measure(r, NULL, b, animate_orbits, or, &o, &solo);
+	orb->first = 0;
+	orb->fraction = 1;
+	measure(r, NULL, b, animate_orbits, orb, &o, &solo);
 	row("icosahedron alone", "full render", &solo, "");
 	bscene_free(b);
 	char err[256];
@@ -309,10 +292,10 @@ int main(int argc, char **argv)
 		memset(b, 0, sizeof(*b));
 		bscene_add(b, &dragon.draws[0]);
 		bscene_add(b, &d);
-		or->first = 1;
-		measure(r, NULL, b, animate_orbits, or, &o, &res);
+		orb->first = 1;
+		measure(r, NULL, b, animate_orbits, orb, &o, &res);
 		row("dragon (static) + icosahedron", "full render", &res, "");
-		measure(r, cache, b, animate_orbits, or, &o, &res);
+		measure(r, cache, b, animate_orbits, orb, &o, &res);
 		char note[128];
 		snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
 		row("dragon (static) + icosahedron", "cache", &res, note);
@@ -341,16 +324,16 @@ int main(int argc, char **argv)
 						   { 255, 255, 0 }, { 255, 0, 255 }, { 0, 255, 255 } };
 		struct scene_draw di = icosahedron(&ico, six[i % 6]);
 		bscene_add(b, &di);
-		pose(b, or, i, 0);
+		pose(b, orb, i, 0);
 	}
-	or->first = 0;
-	or->fraction = 1;
-	measure(r, NULL, b, animate_orbits, or, &o, &solo);
+	orb->first = 0;
+	orb->fraction = 1;
+	measure(r, NULL, b, animate_orbits, orb, &o, &solo);
 	row("S4: 1,000 objects, all move", "full render", &solo, "");
-	or->fraction = 0.1;
-	measure(r, NULL, b, animate_orbits, or, &o, &res);
+	orb->fraction = 0.1;
+	measure(r, NULL, b, animate_orbits, orb, &o, &res);
 	row("S4: 1,000 objects, 10% move", "full render", &res, "");
-	measure(r, cache, b, animate_orbits, or, &o, &res);
+	measure(r, cache, b, animate_orbits, orb, &o, &res);
 	char note[128];
 	snprintf(note, sizeof(note), "%.2fx the full render of all moving", res.vol_s / solo.vol_s);
 	row("S4: 1,000 objects, 10% move", "cache", &res, note);
@@ -358,7 +341,7 @@ int main(int argc, char **argv)
 	       res.st.working_bytes / 1048576.0);
 	bscene_free(b);
 	free(b);
-	free(or);
+	free(orb);
 	bench_scene_free(&dragon);
 	cache_destroy(cache);
 	render_destroy(r);

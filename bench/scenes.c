@@ -17,8 +17,8 @@
 struct scene_data {
 	struct vbuf bufs[MAX_BUFS];
 	struct model *model;
-	struct orbit *orbits; /* S4: one per draw */
-	double volume_s;      /* seconds per volume, for the animation */
+	struct bench_orbit *orbits; /* S4: one per draw */
+	double volume_s;            /* seconds per volume, for the animation */
 };
 
 struct bench_scene_impl {
@@ -177,11 +177,7 @@ static int build_model(struct bench_scene *s, struct scene_data *d, const struct
 
 /* S4: param small icosahedra orbiting the axis, each at its own radius,
  * height, speed and spin; every transform changes every volume. */
-struct orbit {
-	double radius, y, phase, speed, spin, tilt; /* speeds in rad/s */
-};
-
-static void random_orbit(struct orbit *o, struct rng *rng, double h)
+void bench_orbit_random(struct bench_orbit *o, struct rng *rng, double h)
 {
 	double sign = rng_unit(rng) < 0.5 ? -1 : 1;
 	o->radius = rng_range(rng, 0.1, 0.9);
@@ -196,12 +192,15 @@ static void animate_objects(struct bench_scene *s, uint64_t frame)
 {
 	struct scene_data *d = s->data;
 	double t = (double)frame * d->volume_s;
-	for (uint32_t i = 0; i < s->scene.draw_count; i++) {
-		const struct orbit *o = &d->orbits[i];
-		double a = o->phase + o->speed * t;
-		double pos[3] = { o->radius * cos(a), o->y, o->radius * sin(a) };
-		mat4_pose(s->draws[i].transform, pos, o->tilt, o->spin * t, 1.0);
-	}
+	for (uint32_t i = 0; i < s->scene.draw_count; i++)
+		bench_orbit_pose(&d->orbits[i], t, s->draws[i].transform);
+}
+
+void bench_orbit_pose(const struct bench_orbit *o, double t, float out[16])
+{
+	double a = o->phase + o->speed * t;
+	double pos[3] = { o->radius * cos(a), o->y, o->radius * sin(a) };
+	mat4_pose(out, pos, o->tilt, o->spin * t, 1.0);
 }
 
 static int build_objects(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
@@ -216,7 +215,7 @@ static int build_objects(struct bench_scene *s, struct scene_data *d, const stru
 	d->volume_s = 1.0 / volumes_per_s;
 	struct rng rng = rng_seed(0x5350494e444c4534u);
 	for (uint32_t i = 0; i < param; i++) {
-		random_orbit(&d->orbits[i], &rng, g->half_height);
+		bench_orbit_random(&d->orbits[i], &rng, g->half_height);
 		set_draw(&s->draws[i], SCENE_TRIANGLES, b->xyz, b->count, colours[i % 6]);
 	}
 	animate_objects(s, 0);

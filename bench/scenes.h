@@ -55,4 +55,15 @@ void bench_scene_animate(struct bench_scene *s, uint64_t frame);
 /* Accepts a zeroed scene. */
 void bench_scene_free(struct bench_scene *s);
 
+/* S4's motion: an object orbiting the axis at its own radius, height,
+ * speed and spin (speeds in rad/s). */
+struct bench_orbit {
+	double radius, y, phase, speed, spin, tilt;
+};
+struct rng;
+/* A random orbit inside a display of half height h. */
+void bench_orbit_random(struct bench_orbit *o, struct rng *rng, double h);
+/* Its model -> volume transform at t seconds. */
+void bench_orbit_pose(const struct bench_orbit *o, double t, float out[16]);
+
 #endif

@@ -348,6 +348,18 @@ static void evict_to(struct cache *c, uint64_t target)
 	}
 }
 
+/* *pp (a pointer to an array) resized to n elements of size bytes; false
+ * when out of memory, *pp untouched. */
+static bool resize(void *pp, size_t n, size_t size)
+{
+	void **p = pp;
+	void *q = realloc(*p, n * size);
+	if (!q)
+		return false;
+	*p = q;
+	return true;
+}
+
 static int grow_plan(struct cache *c, uint32_t objects)
 {
 	if (objects <= c->array_cap)
@@ -355,42 +367,13 @@ static int grow_plan(struct cache *c, uint32_t objects)
 	uint32_t cap = c->array_cap ? c->array_cap : 64;
 	while (cap < objects)
 		cap *= 2;
-	struct entry **u = realloc(c->uses, cap * sizeof(*u));
-	if (!u)
+	/* The sources: every object's volume, the rest's and the turned. */
+	if (!resize(&c->uses, cap, sizeof(*c->uses)) || !resize(&c->creates, cap, sizeof(*c->creates)) ||
+	    !resize(&c->created, cap, sizeof(*c->created)) || !resize(&c->created_by, cap, sizeof(*c->created_by)) ||
+	    !resize(&c->turneds, cap, sizeof(*c->turneds)) || !resize(&c->canvases, cap, sizeof(*c->canvases)) ||
+	    !resize(&c->made_canvas, cap, sizeof(*c->made_canvas)) ||
+	    !resize(&c->turned_src, cap, sizeof(*c->turned_src)) || !resize(&c->sources, cap + 2, sizeof(*c->sources)))
 		return -ENOMEM;
-	c->uses = u;
-	struct entry **k = realloc(c->creates, cap * sizeof(*k));
-	if (!k)
-		return -ENOMEM;
-	c->creates = k;
-	struct rle_volume **v = realloc(c->created, cap * sizeof(*v));
-	if (!v)
-		return -ENOMEM;
-	c->created = v;
-	enum render_engine *by = realloc(c->created_by, cap * sizeof(*by));
-	if (!by)
-		return -ENOMEM;
-	c->created_by = by;
-	struct entry **tu = realloc(c->turneds, cap * sizeof(*tu));
-	if (!tu)
-		return -ENOMEM;
-	c->turneds = tu;
-	struct entry **ca = realloc(c->canvases, cap * sizeof(*ca));
-	if (!ca)
-		return -ENOMEM;
-	c->canvases = ca;
-	struct rle_volume **mc = realloc(c->made_canvas, cap * sizeof(*mc));
-	if (!mc)
-		return -ENOMEM;
-	c->made_canvas = mc;
-	struct turned_source *ts = realloc(c->turned_src, cap * sizeof(*ts));
-	if (!ts)
-		return -ENOMEM;
-	c->turned_src = ts;
-	struct compose_source *s = realloc(c->sources, (cap + 2) * sizeof(*s));
-	if (!s)
-		return -ENOMEM;
-	c->sources = s;
 	c->source_cap = cap + 2;
 	c->array_cap = cap;
 	return 0;
@@ -402,10 +385,8 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 		uint32_t cap = c->rest_cap ? c->rest_cap : 64;
 		while (cap < c->rest_count + n)
 			cap *= 2;
-		struct scene_draw *r = realloc(c->rest, cap * sizeof(*r));
-		if (!r)
+		if (!resize(&c->rest, cap, sizeof(*c->rest)))
 			return -ENOMEM;
-		c->rest = r;
 		c->rest_cap = cap;
 	}
 	memcpy(c->rest + c->rest_count, draws, n * sizeof(*draws));
@@ -566,10 +547,8 @@ static int render_turned(struct cache *c, struct renderer *r, const struct scene
 	for (uint32_t i = 0; i < c->canvas_count; i++) {
 		const struct entry *e = c->canvases[i];
 		if (e->draw_count > c->unturned_cap) {
-			struct scene_draw *u = realloc(c->unturned, e->draw_count * sizeof(*u));
-			if (!u)
+			if (!resize(&c->unturned, e->draw_count, sizeof(*c->unturned)))
 				return -ENOMEM;
-			c->unturned = u;
 			c->unturned_cap = e->draw_count;
 		}
 		memcpy(c->unturned, scene->draws + e->first_draw, e->draw_count * sizeof(*c->unturned));

@@ -247,6 +247,66 @@ static void or_tile(uint8_t *dst, const uint8_t *src)
 		for (uint32_t bits_ = (mask)[byte_], t;                \
 		     bits_ && ((t = byte_ * 8 + (uint32_t)__builtin_ctz(bits_)), 1); bits_ &= bits_ - 1, i++)
 
+/* The touched tiles of w's dense image, in order, as image k of c->out
+ * (count of them), leaving the dense image zero. */
+static int emit_image(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t count)
+{
+	if (!count)
+		return 0;
+	int err = volume_image_reserve(c->out, k, count);
+	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
+		if (!w->touched[t])
+			continue;
+		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+		if (err == 0)
+			err = volume_image_append(c->out, k, t, tile);
+		memset(tile, 0, VOLUME_TILE_BYTES);
+		w->touched[t] = 0;
+	}
+	return err;
+}
+
+typedef int (*image_fn)(struct compose *c, struct compose_worker *w, uint32_t k);
+
+struct image_job {
+	struct compose *c;
+	image_fn fn;
+};
+
+/* Images are handed out one at a time; the first error wins. */
+static void image_job(void *arg, unsigned index)
+{
+	struct image_job *j = arg;
+	struct compose_worker *w = &j->c->w[index];
+	for (;;) {
+		uint32_t k = atomic_fetch_add(&j->c->next_image, 1);
+		if (k >= j->c->image_count)
+			break;
+		int err = j->fn(j->c, w, k);
+		if (err < 0 && w->err == 0)
+			w->err = err;
+	}
+}
+
+/* fn on every image of c->out, on the pool's workers. */
+static int run_images(struct compose *c, struct volume *out, image_fn fn)
+{
+	struct image_job j = { c, fn };
+	c->out = out;
+	atomic_store(&c->next_image, 0);
+	for (unsigned i = 0; i < c->workers; i++)
+		c->w[i].err = 0;
+	if (c->pool)
+		pool_run(c->pool, image_job, &j);
+	else
+		image_job(&j, 0);
+	int err = 0;
+	for (unsigned i = 0; i < c->workers && !err; i++)
+		err = c->w[i].err;
+	c->out = NULL;
+	return err;
+}
+
 /* Image k of every source ORed into w's dense image, then packed into out. */
 static int compose_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
@@ -284,33 +344,7 @@ static int compose_image(struct compose *c, struct compose_worker *w, uint32_t k
 			}
 		}
 	}
-	if (!count)
-		return 0;
-	int err = volume_image_reserve(c->out, k, count);
-	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
-		if (!w->touched[t])
-			continue;
-		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-		if (err == 0)
-			err = volume_image_append(c->out, k, t, tile);
-		memset(tile, 0, VOLUME_TILE_BYTES);
-		w->touched[t] = 0;
-	}
-	return err;
-}
-
-static void compose_job(void *arg, unsigned index)
-{
-	struct compose *c = arg;
-	struct compose_worker *w = &c->w[index];
-	for (;;) {
-		uint32_t k = atomic_fetch_add(&c->next_image, 1);
-		if (k >= c->image_count)
-			break;
-		int err = compose_image(c, w, k);
-		if (err < 0 && w->err == 0)
-			w->err = err;
-	}
+	return emit_image(c, w, k, count);
 }
 
 static int check_sources(const struct compose *c, const struct volume *out, const struct compose_source *src,
@@ -337,20 +371,9 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 	if (err < 0)
 		return err;
 	volume_clear(out);
-	c->out = out;
 	c->src = src;
 	c->n = n;
-	atomic_store(&c->next_image, 0);
-	for (unsigned i = 0; i < c->workers; i++)
-		c->w[i].err = 0;
-	if (c->pool)
-		pool_run(c->pool, compose_job, c);
-	else
-		compose_job(c, 0);
-	for (unsigned i = 0; i < c->workers && !err; i++)
-		err = c->w[i].err;
-	c->out = NULL;
-	return err;
+	return run_images(c, out, compose_image);
 }
 
 /* ---- patching ---- */
@@ -456,41 +479,16 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	return err;
 }
 
-static void patch_job(void *arg, unsigned index)
-{
-	struct compose *c = arg;
-	struct compose_worker *w = &c->w[index];
-	for (;;) {
-		uint32_t k = atomic_fetch_add(&c->next_image, 1);
-		if (k >= c->image_count)
-			break;
-		int err = patch_image(c, w, k);
-		if (err < 0 && w->err == 0)
-			w->err = err;
-	}
-}
-
 int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
 		  unsigned n)
 {
 	int err = check_sources(c, vol, src, n);
 	if (err < 0)
 		return err;
-	c->out = vol;
 	c->src = src;
 	c->n = n;
 	c->dirty = dirty;
-	atomic_store(&c->next_image, 0);
-	for (unsigned i = 0; i < c->workers; i++)
-		c->w[i].err = 0;
-	if (c->pool)
-		pool_run(c->pool, patch_job, c);
-	else
-		patch_job(c, 0);
-	for (unsigned i = 0; i < c->workers && !err; i++)
-		err = c->w[i].err;
-	c->out = NULL;
-	return err;
+	return run_images(c, vol, patch_image);
 }
 
 void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src)
@@ -578,33 +576,7 @@ static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 			or_tile(w->tiles + (size_t)to * VOLUME_TILE_BYTES, packed);
 		}
 	}
-	if (!count)
-		return 0;
-	int err = volume_image_reserve(c->out, k, count);
-	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
-		if (!w->touched[t])
-			continue;
-		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-		if (err == 0)
-			err = volume_image_append(c->out, k, t, tile);
-		memset(tile, 0, VOLUME_TILE_BYTES);
-		w->touched[t] = 0;
-	}
-	return err;
-}
-
-static void turn_job(void *arg, unsigned index)
-{
-	struct compose *c = arg;
-	struct compose_worker *w = &c->w[index];
-	for (;;) {
-		uint32_t k = atomic_fetch_add(&c->next_image, 1);
-		if (k >= c->image_count)
-			break;
-		int err = turn_image(c, w, k);
-		if (err < 0 && w->err == 0)
-			w->err = err;
-	}
+	return emit_image(c, w, k, count);
 }
 
 int compose_turned(struct compose *c, struct volume *out, const struct turned_source *src, unsigned n)
@@ -615,21 +587,9 @@ int compose_turned(struct compose *c, struct volume *out, const struct turned_so
 		if (src[s].canvas->tile_bytes != CANVAS_TILE_BYTES || src[s].canvas->image_count != c->image_count)
 			return -EINVAL;
 	volume_clear(out);
-	c->out = out;
 	c->turned = src;
 	c->n = n;
-	atomic_store(&c->next_image, 0);
-	for (unsigned i = 0; i < c->workers; i++)
-		c->w[i].err = 0;
-	if (c->pool)
-		pool_run(c->pool, turn_job, c);
-	else
-		turn_job(c, 0);
-	int err = 0;
-	for (unsigned i = 0; i < c->workers && !err; i++)
-		err = c->w[i].err;
-	c->out = NULL;
-	return err;
+	return run_images(c, out, turn_image);
 }
 
 int rle_volume_decode(const struct rle_volume *r, struct volume *out)
