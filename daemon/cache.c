@@ -400,10 +400,12 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 static enum role decide(struct cache *c, struct entry *e, enum change change, bool room)
 {
 	if (change == CHANGED || (change == TURNED && !c->turns)) {
+		bool paid = false;
 		if (e->vol || e->canvas) {
 			drop_volume(c, e);
 			drop_canvas(e);
-			if (e->hits < PAYOFF_HITS)
+			paid = e->hits >= PAYOFF_HITS;
+			if (!paid)
 				e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
 			else if (e->backoff)
 				e->backoff--;
@@ -411,7 +413,11 @@ static enum role decide(struct cache *c, struct entry *e, enum change change, bo
 		}
 		e->reuse = 0;
 		e->hits = 0;
-		return ROLE_REST;
+		/* An object whose cached volume paid and that does not back
+		 * off is cached again at once, in its new state: it changes
+		 * now and then, and rendering it with the rest now and alone
+		 * next time would render it twice. */
+		return paid && !e->backoff && room ? ROLE_CREATE : ROLE_REST;
 	}
 	/* Unchanged, or only turned: reusable. */
 	e->reuse = sat_inc(e->reuse, UINT8_MAX);
