@@ -178,6 +178,7 @@ struct compose {
 	struct volume *tmp; /* patching builds images here, then exchanges them */
 	struct geometry geom;
 	halftone_fn halftone;
+	struct halftone_table *thr; /* per volume image, made once */
 	const struct turned_source *turned;
 	/* Per call: */
 	const uint8_t *dirty;
@@ -205,6 +206,11 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	c->mask_bytes = probe->mask_bytes;
 	c->image_count = probe->image_count;
 	c->tmp = probe;
+	c->thr = calloc(c->image_count, sizeof(*c->thr));
+	if (!c->thr)
+		goto fail;
+	for (uint32_t k = 0; k < c->image_count; k++)
+		halftone_table_init(&c->thr[k], k);
 	c->w = calloc(c->workers, sizeof(*c->w));
 	if (!c->w)
 		goto fail;
@@ -230,6 +236,7 @@ void compose_destroy(struct compose *c)
 		free(c->w[i].touched);
 	}
 	free(c->w);
+	free(c->thr);
 	volume_destroy(c->tmp);
 	free(c);
 }
@@ -525,8 +532,6 @@ static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	uint32_t n_img = c->geom.images_per_rev, m_img = c->image_count;
 	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
-	struct halftone_table thr;
-	bool have_thr = false;
 	uint8_t buf[CANVAS_TILE_BYTES], mirrored[HALFTONE_TILE_BYTES], packed[VOLUME_TILE_BYTES];
 	uint32_t count = 0;
 	for (unsigned s = 0; s < c->n; s++) {
@@ -544,10 +549,6 @@ static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 		const struct rle_image *img = &cv->images[j];
 		if (!img->tile_count)
 			continue;
-		if (!have_thr) {
-			halftone_table_init(&thr, k);
-			have_thr = true;
-		}
 		size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
 		const uint8_t *code = img->data + head;
 		size_t avail = img->len - head;
@@ -569,7 +570,7 @@ static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 				canvas = mirrored;
 				to = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
 			}
-			if (!c->halftone(canvas, rows, &thr, packed))
+			if (!c->halftone(canvas, rows, &c->thr[k], packed))
 				continue;
 			count += !w->touched[to];
 			w->touched[to] = 1;

@@ -35,6 +35,7 @@ struct render_cpu {
 	struct cpu_worker *workers;
 	struct bin_set bins;
 	struct section_wedge *wedges; /* per volume image */
+	struct halftone_table *thr;   /* per volume image, made once */
 	halftone_fn halftone;
 	/* Per render: */
 	struct volume *out;
@@ -74,23 +75,18 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	struct section_canvas *c = &w->canvas;
-	struct halftone_table thr;
-	bool have_thr = false; /* made at the first touched tile */
+	const struct halftone_table *thr = &r->thr[k];
 	int err = 0;
 	uint32_t tiles = c->tiles_x * c->tiles_y;
 	for (uint32_t t = 0; t < tiles; t++) {
 		if (!c->rows[t])
 			continue;
-		if (!have_thr) {
-			halftone_table_init(&thr, k);
-			have_thr = true;
-		}
 		w->canvas_tiles++;
 		/* Halftoned straight into the volume's storage. */
 		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
 		if (!dst && err == 0)
 			err = -ENOMEM;
-		if (dst && r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], &thr, dst)) {
+		if (dst && r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst)) {
 			err = volume_image_push(r->out, k, t);
 			w->tiles++;
 		}
@@ -284,6 +280,7 @@ static void cpu_destroy(struct renderer *base)
 	}
 	free(r->stage);
 	free(r->wedges);
+	free(r->thr);
 	bin_finish(&r->bins);
 	free(r);
 }
@@ -332,10 +329,13 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom, const struc
 	r->workers = calloc(n, sizeof(*r->workers));
 	uint32_t images = geometry_images_per_volume(geom);
 	r->wedges = calloc(images, sizeof(*r->wedges));
-	if (!r->workers || !r->wedges || bin_init(&r->bins, geom) < 0)
+	r->thr = calloc(images, sizeof(*r->thr));
+	if (!r->workers || !r->wedges || !r->thr || bin_init(&r->bins, geom) < 0)
 		goto err_free;
-	for (uint32_t k = 0; k < images; k++)
+	for (uint32_t k = 0; k < images; k++) {
 		section_wedge_init(&r->wedges[k], geom, k);
+		halftone_table_init(&r->thr[k], k);
+	}
 	for (unsigned i = 0; i < n; i++) {
 		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
 			goto err_free;
