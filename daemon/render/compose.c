@@ -124,11 +124,22 @@ void rle_volume_sum(struct rle_volume *r)
 {
 	r->tiles = 0;
 	r->bytes = sizeof(*r) + r->image_count * sizeof(*r->images);
+	r->lit_count = 0;
 	for (uint32_t k = 0; k < r->image_count; k++) {
 		r->tiles += r->images[k].tile_count;
 		r->bytes += r->images[k].len;
+		r->lit_count += r->images[k].tile_count > 0;
 	}
 	r->packed_bytes = r->tiles * r->tile_bytes;
+	free(r->lit);
+	r->lit = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit));
+	if (!r->lit)
+		return; /* patching then looks at every image */
+	uint32_t n = 0;
+	for (uint32_t k = 0; k < r->image_count; k++)
+		if (r->images[k].tile_count)
+			r->lit[n++] = k;
+	r->bytes += r->lit_count * sizeof(*r->lit);
 }
 
 struct rle_volume *rle_volume_encode(const struct volume *vol)
@@ -159,6 +170,7 @@ void rle_volume_free(struct rle_volume *r)
 	for (uint32_t k = 0; r->images && k < r->image_count; k++)
 		free(r->images[k].data);
 	free(r->images);
+	free(r->lit);
 	free(r);
 }
 
@@ -180,6 +192,10 @@ struct compose {
 	halftone_fn halftone;
 	struct halftone_table *thr; /* per volume image, made once */
 	const struct turned_source *turned;
+	/* Patching: the sources with tiles in image k are img_src[img_first[k]
+	 * .. img_first[k + 1]). */
+	uint32_t *img_first, *img_src;
+	size_t img_src_cap;
 	/* Per call: */
 	const uint8_t *dirty;
 	struct volume *out;
@@ -237,6 +253,8 @@ void compose_destroy(struct compose *c)
 	}
 	free(c->w);
 	free(c->thr);
+	free(c->img_first);
+	free(c->img_src);
 	volume_destroy(c->tmp);
 	free(c);
 }
@@ -456,9 +474,8 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	if (!dirty_count)
 		return 0;
 	int err = 0;
-	for (unsigned s = 0; s < c->n && err == 0; s++)
-		if (source_mask(&c->src[s], k))
-			err = gather_dirty(c, w, &c->src[s], k, dirty);
+	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
+		err = gather_dirty(c, w, &c->src[c->img_src[i]], k, dirty);
 	struct volume_image *old = &c->out->images[k];
 	volume_image_clear(c->tmp, k);
 	if (err == 0)
@@ -486,6 +503,58 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	return err;
 }
 
+/* Calls fn(c, s, k) for each image k in which source s has tiles. */
+static void for_each_lit(struct compose *c, unsigned s, void (*fn)(struct compose *c, unsigned s, uint32_t k))
+{
+	const struct compose_source *src = &c->src[s];
+	if (src->rle && src->rle->lit) {
+		for (uint32_t i = 0; i < src->rle->lit_count; i++)
+			fn(c, s, src->rle->lit[i]);
+		return;
+	}
+	for (uint32_t k = 0; k < c->image_count; k++)
+		if (source_mask(src, k))
+			fn(c, s, k);
+}
+
+static void count_lit(struct compose *c, unsigned s, uint32_t k)
+{
+	c->img_first[k + 1]++;
+}
+
+static void place_lit(struct compose *c, unsigned s, uint32_t k)
+{
+	c->img_src[c->img_first[k]++] = s;
+}
+
+/* The sources of each image (img_first, img_src): an object touches a
+ * few images, and there may be thousands of objects. */
+static int index_sources(struct compose *c)
+{
+	if (!c->img_first && !(c->img_first = malloc((c->image_count + 1) * sizeof(*c->img_first))))
+		return -ENOMEM;
+	memset(c->img_first, 0, (c->image_count + 1) * sizeof(*c->img_first));
+	for (unsigned s = 0; s < c->n; s++)
+		for_each_lit(c, s, count_lit);
+	for (uint32_t k = 0; k < c->image_count; k++)
+		c->img_first[k + 1] += c->img_first[k];
+	size_t total = c->img_first[c->image_count];
+	if (total > c->img_src_cap) {
+		uint32_t *a = realloc(c->img_src, total * sizeof(*a));
+		if (!a)
+			return -ENOMEM;
+		c->img_src = a;
+		c->img_src_cap = total;
+	}
+	/* Placed at their image's start, which moves on to the next's. */
+	for (unsigned s = 0; s < c->n; s++)
+		for_each_lit(c, s, place_lit);
+	for (uint32_t k = c->image_count; k > 0; k--)
+		c->img_first[k] = c->img_first[k - 1];
+	c->img_first[0] = 0;
+	return 0;
+}
+
 int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
 		  unsigned n)
 {
@@ -495,6 +564,8 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
 	c->src = src;
 	c->n = n;
 	c->dirty = dirty;
+	if ((err = index_sources(c)) < 0)
+		return err;
 	return run_images(c, vol, patch_image);
 }
 

@@ -42,6 +42,8 @@ struct rle_volume {
 	uint64_t bytes;        /* memory held, structures included */
 	uint64_t packed_bytes; /* what the tiles take uncoded (tiles * tile_bytes) */
 	struct rle_image *images;
+	/* The images with tiles, in order (rle_volume_sum()), or NULL. */
+	uint32_t *lit, lit_count;
 };
 
 /* A tile of a canvas volume: an object rendered before the halftone, as
