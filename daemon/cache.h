@@ -8,7 +8,8 @@
  * - analyse: the entry counts the volumes in a row the object came
  *   unchanged (draw for draw the same vertex data, by identity, transform,
  *   colour and point size), in a saturating counter;
- * - create: once that count says reuse is likely, the object is rendered on
+ * - create: once that count says reuse is likely (or at once when it
+ *   changes but its last cached volume paid), the object is rendered on
  *   its own and its volume kept, run-length coded (compose.h);
  * - use: while it stays unchanged the volume is composed from the entry
  *   and the object is not rendered; an object that only turns about the
@@ -33,8 +34,11 @@
  * cached object comes back are composed anew. A change costs what it
  * touches, plus one copy of the composition into the volume handed out.
  *
- * Entries stay within a byte budget: past it the least recently used
- * entries lose their volumes. The cache is driven from the
+ * Entries stay within a byte budget (cache_set_budget()): past it the
+ * least recently used entries lose their volumes and canvases. The cache
+ * never composes volumes of two engines (render_stats.engine): a scene a
+ * GL renderer would hand to its CPU fallback is rendered whole. The cache
+ * is driven from the
  * daemon's loop (cache_plan(), cache_done()) and runs its renders and
  * compositions on the render thread (cache_render()), never both at once. */
 #ifndef SPINDLE_CACHE_H
@@ -53,9 +57,9 @@ struct volume;
 
 struct cache_stats {
 	uint32_t objects;       /* entries: objects being followed */
-	uint32_t cached;        /* of them holding a volume */
-	uint64_t bytes;         /* held: coded volumes, the base, bookkeeping */
-	uint64_t budget;        /* cache-budget */
+	uint32_t cached;        /* of them holding a volume or a canvas */
+	uint64_t bytes;         /* held: coded volumes and canvases, bookkeeping */
+	uint64_t budget;        /* cache-budget, or less: what of memory-budget the clients leave */
 	uint64_t working_bytes; /* the volumes it renders and composes into (not in bytes) */
 	uint64_t hits;          /* objects composed from the cache, summed over volumes */
 	uint64_t turned;        /* of them, composed turned from a canvas */
