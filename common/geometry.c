@@ -40,6 +40,14 @@ int geometry_validate(const struct geometry *g)
 	return 0;
 }
 
+uint32_t geometry_turn_source(const struct geometry *g, uint32_t k, uint32_t t, bool *mirror)
+{
+	uint32_t m = geometry_images_per_volume(g);
+	uint32_t j = k >= t ? k - t : k + g->images_per_rev - t;
+	*mirror = j >= m; /* never unmirrored: M = N */
+	return *mirror ? j - m : j;
+}
+
 uint32_t geometry_images_per_volume(const struct geometry *g)
 {
 	return g->mirrored ? g->images_per_rev / 2 : g->images_per_rev;

@@ -28,6 +28,12 @@ int geometry_validate(const struct geometry *g);
 /* Images in one volume: N/2 when mirrored, else N. */
 uint32_t geometry_images_per_volume(const struct geometry *g);
 
+/* A turn about the axis by t images (t < N) as an image shift: the volume
+ * image whose unturned content volume image k shows, and in *mirror
+ * whether mirrored (u -> W-1-u): j = k - t mod N; on a mirrored device
+ * j >= M is image j - M mirrored (scene.h, scene_draw.turn). */
+uint32_t geometry_turn_source(const struct geometry *g, uint32_t k, uint32_t t, bool *mirror);
+
 /* Angle of image k and its in-plane direction. */
 double geometry_image_angle(const struct geometry *g, uint32_t k);
 

@@ -94,8 +94,8 @@ struct cache {
 	bool turned_rendered;
 	struct rle_volume **created;    /* creates[i]'s volume, made by the render */
 	enum render_engine *created_by; /* and what rendered it */
-	bool mixed;                     /* the last render's parts came from different engines */
-	enum render_engine engine;      /* of the last composition, or of the whole render when mixed */
+	bool whole;                     /* the last volume was rendered whole, not composed */
+	enum render_engine engine;      /* of the last composition, or of the whole render */
 	struct volume *rest_vol, *tmp;
 	struct compose_source *sources;
 	uint32_t source_cap;
@@ -126,14 +126,18 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	return c;
 }
 
+static void add_footprint(struct cache *c, const struct compose_source *src)
+{
+	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
+}
+
 /* An entry whose volume is in the last composition leaves it: its tiles
  * there are composed anew next time. */
 static void leave_composition(struct cache *c, struct entry *e)
 {
 	if (!e->in_prev)
 		return;
-	struct compose_source s = { .rle = e->vol };
-	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, &s);
+	add_footprint(c, &(struct compose_source){ .rle = e->vol });
 	e->in_prev = false;
 }
 
@@ -442,6 +446,58 @@ static enum role decide(struct cache *c, struct entry *e, enum change change, bo
 	return e->canvas ? ROLE_TURNED : ROLE_REST;
 }
 
+/* Puts e, in its role, into the plan. */
+static int place(struct cache *c, struct entry *e, const struct scene_draw *draws, uint32_t n)
+{
+	bool hit = e->role == ROLE_USE || e->role == ROLE_TURNED;
+	c->stats.hits += hit;
+	c->stats.misses += !hit;
+	if (e->role != ROLE_REST)
+		e->last_used = c->plan_seq;
+	switch (e->role) {
+	case ROLE_TURNED:
+		c->turneds[c->turned_count++] = e;
+		c->stats.turned++;
+		return 0;
+	case ROLE_CANVAS:
+		c->canvases[c->canvas_count++] = e;
+		return 0;
+	case ROLE_USE:
+		c->uses[c->use_count++] = e;
+		if (!e->in_prev) /* back in the scene */
+			add_footprint(c, &(struct compose_source){ .rle = e->vol });
+		return 0;
+	case ROLE_CREATE:
+		c->creates[c->create_count++] = e;
+		return 0;
+	case ROLE_REST:
+		break;
+	}
+	return add_rest(c, draws, n);
+}
+
+/* Objects missing from the scene: kept a while (a layer hidden and shown
+ * again), then forgotten. They leave the composition. */
+static void sweep_absent(struct cache *c)
+{
+	for (uint32_t i = 0; i < c->count;) {
+		struct entry *e = c->entries[i];
+		if (!e->seen) {
+			e->role = ROLE_REST;
+			leave_composition(c, e);
+			e->absent = sat_inc(e->absent, UINT8_MAX);
+			if (e->absent > IDLE_VOLUMES) {
+				free_entry(c, e);
+				memmove(c->entries + i, c->entries + i + 1, (c->count - i - 1) * sizeof(*c->entries));
+				c->count--;
+				c->stats.expired++;
+				continue;
+			}
+		}
+		i++;
+	}
+}
+
 int cache_plan(struct cache *c, const struct snapshot *snap)
 {
 	const struct scene *s = &snap->scene;
@@ -469,63 +525,14 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		e->first_draw = obj->first_draw;
 		e->turn = obj->draw_count ? draws[0].turn : 0;
 		e->role = decide(c, e, change, room);
-		switch (e->role) {
-		case ROLE_TURNED:
-			e->last_used = c->plan_seq;
-			c->turneds[c->turned_count++] = e;
-			c->stats.hits++;
-			c->stats.turned++;
-			break;
-		case ROLE_CANVAS:
-			e->last_used = c->plan_seq;
-			c->canvases[c->canvas_count++] = e;
-			c->stats.misses++;
-			break;
-		case ROLE_USE:
-			e->last_used = c->plan_seq;
-			c->uses[c->use_count++] = e;
-			if (!e->in_prev) { /* back in the scene */
-				struct compose_source src = { .rle = e->vol };
-				compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, &src);
-			}
-			c->stats.hits++;
-			break;
-		case ROLE_CREATE:
-			e->last_used = c->plan_seq;
-			c->creates[c->create_count++] = e;
-			c->stats.misses++;
-			break;
-		case ROLE_REST:
-			if (add_rest(c, draws, obj->draw_count) < 0)
-				return -ENOMEM;
-			c->stats.misses++;
-			break;
-		}
+		if (place(c, e, draws, obj->draw_count) < 0)
+			return -ENOMEM;
 	}
-	/* Objects missing from the scene: kept a while (a layer hidden and
-	 * shown again), then forgotten. They leave the composition. */
-	for (uint32_t i = 0; i < c->count;) {
-		struct entry *e = c->entries[i];
-		if (!e->seen) {
-			e->role = ROLE_REST;
-			leave_composition(c, e);
-			e->absent = sat_inc(e->absent, UINT8_MAX);
-			if (e->absent > IDLE_VOLUMES) {
-				free_entry(c, e);
-				memmove(c->entries + i, c->entries + i + 1, (c->count - i - 1) * sizeof(*c->entries));
-				c->count--;
-				c->stats.expired++;
-				continue;
-			}
-		}
-		i++;
-	}
+	sweep_absent(c);
 	c->planned = true;
 	evict_to(c, c->budget);
-	for (uint32_t i = 0; i < c->create_count; i++)
-		c->created[i] = NULL;
-	for (uint32_t i = 0; i < c->canvas_count; i++)
-		c->made_canvas[i] = NULL;
+	memset(c->created, 0, c->create_count * sizeof(*c->created));
+	memset(c->made_canvas, 0, c->canvas_count * sizeof(*c->made_canvas));
 	return 0;
 }
 
@@ -534,11 +541,6 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 {
 	return (struct scene){ .draw_count = n, .draws = draws };
-}
-
-static void add_footprint(struct cache *c, const struct compose_source *src)
-{
-	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
 }
 
 /* The canvases to make (each object's draws with turn 0, rendered up to
@@ -589,49 +591,49 @@ static uint64_t scene_prims(const struct scene *s)
 	return n;
 }
 
-int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
+/* The scene rendered whole, nothing composed; cache_done() drops what
+ * another engine made. */
+static int render_whole(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out, int64_t t0)
 {
-	if (!c->planned)
-		return render_volume(r, scene, out);
-	int64_t t0 = now_ns();
+	int err = render_volume(r, scene, out);
+	c->whole = true;
+	c->engine = r->stats.engine;
+	c->render_us = (uint32_t)((now_ns() - t0) / 1000);
+	c->compose_us = 0;
+	return err;
+}
+
+/* The sources of a composition, and whether they come from one engine
+ * (a GL renderer may hand a scene to its CPU fallback: too large, or for
+ * good): OR is exact only among volumes of one. */
+struct parts {
+	unsigned n;
+	enum render_engine engine; /* 0: none yet */
+	bool mixed;
+};
+
+static void add_part(struct cache *c, struct parts *p, struct compose_source src, enum render_engine engine,
+		     bool footprint)
+{
+	p->mixed |= p->engine && engine != p->engine;
+	p->engine = engine;
+	c->sources[p->n] = src;
+	if (footprint) /* new in the composition */
+		add_footprint(c, &c->sources[p->n]);
+	p->n++;
+}
+
+/* What is rendered this time: the rest, the new entries, the turned. */
+static int render_parts(struct cache *c, struct renderer *r, const struct scene *scene, struct parts *p)
+{
 	int err;
-	c->composed = false;
-	/* Everything rendered: nothing to compose. */
-	if (c->use_count == 0 && c->create_count == 0 && c->turned_count == 0 && c->canvas_count == 0) {
-		struct scene rest = sub_scene(c->rest, c->rest_count);
-		err = render_volume(r, &rest, out);
-		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
-		c->compose_us = 0;
-		return err;
-	}
-	/* A scene the renderer would hand to another engine whole is
-	 * rendered whole: its parts would each stay native. (A GL renderer
-	 * hands over any scene with a turn.) */
-	if ((r->native_prims && scene_prims(scene) > r->native_prims) ||
-	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count))) {
-		err = render_volume(r, scene, out);
-		c->mixed = true;
-		c->engine = r->stats.engine;
-		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
-		c->compose_us = 0;
-		return err;
-	}
-	unsigned n = 0;
 	c->rest_rendered = false;
-	/* Every part must come from one engine (a GL renderer may hand a
-	 * scene to its CPU fallback: too large, or for good): OR is exact
-	 * only among volumes of one. */
-	enum render_engine engine = c->prev_valid ? c->engine : 0;
-	bool mixed = false;
 	if (c->rest_count) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
 		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
 			return err;
-		c->sources[n] = (struct compose_source){ .vol = c->rest_vol };
-		add_footprint(c, &c->sources[n++]);
+		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, true);
 		c->rest_rendered = true;
-		mixed |= engine && r->stats.engine != engine;
-		engine = r->stats.engine;
 	}
 	for (uint32_t i = 0; i < c->create_count; i++) {
 		const struct entry *e = c->creates[i];
@@ -641,52 +643,93 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 		if (!(c->created[i] = rle_volume_encode(c->tmp)))
 			return -ENOMEM;
 		c->created_by[i] = r->stats.engine;
-		mixed |= engine && r->stats.engine != engine;
-		engine = r->stats.engine;
-		c->sources[n] = (struct compose_source){ .rle = c->created[i] };
-		add_footprint(c, &c->sources[n++]);
+		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, r->stats.engine, true);
 	}
 	if ((err = render_turned(c, r, scene)) < 0)
 		return err;
-	if (c->turned_rendered) {
-		c->sources[n] = (struct compose_source){ .vol = c->turned_vol };
-		add_footprint(c, &c->sources[n++]);
-		mixed |= engine && engine != RENDER_ENGINE_CPU;
-		engine = RENDER_ENGINE_CPU;
-	}
-	int64_t t1 = now_ns();
-	for (uint32_t i = 0; i < c->use_count; i++) {
-		mixed |= engine && c->uses[i]->engine != engine;
-		engine = c->uses[i]->engine;
-		c->sources[n++] = (struct compose_source){ .rle = c->uses[i]->vol };
-	}
-	c->mixed = mixed;
-	if (mixed) {
-		/* The whole scene, as the renderer renders it; what came from
-		 * another engine is dropped afterwards (cache_done()). */
-		err = render_volume(r, scene, out);
-		c->engine = r->stats.engine;
-		c->render_us = (uint32_t)((now_ns() - t0) / 1000);
-		c->compose_us = 0;
+	if (c->turned_rendered) /* halftoned as the CPU renderer does */
+		add_part(c, p, (struct compose_source){ .vol = c->turned_vol }, RENDER_ENGINE_CPU, true);
+	return 0;
+}
+
+int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
+{
+	if (!c->planned)
+		return render_volume(r, scene, out);
+	int64_t t0 = now_ns();
+	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
+	/* Nothing from the cache; or a scene the renderer would hand to
+	 * another engine whole (a GL renderer, one with a turn or too
+	 * large), whose parts would each stay native. */
+	if ((!c->use_count && !c->create_count && !c->turned_count && !c->canvas_count) ||
+	    (r->native_prims && scene_prims(scene) > r->native_prims) ||
+	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count)))
+		return render_whole(c, r, scene, out, t0);
+	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
+	int err = render_parts(c, r, scene, &p);
+	if (err < 0)
 		return err;
-	}
-	c->engine = engine;
+	int64_t t1 = now_ns();
+	for (uint32_t i = 0; i < c->use_count; i++)
+		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
+	if (p.mixed)
+		return render_whole(c, r, scene, out, t0);
+	c->engine = p.engine;
 	/* The last composition, patched where something may have changed
 	 * (or composed whole when there is none), then handed out. */
 	if (c->prev_valid)
-		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, n);
+		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, p.n);
 	else
-		err = compose_volumes(c->compose, c->prev, c->sources, n);
+		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
 	if (err == 0)
 		err = volume_copy(out, c->prev);
 	c->composed = err == 0;
-	int64_t t2 = now_ns();
 	c->render_us = (uint32_t)((t1 - t0) / 1000);
-	c->compose_us = (uint32_t)((t2 - t1) / 1000);
+	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);
 	return err;
 }
 
 /* ---- after ---- */
+
+/* The volumes and canvases the render made for new entries: kept, unless
+ * the volume was rendered whole by another engine than made them (or
+ * discard). */
+static void keep_made(struct cache *c, bool discard)
+{
+	for (uint32_t i = 0; i < c->create_count; i++) {
+		if (discard || (c->whole && c->created_by[i] != c->engine)) {
+			rle_volume_free(c->created[i]);
+		} else {
+			c->creates[i]->vol = c->created[i];
+			c->creates[i]->engine = c->created_by[i];
+			c->stats.creates++;
+		}
+		c->created[i] = NULL;
+	}
+	for (uint32_t i = 0; i < c->canvas_count; i++) {
+		if (discard || (c->whole && c->engine != RENDER_ENGINE_CPU)) {
+			rle_volume_free(c->made_canvas[i]);
+		} else {
+			c->canvases[i]->canvas = c->made_canvas[i];
+			c->stats.creates++;
+		}
+		c->made_canvas[i] = NULL;
+	}
+}
+
+/* What the new composition holds; what was rendered with the rest or
+ * turned is composed anew next time wherever it was. */
+static void mark_composition(struct cache *c)
+{
+	for (uint32_t i = 0; i < c->use_count; i++)
+		c->uses[i]->in_prev = true;
+	for (uint32_t i = 0; i < c->create_count; i++)
+		c->creates[i]->in_prev = true;
+	if (c->rest_rendered)
+		add_footprint(c, &(struct compose_source){ .vol = c->rest_vol });
+	if (c->turned_rendered)
+		add_footprint(c, &(struct compose_source){ .vol = c->turned_vol });
+}
 
 void cache_done(struct cache *c, int result)
 {
@@ -697,64 +740,23 @@ void cache_done(struct cache *c, int result)
 		c->entries[i]->in_prev = false;
 	memset(c->dirty, 0, (size_t)c->prev->image_count * c->prev->mask_bytes);
 	c->prev_valid = result == 0 && c->composed;
-	if (result < 0) {
-		/* Nothing of this render is trusted: the next composition is
-		 * made whole, the entries to be made are not. */
-		for (uint32_t i = 0; i < c->create_count; i++) {
-			rle_volume_free(c->created[i]);
-			c->created[i] = NULL;
-		}
-		for (uint32_t i = 0; i < c->canvas_count; i++) {
-			rle_volume_free(c->made_canvas[i]);
-			c->made_canvas[i] = NULL;
-		}
+	/* A failed render: nothing of it is trusted, the next composition
+	 * is made whole. */
+	keep_made(c, result < 0);
+	if (result < 0)
 		return;
-	}
-	if (c->mixed) {
-		/* Rendered whole after all: nothing came from the cache. */
+	if (c->whole) {
+		/* Nothing came from the cache after all, and only what the
+		 * renderer's engine now gives may be composed. */
 		c->stats.hits -= c->use_count + c->turned_count;
 		c->stats.turned -= c->turned_count;
 		c->stats.misses += c->use_count + c->turned_count;
-		/* Only what the renderer's engine now gives may be composed. */
 		for (uint32_t i = 0; i < c->count; i++)
 			if (c->entries[i]->vol && c->entries[i]->engine != c->engine)
 				drop_volume(c, c->entries[i]);
 	}
-	for (uint32_t i = 0; i < c->create_count; i++) {
-		if (c->mixed && c->created_by[i] != c->engine) {
-			rle_volume_free(c->created[i]);
-		} else {
-			c->creates[i]->vol = c->created[i];
-			c->creates[i]->engine = c->created_by[i];
-			c->stats.creates++;
-		}
-		c->created[i] = NULL;
-	}
-	for (uint32_t i = 0; i < c->canvas_count; i++) {
-		if (c->mixed && c->engine != RENDER_ENGINE_CPU) {
-			rle_volume_free(c->made_canvas[i]);
-		} else {
-			c->canvases[i]->canvas = c->made_canvas[i];
-			c->stats.creates++;
-		}
-		c->made_canvas[i] = NULL;
-	}
-	if (c->prev_valid) {
-		/* What the composition holds; the rest is composed anew next
-		 * time wherever it was. */
-		for (uint32_t i = 0; i < c->use_count; i++)
-			c->uses[i]->in_prev = true;
-		for (uint32_t i = 0; i < c->create_count; i++)
-			c->creates[i]->in_prev = true;
-		if (c->rest_rendered) {
-			struct compose_source rest = { .vol = c->rest_vol };
-			add_footprint(c, &rest);
-		}
-		if (c->turned_rendered) {
-			struct compose_source turned = { .vol = c->turned_vol };
-			add_footprint(c, &turned);
-		}
-	}
+	if (c->prev_valid)
+		mark_composition(c);
 	c->stats.last_rendered = c->rest_objects + c->create_count + c->canvas_count;
 	c->stats.last_reused = c->use_count + c->turned_count;
 	c->stats.last_render_us = c->render_us;

@@ -18,7 +18,7 @@
  * vertices; their image range is shifted by the turn (mod M) and the turn
  * is kept beside each (prim_turn), from which the renderer takes the image
  * whose wedge it sections by and whether it writes mirrored
- * (bin_turn_source()). Points are shifted and mirrored at binning. */
+ * (geometry_turn_source()). Points are shifted and mirrored at binning. */
 #ifndef SPINDLE_BIN_H
 #define SPINDLE_BIN_H
 
@@ -132,16 +132,6 @@ static inline void bin_point_columns(const struct bin_point *p, uint32_t n, uint
 	uint32_t before = size / 2, after = (size - 1) / 2;
 	*lo = p->u > before ? p->u - before : 0;
 	*hi = p->u + after < n ? p->u + after : n - 1;
-}
-
-/* The volume image whose unturned content a primitive with turn t (mod N)
- * shows in volume image k, and in *mirror whether mirrored (u -> W-1-u):
- * j = k - t mod N; on a mirrored device j >= M is image j - M mirrored. */
-static inline uint32_t bin_turn_source(const struct bin_set *b, uint32_t k, uint32_t t, bool *mirror)
-{
-	uint32_t j = k >= t ? k - t : k + b->geom.images_per_rev - t;
-	*mirror = j >= b->images; /* never unmirrored: M = N */
-	return *mirror ? j - b->images : j;
 }
 
 static inline int bin_prim_in_image(const struct bin_set *b, const struct bin_prim *p, uint32_t k)

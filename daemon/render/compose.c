@@ -191,6 +191,7 @@ struct compose {
 	struct geometry geom;
 	halftone_fn halftone;
 	struct halftone_table *thr; /* per volume image, made once */
+	uint8_t *all_dirty;         /* every tile of every image: compose_volumes() */
 	const struct turned_source *turned;
 	/* Patching: the sources with tiles in image k are img_src[img_first[k]
 	 * .. img_first[k + 1]). */
@@ -227,6 +228,11 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 		goto fail;
 	for (uint32_t k = 0; k < c->image_count; k++)
 		halftone_table_init(&c->thr[k], k);
+	if (!(c->all_dirty = calloc(c->image_count, c->mask_bytes)))
+		goto fail;
+	for (uint32_t k = 0; k < c->image_count; k++)
+		for (uint32_t t = 0; t < c->tiles_per_image; t++)
+			c->all_dirty[(size_t)k * c->mask_bytes + t / 8] |= (uint8_t)(1u << (t % 8));
 	c->w = calloc(c->workers, sizeof(*c->w));
 	if (!c->w)
 		goto fail;
@@ -253,6 +259,7 @@ void compose_destroy(struct compose *c)
 	}
 	free(c->w);
 	free(c->thr);
+	free(c->all_dirty);
 	free(c->img_first);
 	free(c->img_src);
 	volume_destroy(c->tmp);
@@ -264,13 +271,6 @@ static void or_tile(uint8_t *dst, const uint8_t *src)
 	for (size_t i = 0; i < VOLUME_TILE_BYTES; i++)
 		dst[i] |= src[i];
 }
-
-/* The tile numbers a mask holds, in order: calls fn for the i-th stored
- * tile. */
-#define FOR_EACH_TILE(mask, mask_bytes, t, i)                          \
-	for (uint32_t byte_ = 0, i = 0; byte_ < (mask_bytes); byte_++) \
-		for (uint32_t bits_ = (mask)[byte_], t;                \
-		     bits_ && ((t = byte_ * 8 + (uint32_t)__builtin_ctz(bits_)), 1); bits_ &= bits_ - 1, i++)
 
 /* The touched tiles of w's dense image, in order, as image k of c->out
  * (count of them), leaving the dense image zero. */
@@ -332,46 +332,6 @@ static int run_images(struct compose *c, struct volume *out, image_fn fn)
 	return err;
 }
 
-/* Image k of every source ORed into w's dense image, then packed into out. */
-static int compose_image(struct compose *c, struct compose_worker *w, uint32_t k)
-{
-	uint32_t count = 0;
-	for (unsigned s = 0; s < c->n; s++) {
-		const struct compose_source *src = &c->src[s];
-		if (src->vol) {
-			const struct volume_image *img = &src->vol->images[k];
-			if (!img->tile_count)
-				continue;
-			FOR_EACH_TILE(img->mask, c->mask_bytes, t, i)
-			{
-				count += !w->touched[t];
-				w->touched[t] = 1;
-				or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES,
-					img->tiles + (size_t)i * VOLUME_TILE_BYTES);
-			}
-		} else {
-			const struct rle_image *img = &src->rle->images[k];
-			if (!img->tile_count)
-				continue;
-			size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
-			const uint8_t *code = img->data + head;
-			size_t avail = img->len - head;
-			FOR_EACH_TILE(img->data, c->mask_bytes, t, i)
-			{
-				(void)i;
-				count += !w->touched[t];
-				w->touched[t] = 1;
-				size_t used = or_coded_tile(code, avail, w->tiles + (size_t)t * VOLUME_TILE_BYTES);
-				if (!used)
-					return -EINVAL;
-				code += used;
-				avail -= used;
-			}
-		}
-	}
-	return emit_image(c, w, k, count);
-}
-
 static int check_sources(const struct compose *c, const struct volume *out, const struct compose_source *src,
 			 unsigned n)
 {
@@ -390,17 +350,6 @@ static int check_sources(const struct compose *c, const struct volume *out, cons
 	return 0;
 }
 
-int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n)
-{
-	int err = check_sources(c, out, src, n);
-	if (err < 0)
-		return err;
-	volume_clear(out);
-	c->src = src;
-	c->n = n;
-	return run_images(c, out, compose_image);
-}
-
 /* ---- patching ---- */
 
 static bool bit(const uint8_t *mask, uint32_t t)
@@ -415,18 +364,13 @@ static const uint8_t *source_mask(const struct compose_source *s, uint32_t k)
 	return s->rle->images[k].tile_count ? s->rle->images[k].data : NULL;
 }
 
-/* The stored tiles of mask before tile t, by 64-bit words. */
-static uint32_t count_before(const uint8_t *mask, uint32_t mask_bytes, uint32_t t)
+/* The codes of a coded image's tiles (after its mask and offsets), and
+ * how many bytes of them. */
+static const uint8_t *rle_codes(const struct compose *c, const struct rle_image *img, size_t *avail)
 {
-	uint32_t n = 0, b = 0;
-	for (; b + 8 <= t / 8; b += 8) {
-		uint64_t v;
-		memcpy(&v, mask + b, 8);
-		n += (uint32_t)__builtin_popcountll(v);
-	}
-	for (; b < t / 8; b++)
-		n += (uint32_t)__builtin_popcount(mask[b]);
-	return n + (uint32_t)__builtin_popcount(mask[t / 8] & ((1u << (t % 8)) - 1));
+	size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+	*avail = img->len - head;
+	return img->data + head;
 }
 
 /* ORs source s's tiles of image k that lie in dirty into w's dense image. */
@@ -436,14 +380,11 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 	const uint8_t *mask = source_mask(s, k);
 	const uint8_t *tiles = s->vol ? s->vol->images[k].tiles : NULL;
 	const struct rle_image *img = s->rle ? &s->rle->images[k] : NULL;
-	size_t head = img ? c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t) : 0;
-	for (uint32_t b = 0; b < c->mask_bytes; b++) {
-		uint32_t both = mask[b] & dirty[b];
-		if (!both)
-			continue;
-		/* The stored index of the first tile of this byte. */
-		uint32_t base = count_before(mask, c->mask_bytes, b * 8);
-		for (; both; both &= both - 1) {
+	size_t avail = 0;
+	const uint8_t *codes = img ? rle_codes(c, img, &avail) : NULL;
+	uint32_t base = 0; /* the stored index of the first tile of byte b */
+	for (uint32_t b = 0; b < c->mask_bytes; base += (uint32_t)__builtin_popcount(mask[b]), b++) {
+		for (uint32_t both = mask[b] & dirty[b]; both; both &= both - 1) {
 			uint32_t bitno = (uint32_t)__builtin_ctz(both), t = b * 8 + bitno;
 			uint32_t i = base + (uint32_t)__builtin_popcount(mask[b] & ((1u << bitno) - 1));
 			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
@@ -454,8 +395,7 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 			}
 			uint32_t off;
 			memcpy(&off, img->data + c->mask_bytes + i * sizeof(uint32_t), sizeof(off));
-			if (head + off >= img->len ||
-			    !or_coded_tile(img->data + head + off, img->len - head - off, dst))
+			if (off >= avail || !or_coded_tile(codes + off, avail - off, dst))
 				return -EINVAL;
 		}
 	}
@@ -569,6 +509,16 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
 	return run_images(c, vol, patch_image);
 }
 
+/* A composition from nothing is a patch of an empty volume where every
+ * tile is dirty. */
+int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n)
+{
+	if (out->image_count != c->image_count)
+		return -EINVAL;
+	volume_clear(out);
+	return compose_patch(c, out, c->all_dirty, src, n);
+}
+
 void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src)
 {
 	for (uint32_t k = 0; k < image_count; k++) {
@@ -597,55 +547,56 @@ static void mirror_canvas(const uint8_t *src, uint8_t *dst)
 	}
 }
 
+/* A turned source's coded canvas tile t (of code, avail bytes), mirrored
+ * when asked, halftoned at image k's phase and ORed into w's dense image;
+ * *count counts the tiles newly touched. Returns the coded bytes read, 0
+ * when the code is broken. */
+static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t t, bool mirror,
+			const uint8_t *code, size_t avail, uint32_t *count)
+{
+	uint8_t buf[CANVAS_TILE_BYTES], mirrored[HALFTONE_TILE_BYTES], packed[VOLUME_TILE_BYTES];
+	memset(buf, 0, sizeof(buf));
+	size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+	if (!used)
+		return 0;
+	uint32_t rows;
+	memcpy(&rows, buf, sizeof(rows));
+	const uint8_t *canvas = buf + sizeof(rows);
+	if (mirror) {
+		uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+		mirror_canvas(canvas, mirrored);
+		canvas = mirrored;
+		t = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
+	}
+	if (c->halftone(canvas, rows, &c->thr[k], packed)) {
+		*count += !w->touched[t];
+		w->touched[t] = 1;
+		or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);
+	}
+	return used;
+}
+
 /* Image k of every turned source into w's dense image, then packed into
  * c->out. */
 static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
-	uint32_t n_img = c->geom.images_per_rev, m_img = c->image_count;
-	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
-	uint8_t buf[CANVAS_TILE_BYTES], mirrored[HALFTONE_TILE_BYTES], packed[VOLUME_TILE_BYTES];
 	uint32_t count = 0;
 	for (unsigned s = 0; s < c->n; s++) {
-		const struct rle_volume *cv = c->turned[s].canvas;
-		int64_t j = (int64_t)k - (int64_t)(c->turned[s].turn % n_img);
-		bool mirror = false;
-		if (c->geom.mirrored) {
-			while (j < 0) {
-				j += m_img;
-				mirror = !mirror;
-			}
-		} else if (j < 0) {
-			j += n_img;
-		}
-		const struct rle_image *img = &cv->images[j];
+		bool mirror;
+		uint32_t j = geometry_turn_source(&c->geom, k, c->turned[s].turn % c->geom.images_per_rev, &mirror);
+		const struct rle_image *img = &c->turned[s].canvas->images[j];
 		if (!img->tile_count)
 			continue;
-		size_t head = c->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
-		const uint8_t *code = img->data + head;
-		size_t avail = img->len - head;
-		FOR_EACH_TILE(img->data, c->mask_bytes, t, i)
-		{
-			(void)i;
-			memset(buf, 0, sizeof(buf));
-			size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+		size_t avail;
+		const uint8_t *code = rle_codes(c, img, &avail);
+		for (uint32_t t = 0; t < c->tiles_per_image; t++) {
+			if (!bit(img->data, t))
+				continue;
+			size_t used = turn_tile(c, w, k, t, mirror, code, avail, &count);
 			if (!used)
 				return -EINVAL;
 			code += used;
 			avail -= used;
-			uint32_t rows;
-			memcpy(&rows, buf, sizeof(rows));
-			const uint8_t *canvas = buf + sizeof(rows);
-			uint32_t to = t;
-			if (mirror) {
-				mirror_canvas(canvas, mirrored);
-				canvas = mirrored;
-				to = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
-			}
-			if (!c->halftone(canvas, rows, &c->thr[k], packed))
-				continue;
-			count += !w->touched[to];
-			w->touched[to] = 1;
-			or_tile(w->tiles + (size_t)to * VOLUME_TILE_BYTES, packed);
 		}
 	}
 	return emit_image(c, w, k, count);

@@ -6,7 +6,7 @@
  * canvas, and halftone and pack only the tiles something touched. A turned
  * draw's primitives are sectioned by the wedge of the image they show
  * unturned, and written mirrored where that image is shown mirrored
- * (scene.h, bin_turn_source()). */
+ * (scene.h, geometry_turn_source()). */
 #include "render_cpu.h"
 
 #include <errno.h>
@@ -133,7 +133,7 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 				section_prim(c, &r->wedges[k], (const double(*)[3])v, p->nverts, p->rgb);
 			} else { /* what it lights unturned in its source image */
 				bool mirror;
-				uint32_t src = bin_turn_source(b, k, b->prim_turn[i], &mirror);
+				uint32_t src = geometry_turn_source(&r->base.geom, k, b->prim_turn[i], &mirror);
 				section_prim_mirror(c, &r->wedges[src], (const double(*)[3])v, p->nverts, p->rgb,
 						    mirror);
 			}
