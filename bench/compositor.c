@@ -14,6 +14,7 @@
 #include "cache.h"
 #include "draw.h"
 #include "log.h"
+#include "pool.h"
 #include "render.h"
 #include "rng.h"
 #include "scenes.h"
@@ -254,7 +255,10 @@ int main(int argc, char **argv)
 	}
 	log_set_level(LOG_LEVEL_WARN);
 	struct renderer *r = render_cpu_create(&g, 0);
-	struct cache *cache = cache_create(&g, 256ull << 20, NULL, true);
+	/* The cache composes on a pool of its own, as the daemon's pipeline
+	 * gives it. */
+	struct pool *pool = pool_create(r ? r->stats.threads : 1);
+	struct cache *cache = pool ? cache_create(&g, 256ull << 20, pool, true) : NULL;
 	if (!r || !cache)
 		return 1;
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
@@ -300,7 +304,7 @@ int main(int argc, char **argv)
 		snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
 		row("dragon (static) + icosahedron", "cache", &res, note);
 		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, NULL, true);
+		cache = cache_create(&g, 256ull << 20, pool, true);
 		bscene_free(b);
 
 		/* Turntable: one image step per volume. */
@@ -311,7 +315,7 @@ int main(int argc, char **argv)
 		measure(r, cache, b, animate_turntable, &g, &o, &res);
 		row("dragon turning one image a volume", "cache", &res, "");
 		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, NULL, true);
+		cache = cache_create(&g, 256ull << 20, pool, true);
 		bscene_free(b);
 	} else {
 		printf("\n(no dragon: %s)\n", o.dragon ? err : "give dragon_vrip.ply");
@@ -344,6 +348,7 @@ int main(int argc, char **argv)
 	free(orb);
 	bench_scene_free(&dragon);
 	cache_destroy(cache);
+	pool_destroy(pool);
 	render_destroy(r);
 	vbuf_free(&ico);
 	return 0;

@@ -51,17 +51,20 @@ void volume_clear(struct volume *vol)
 		vol->images[k].tile_count = vol->images[k].next_tile = 0;
 	vol->seq = 0;
 	vol->shown_ns = 0;
+	vol->origin = 0;
 }
 
 void volume_image_clear(struct volume *vol, uint32_t k)
 {
 	memset(vol->images[k].mask, 0, vol->mask_bytes);
 	vol->images[k].tile_count = vol->images[k].next_tile = 0;
+	vol->origin = 0;
 }
 
 void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint32_t kb)
 {
 	struct volume_image *x = &a->images[ka], *y = &b->images[kb];
+	a->origin = b->origin = 0;
 	/* The masks stay where they are (one block per volume); their bytes
 	 * move. */
 	for (uint32_t i = 0; i < a->mask_bytes; i++) {
@@ -100,10 +103,16 @@ int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n)
 
 static int all_zero(const uint8_t *p, size_t n)
 {
-	for (size_t i = 0; i < n; i++)
-		if (p[i])
-			return 0;
-	return 1;
+	uint64_t any = 0;
+	size_t i = 0;
+	for (; i + 8 <= n; i += 8) {
+		uint64_t w;
+		memcpy(&w, p + i, sizeof(w));
+		any |= w;
+	}
+	for (; i < n; i++)
+		any |= p[i];
+	return any == 0;
 }
 
 int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *data)
@@ -140,6 +149,25 @@ int volume_image_push(struct volume *vol, uint32_t k, uint32_t t)
 	img->tile_count++;
 	img->next_tile = t + 1;
 	img->mask[t / 8] |= (uint8_t)(1u << (t % 8));
+	vol->origin = 0;
+	return 0;
+}
+
+int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
+{
+	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes || k >= src->image_count)
+		return -EINVAL;
+	const struct volume_image *s = &src->images[k];
+	struct volume_image *d = &dst->images[k];
+	int r = volume_image_reserve(dst, k, s->tile_count);
+	if (r < 0)
+		return r;
+	memcpy(d->mask, s->mask, src->mask_bytes);
+	if (s->tile_count)
+		memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
+	d->tile_count = s->tile_count;
+	d->next_tile = s->next_tile;
+	dst->origin = 0;
 	return 0;
 }
 
@@ -148,19 +176,13 @@ int volume_copy(struct volume *dst, const struct volume *src)
 	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes)
 		return -EINVAL;
 	for (uint32_t k = 0; k < src->image_count; k++) {
-		const struct volume_image *s = &src->images[k];
-		struct volume_image *d = &dst->images[k];
-		int r = volume_image_reserve(dst, k, s->tile_count);
+		int r = volume_copy_image(dst, k, src);
 		if (r < 0)
 			return r;
-		memcpy(d->mask, s->mask, src->mask_bytes);
-		if (s->tile_count)
-			memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
-		d->tile_count = s->tile_count;
-		d->next_tile = s->next_tile;
 	}
 	dst->seq = src->seq;
 	dst->shown_ns = src->shown_ns;
+	dst->origin = 0;
 	return 0;
 }
 
@@ -203,8 +225,8 @@ int volume_pixel(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, i
 		return 0;
 	uint32_t idx = 0;
 	for (uint32_t b = 0; b < t / 8; b++)
-		idx += (uint32_t)__builtin_popcount(img->mask[b]);
-	idx += (uint32_t)__builtin_popcount(img->mask[t / 8] & ((1u << (t % 8)) - 1));
+		idx += volume_mask_bits(img->mask[b]);
+	idx += volume_mask_bits(img->mask[t / 8] & ((1u << (t % 8)) - 1));
 	const uint8_t *plane = img->tiles + (size_t)idx * VOLUME_TILE_BYTES + c * VOLUME_TILE_PLANE_BYTES;
 	uint32_t x = u % VOLUME_TILE, y = v % VOLUME_TILE;
 	return (plane[y * 4 + x / 8] >> (7 - x % 8)) & 1;
@@ -221,4 +243,12 @@ uint64_t volume_tile_count(const struct volume *vol)
 uint64_t volume_sparse_bytes(const struct volume *vol)
 {
 	return (uint64_t)vol->image_count * vol->mask_bytes + volume_tile_count(vol) * VOLUME_TILE_BYTES;
+}
+
+uint64_t volume_held_bytes(const struct volume *vol)
+{
+	uint64_t b = (uint64_t)vol->image_count * (sizeof(*vol->images) + vol->mask_bytes);
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		b += (uint64_t)vol->images[k].tile_cap * VOLUME_TILE_BYTES;
+	return b;
 }

@@ -35,6 +35,10 @@ struct volume {
 	uint32_t mask_bytes; /* ceil(tiles_x * tiles_y / 8) */
 	uint64_t seq;        /* volume sequence number */
 	uint64_t shown_ns;   /* CLOCK_MONOTONIC when first shown, 0 if never */
+	/* What a writer may mark its contents with, to know them again
+	 * (the object cache's compositions); every change through the calls
+	 * below resets it to 0. */
+	uint64_t origin;
 	struct volume_image *images;
 };
 
@@ -50,6 +54,15 @@ void volume_clear(struct volume *vol);
 static inline uint32_t volume_tiles_per_image(const struct volume *vol)
 {
 	return vol->tiles_x * vol->tiles_y;
+}
+
+/* Set bits of a mask byte (without the library call __builtin_popcount
+ * becomes where the CPU baseline has no POPCNT instruction). */
+static inline uint32_t volume_mask_bits(uint32_t byte)
+{
+	byte = byte - ((byte >> 1) & 0x55);
+	byte = (byte & 0x33) + ((byte >> 2) & 0x33);
+	return (byte + (byte >> 4)) & 0x0f;
 }
 
 static inline int volume_tile_present(const struct volume_image *img, uint32_t t)
@@ -81,6 +94,9 @@ void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint
 
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
 int volume_copy(struct volume *dst, const struct volume *src);
+/* Image k of src copied into image k of dst (same geometry); nothing
+ * else. 0 or -ENOMEM/-EINVAL. */
+int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src);
 
 /* Bytes of image k if stored dense: 3 planes of H rows of ceil(W/8). */
 size_t volume_dense_image_bytes(const struct volume *vol);
@@ -95,5 +111,8 @@ int volume_pixel(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, i
 /* Total stored tiles, and the sparse payload bytes (masks + tiles). */
 uint64_t volume_tile_count(const struct volume *vol);
 uint64_t volume_sparse_bytes(const struct volume *vol);
+/* Bytes the volume holds in memory: its images, masks and tile storage
+ * (what it has room for, not only what is stored). */
+uint64_t volume_held_bytes(const struct volume *vol);
 
 #endif

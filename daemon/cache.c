@@ -1,13 +1,16 @@
 /* The object cache and compositor (cache.h). */
 #include "cache.h"
+#include "cache_priv.h"
 
 #include <errno.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "batch.h"
 #include "compose.h"
 #include "draw.h"
 #include "log.h"
+#include "pool.h"
 #include "renderer.h"
 #include "snapshot.h"
 #include "volume.h"
@@ -26,83 +29,6 @@
  * its entry goes. */
 #define IDLE_VOLUMES 24
 
-enum role {
-	ROLE_REST,   /* rendered with every other object not cached */
-	ROLE_CREATE, /* rendered alone; its volume kept */
-	ROLE_USE,    /* composed from its volume */
-	ROLE_CANVAS, /* rendered alone, unturned, before the halftone; its canvas kept, then as ROLE_TURNED */
-	ROLE_TURNED, /* composed from its canvas, turned (compose_turned()) */
-};
-
-struct entry {
-	uint64_t key;
-	uint8_t reuse;       /* volumes in a row it came unchanged, saturating */
-	uint8_t backoff;     /* times its cached volume was dropped for a change, saturating */
-	uint8_t hits;        /* hits of its cached volume, saturating at PAYOFF_HITS */
-	uint8_t absent;      /* volumes in a row it was not in the scene */
-	bool seen;           /* in the scene being planned */
-	bool in_prev;        /* its volume is in the last composition */
-	enum role role;      /* in the plan */
-	uint32_t first_draw; /* in the planned scene */
-	uint64_t last_used;  /* the plan that last composed it */
-	/* What it draws (copies of the scene's draws, with references to
-	 * their vertex data so that identity means equality). */
-	struct scene_draw *draws;
-	struct vdata **refs;
-	uint32_t draw_count;
-	struct rle_volume *vol;    /* its rendered volume, or NULL */
-	enum render_engine engine; /* what rendered it */
-	/* Its render unturned, before the halftone (the CPU renderer's
-	 * canvas), or NULL: an object that only turns about the axis by
-	 * whole images is composed from it (cache.h). */
-	struct rle_volume *canvas;
-	uint32_t turn; /* its draws' turn in the planned scene */
-};
-
-struct cache {
-	struct geometry geom;
-	uint64_t budget;
-	struct compose *compose;
-	/* Entries, sorted by key. */
-	struct entry **entries;
-	uint32_t count, cap;
-	/* The last composition (what cache_render() last handed out), valid
-	 * or not, and per image the tiles of it that may have changed since:
-	 * where objects left it, where the rest was, where new ones come. */
-	struct volume *prev;
-	bool prev_valid, composed, rest_rendered;
-	uint8_t *dirty; /* image_count * mask_bytes */
-	/* The plan, made by cache_plan() for cache_render(). */
-	bool planned;
-	uint64_t plan_seq;
-	struct entry **uses, **creates;
-	uint32_t use_count, create_count, array_cap;
-	struct scene_draw *rest;
-	uint32_t rest_count, rest_cap, rest_objects;
-	/* Turns: whether objects are composed turned from canvases (the
-	 * renderer renders canvases, compose_turned() can turn them); the
-	 * entries composed so (turneds) and those whose canvas the render
-	 * makes first (canvases, made into made_canvas). */
-	bool turns;
-	struct entry **turneds, **canvases;
-	uint32_t turned_count, canvas_count;
-	struct rle_volume **made_canvas;
-	struct turned_source *turned_src;
-	struct volume *turned_vol;   /* what they light this volume */
-	struct scene_draw *unturned; /* a canvas entry's draws with turn 0 */
-	uint32_t unturned_cap;
-	bool turned_rendered;
-	struct rle_volume **created;    /* creates[i]'s volume, made by the render */
-	enum render_engine *created_by; /* and what rendered it */
-	bool whole;                     /* the last volume was rendered whole, not composed */
-	enum render_engine engine;      /* of the last composition, or of the whole render */
-	struct volume *rest_vol, *tmp;
-	struct compose_source *sources;
-	uint32_t source_cap;
-	uint32_t render_us, compose_us; /* of the last render */
-	struct cache_stats stats;
-};
-
 struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool, bool turns)
 {
 	struct cache *c = calloc(1, sizeof(*c));
@@ -111,14 +37,17 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->geom = *geom;
 	c->budget = budget;
 	c->compose = compose_create(geom, pool);
+	c->pool = pool;
 	c->turns = turns && c->compose && compose_can_turn(c->compose);
 	c->turned_vol = volume_create(geom);
 	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
-	if (c->prev)
+	if (c->prev) {
 		c->dirty = calloc(c->prev->image_count, c->prev->mask_bytes);
-	if (!c->compose || !c->prev || !c->dirty || !c->rest_vol || !c->tmp || !c->turned_vol) {
+		c->changed = calloc(CHANGED_HISTORY, c->prev->image_count);
+	}
+	if (!c->compose || !c->prev || !c->dirty || !c->changed || !c->rest_vol || !c->tmp || !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -126,7 +55,7 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	return c;
 }
 
-static void add_footprint(struct cache *c, const struct compose_source *src)
+void cache_add_footprint(struct cache *c, const struct compose_source *src)
 {
 	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
 }
@@ -137,7 +66,7 @@ static void leave_composition(struct cache *c, struct entry *e)
 {
 	if (!e->in_prev)
 		return;
-	add_footprint(c, &(struct compose_source){ .rle = e->vol });
+	cache_add_footprint(c, &(struct compose_source){ .rle = e->vol });
 	e->in_prev = false;
 }
 
@@ -196,10 +125,13 @@ void cache_destroy(struct cache *c)
 	free(c->creates);
 	free(c->created);
 	free(c->created_by);
+	free(c->batched);
+	batch_destroy(c->batch);
 	free(c->rest);
 	free(c->sources);
 	volume_destroy(c->prev);
 	free(c->dirty);
+	free(c->changed);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);
@@ -298,14 +230,6 @@ static uint8_t sat_inc(uint8_t v, uint8_t max)
 }
 
 /* Tile storage a volume has allocated. */
-static uint64_t volume_held(const struct volume *v)
-{
-	uint64_t b = (uint64_t)v->image_count * (sizeof(*v->images) + v->mask_bytes);
-	for (uint32_t k = 0; k < v->image_count; k++)
-		b += (uint64_t)v->images[k].tile_cap * VOLUME_TILE_BYTES;
-	return b;
-}
-
 /* Bytes held now against the budget: the coded volumes and the
  * bookkeeping. (The volumes it renders and composes into, the last
  * composition among them, are working storage the size of a volume or
@@ -354,7 +278,7 @@ static void evict_to(struct cache *c, uint64_t target)
 
 /* *pp (a pointer to an array) resized to n elements of size bytes; false
  * when out of memory, *pp untouched. */
-static bool resize(void *pp, size_t n, size_t size)
+bool cache_resize(void *pp, size_t n, size_t size)
 {
 	void **p = pp;
 	void *q = realloc(*p, n * size);
@@ -372,11 +296,15 @@ static int grow_plan(struct cache *c, uint32_t objects)
 	while (cap < objects)
 		cap *= 2;
 	/* The sources: every object's volume, the rest's and the turned. */
-	if (!resize(&c->uses, cap, sizeof(*c->uses)) || !resize(&c->creates, cap, sizeof(*c->creates)) ||
-	    !resize(&c->created, cap, sizeof(*c->created)) || !resize(&c->created_by, cap, sizeof(*c->created_by)) ||
-	    !resize(&c->turneds, cap, sizeof(*c->turneds)) || !resize(&c->canvases, cap, sizeof(*c->canvases)) ||
-	    !resize(&c->made_canvas, cap, sizeof(*c->made_canvas)) ||
-	    !resize(&c->turned_src, cap, sizeof(*c->turned_src)) || !resize(&c->sources, cap + 2, sizeof(*c->sources)))
+	if (!cache_resize(&c->uses, cap, sizeof(*c->uses)) || !cache_resize(&c->creates, cap, sizeof(*c->creates)) ||
+	    !cache_resize(&c->created, cap, sizeof(*c->created)) ||
+	    !cache_resize(&c->created_by, cap, sizeof(*c->created_by)) ||
+	    !cache_resize(&c->batched, cap, sizeof(*c->batched)) ||
+	    !cache_resize(&c->turneds, cap, sizeof(*c->turneds)) ||
+	    !cache_resize(&c->canvases, cap, sizeof(*c->canvases)) ||
+	    !cache_resize(&c->made_canvas, cap, sizeof(*c->made_canvas)) ||
+	    !cache_resize(&c->turned_src, cap, sizeof(*c->turned_src)) ||
+	    !cache_resize(&c->sources, cap + 2, sizeof(*c->sources)))
 		return -ENOMEM;
 	c->source_cap = cap + 2;
 	c->array_cap = cap;
@@ -389,7 +317,7 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 		uint32_t cap = c->rest_cap ? c->rest_cap : 64;
 		while (cap < c->rest_count + n)
 			cap *= 2;
-		if (!resize(&c->rest, cap, sizeof(*c->rest)))
+		if (!cache_resize(&c->rest, cap, sizeof(*c->rest)))
 			return -ENOMEM;
 		c->rest_cap = cap;
 	}
@@ -465,7 +393,7 @@ static int place(struct cache *c, struct entry *e, const struct scene_draw *draw
 	case ROLE_USE:
 		c->uses[c->use_count++] = e;
 		if (!e->in_prev) /* back in the scene */
-			add_footprint(c, &(struct compose_source){ .rle = e->vol });
+			cache_add_footprint(c, &(struct compose_source){ .rle = e->vol });
 		return 0;
 	case ROLE_CREATE:
 		c->creates[c->create_count++] = e;
@@ -536,159 +464,6 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 	return 0;
 }
 
-/* ---- the render thread ---- */
-
-static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
-{
-	return (struct scene){ .draw_count = n, .draws = draws };
-}
-
-/* The canvases to make (each object's draws with turn 0, rendered up to
- * the halftone), then every turned object composed at its turn into
- * c->turned_vol (the CPU renderer's halftone: RENDER_ENGINE_CPU). */
-static int render_turned(struct cache *c, struct renderer *r, const struct scene *scene)
-{
-	c->turned_rendered = false;
-	if (!c->turned_count && !c->canvas_count)
-		return 0;
-	unsigned n = 0;
-	for (uint32_t i = 0; i < c->canvas_count; i++) {
-		const struct entry *e = c->canvases[i];
-		if (e->draw_count > c->unturned_cap) {
-			if (!resize(&c->unturned, e->draw_count, sizeof(*c->unturned)))
-				return -ENOMEM;
-			c->unturned_cap = e->draw_count;
-		}
-		memcpy(c->unturned, scene->draws + e->first_draw, e->draw_count * sizeof(*c->unturned));
-		for (uint32_t d = 0; d < e->draw_count; d++)
-			c->unturned[d].turn = 0;
-		struct rle_volume *cv = rle_volume_new(c->prev->image_count, c->prev->mask_bytes,
-						       volume_tiles_per_image(c->prev), CANVAS_TILE_BYTES);
-		if (!cv)
-			return -ENOMEM;
-		c->made_canvas[i] = cv;
-		struct scene one = sub_scene(c->unturned, e->draw_count);
-		int err = r->impl->render_canvas(r, &one, cv);
-		if (err < 0)
-			return err;
-		c->turned_src[n++] = (struct turned_source){ .canvas = cv, .turn = e->turn };
-	}
-	for (uint32_t i = 0; i < c->turned_count; i++)
-		c->turned_src[n++] =
-			(struct turned_source){ .canvas = c->turneds[i]->canvas, .turn = c->turneds[i]->turn };
-	int err = compose_turned(c->compose, c->turned_vol, c->turned_src, n);
-	c->turned_rendered = err == 0;
-	return err;
-}
-
-/* Segments and triangles of scene, at most what binning keeps. */
-static uint64_t scene_prims(const struct scene *s)
-{
-	uint64_t n = 0;
-	for (uint32_t i = 0; i < s->draw_count; i++)
-		if (s->draws[i].prim != SCENE_POINTS)
-			n += s->draws[i].count / (s->draws[i].prim == SCENE_LINES ? 2 : 3);
-	return n;
-}
-
-/* The scene rendered whole, nothing composed; cache_done() drops what
- * another engine made. */
-static int render_whole(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out, int64_t t0)
-{
-	int err = render_volume(r, scene, out);
-	c->whole = true;
-	c->engine = r->stats.engine;
-	c->render_us = (uint32_t)((now_ns() - t0) / 1000);
-	c->compose_us = 0;
-	return err;
-}
-
-/* The sources of a composition, and whether they come from one engine
- * (a GL renderer may hand a scene to its CPU fallback: too large, or for
- * good): OR is exact only among volumes of one. */
-struct parts {
-	unsigned n;
-	enum render_engine engine; /* 0: none yet */
-	bool mixed;
-};
-
-static void add_part(struct cache *c, struct parts *p, struct compose_source src, enum render_engine engine,
-		     bool footprint)
-{
-	p->mixed |= p->engine && engine != p->engine;
-	p->engine = engine;
-	c->sources[p->n] = src;
-	if (footprint) /* new in the composition */
-		add_footprint(c, &c->sources[p->n]);
-	p->n++;
-}
-
-/* What is rendered this time: the rest, the new entries, the turned. */
-static int render_parts(struct cache *c, struct renderer *r, const struct scene *scene, struct parts *p)
-{
-	int err;
-	c->rest_rendered = false;
-	if (c->rest_count) {
-		struct scene rest = sub_scene(c->rest, c->rest_count);
-		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
-			return err;
-		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, true);
-		c->rest_rendered = true;
-	}
-	for (uint32_t i = 0; i < c->create_count; i++) {
-		const struct entry *e = c->creates[i];
-		struct scene one = sub_scene(scene->draws + e->first_draw, e->draw_count);
-		if ((err = render_volume(r, &one, c->tmp)) < 0)
-			return err;
-		if (!(c->created[i] = rle_volume_encode(c->tmp)))
-			return -ENOMEM;
-		c->created_by[i] = r->stats.engine;
-		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, r->stats.engine, true);
-	}
-	if ((err = render_turned(c, r, scene)) < 0)
-		return err;
-	if (c->turned_rendered) /* halftoned as the CPU renderer does */
-		add_part(c, p, (struct compose_source){ .vol = c->turned_vol }, RENDER_ENGINE_CPU, true);
-	return 0;
-}
-
-int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
-{
-	if (!c->planned)
-		return render_volume(r, scene, out);
-	int64_t t0 = now_ns();
-	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
-	/* Nothing from the cache; or a scene the renderer would hand to
-	 * another engine whole (a GL renderer, one with a turn or too
-	 * large), whose parts would each stay native. */
-	if ((!c->use_count && !c->create_count && !c->turned_count && !c->canvas_count) ||
-	    (r->native_prims && scene_prims(scene) > r->native_prims) ||
-	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count)))
-		return render_whole(c, r, scene, out, t0);
-	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
-	int err = render_parts(c, r, scene, &p);
-	if (err < 0)
-		return err;
-	int64_t t1 = now_ns();
-	for (uint32_t i = 0; i < c->use_count; i++)
-		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
-	if (p.mixed)
-		return render_whole(c, r, scene, out, t0);
-	c->engine = p.engine;
-	/* The last composition, patched where something may have changed
-	 * (or composed whole when there is none), then handed out. */
-	if (c->prev_valid)
-		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, p.n);
-	else
-		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
-	if (err == 0)
-		err = volume_copy(out, c->prev);
-	c->composed = err == 0;
-	c->render_us = (uint32_t)((t1 - t0) / 1000);
-	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);
-	return err;
-}
-
 /* ---- after ---- */
 
 /* The volumes and canvases the render made for new entries: kept, unless
@@ -726,9 +501,9 @@ static void mark_composition(struct cache *c)
 	for (uint32_t i = 0; i < c->create_count; i++)
 		c->creates[i]->in_prev = true;
 	if (c->rest_rendered)
-		add_footprint(c, &(struct compose_source){ .vol = c->rest_vol });
+		cache_add_footprint(c, &(struct compose_source){ .vol = c->rest_vol });
 	if (c->turned_rendered)
-		add_footprint(c, &(struct compose_source){ .vol = c->turned_vol });
+		cache_add_footprint(c, &(struct compose_source){ .vol = c->turned_vol });
 }
 
 void cache_done(struct cache *c, int result)
@@ -778,6 +553,6 @@ void cache_get_stats(const struct cache *c, struct cache_stats *out)
 		out->cached += c->entries[i]->vol || c->entries[i]->canvas;
 	out->bytes = held(c);
 	out->budget = c->budget;
-	out->working_bytes =
-		volume_held(c->rest_vol) + volume_held(c->tmp) + volume_held(c->prev) + volume_held(c->turned_vol);
+	out->working_bytes = volume_held_bytes(c->rest_vol) + volume_held_bytes(c->tmp) + volume_held_bytes(c->prev) +
+			     volume_held_bytes(c->turned_vol) + batch_held(c->batch);
 }

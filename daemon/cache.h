@@ -32,7 +32,11 @@
  * where an object left it (changed, hidden, gone, evicted), where the
  * objects rendered this time were last time and are now, and where a
  * cached object comes back are composed anew. A change costs what it
- * touches, plus one copy of the composition into the volume handed out.
+ * touches, plus copying out the images it changed: a volume handed out
+ * again (the pipeline passes a few round) is known by its origin mark
+ * (volume.h) and gets only the images changed since it last got one.
+ * Many small objects to cache at once are rendered side by side on the
+ * pool's workers (batch.h).
  *
  * Entries stay within a byte budget (cache_set_budget()): past it the
  * least recently used entries lose their volumes and canvases. The cache
@@ -47,6 +51,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "cache_stats.h"
 #include "geometry.h"
 
 struct pool;
@@ -55,31 +60,12 @@ struct scene;
 struct snapshot;
 struct volume;
 
-struct cache_stats {
-	uint32_t objects;       /* entries: objects being followed */
-	uint32_t cached;        /* of them holding a volume or a canvas */
-	uint64_t bytes;         /* held: coded volumes and canvases, bookkeeping */
-	uint64_t budget;        /* cache-budget, or less: what of memory-budget the clients leave */
-	uint64_t working_bytes; /* the volumes it renders and composes into (not in bytes) */
-	uint64_t hits;          /* objects composed from the cache, summed over volumes */
-	uint64_t turned;        /* of them, composed turned from a canvas */
-	uint64_t misses;        /* objects rendered, summed over volumes */
-	uint64_t creates;       /* volumes cached */
-	uint64_t invalidations; /* cached volumes dropped because their object changed */
-	uint64_t evictions;     /* cached volumes dropped over the budget */
-	uint64_t expired;       /* entries dropped, their object gone from the scene */
-	/* The last volume: */
-	uint32_t last_rendered;  /* objects rendered (new entries and the rest) */
-	uint32_t last_reused;    /* objects composed from the cache */
-	uint32_t last_render_us; /* rendering them */
-	uint32_t last_compose_us;
-};
-
 struct cache;
 
 /* A cache for volumes of geom, holding at most budget bytes. pool (may be
- * NULL) runs the compositions; it stays the caller's and must outlive the
- * cache. turns: the renderer renders canvases (renderer_impl.render_canvas),
+ * NULL) runs the compositions, and renders small new entries side by side
+ * where the renderer has a serial form (batch.h); it stays the caller's
+ * and must outlive the cache. turns: the renderer renders canvases (renderer_impl.render_canvas),
  * so an object that only turns about the axis by whole images is composed
  * from its canvas, turned. NULL + errno. */
 struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct pool *pool, bool turns);

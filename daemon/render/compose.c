@@ -120,6 +120,17 @@ int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, 
 	return 0;
 }
 
+/* The bytes of a non-empty mask between which its set bits lie. */
+static struct rle_span mask_span(const uint8_t *mask, uint32_t bytes)
+{
+	uint32_t first = 0, last = bytes - 1;
+	while (first < last && !mask[first])
+		first++;
+	while (last > first && !mask[last])
+		last--;
+	return (struct rle_span){ first, last };
+}
+
 void rle_volume_sum(struct rle_volume *r)
 {
 	r->tiles = 0;
@@ -132,14 +143,23 @@ void rle_volume_sum(struct rle_volume *r)
 	}
 	r->packed_bytes = r->tiles * r->tile_bytes;
 	free(r->lit);
+	free(r->lit_span);
 	r->lit = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit));
-	if (!r->lit)
-		return; /* patching then looks at every image */
+	r->lit_span = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit_span));
+	if (!r->lit || !r->lit_span) {
+		free(r->lit);
+		free(r->lit_span);
+		r->lit = NULL; /* patching then looks at every image */
+		r->lit_span = NULL;
+		return;
+	}
 	uint32_t n = 0;
 	for (uint32_t k = 0; k < r->image_count; k++)
-		if (r->images[k].tile_count)
+		if (r->images[k].tile_count) {
+			r->lit_span[n] = mask_span(r->images[k].data, r->mask_bytes);
 			r->lit[n++] = k;
-	r->bytes += r->lit_count * sizeof(*r->lit);
+		}
+	r->bytes += r->lit_count * (sizeof(*r->lit) + sizeof(*r->lit_span));
 }
 
 struct rle_volume *rle_volume_encode(const struct volume *vol)
@@ -171,6 +191,7 @@ void rle_volume_free(struct rle_volume *r)
 		free(r->images[k].data);
 	free(r->images);
 	free(r->lit);
+	free(r->lit_span);
 	free(r);
 }
 
@@ -194,8 +215,12 @@ struct compose {
 	uint8_t *all_dirty;         /* every tile of every image: compose_volumes() */
 	const struct turned_source *turned;
 	/* Patching: the sources with tiles in image k are img_src[img_first[k]
-	 * .. img_first[k + 1]). */
-	uint32_t *img_first, *img_src;
+	 * .. img_first[k + 1]), each with the mask bytes it lies in there. */
+	uint32_t *img_first;
+	struct img_source {
+		uint32_t src;
+		struct rle_span span;
+	} * img_src;
 	size_t img_src_cap;
 	/* Per call: */
 	const uint8_t *dirty;
@@ -373,20 +398,27 @@ static const uint8_t *rle_codes(const struct compose *c, const struct rle_image 
 	return img->data + head;
 }
 
-/* ORs source s's tiles of image k that lie in dirty into w's dense image. */
-static int gather_dirty(const struct compose *c, struct compose_worker *w, const struct compose_source *s, uint32_t k,
+/* ORs the tiles of image k that lie in dirty of source is (whose mask is
+ * zero outside is's span) into w's dense image. */
+static int gather_dirty(const struct compose *c, struct compose_worker *w, const struct img_source *is, uint32_t k,
 			const uint8_t *dirty)
 {
+	uint32_t b = is->span.first;
+	while (b <= is->span.last && !dirty[b]) /* without reading the source */
+		b++;
+	if (b > is->span.last)
+		return 0;
+	const struct compose_source *s = &c->src[is->src];
 	const uint8_t *mask = source_mask(s, k);
 	const uint8_t *tiles = s->vol ? s->vol->images[k].tiles : NULL;
 	const struct rle_image *img = s->rle ? &s->rle->images[k] : NULL;
 	size_t avail = 0;
 	const uint8_t *codes = img ? rle_codes(c, img, &avail) : NULL;
 	uint32_t base = 0; /* the stored index of the first tile of byte b */
-	for (uint32_t b = 0; b < c->mask_bytes; base += (uint32_t)__builtin_popcount(mask[b]), b++) {
+	for (b = is->span.first; b <= is->span.last; base += volume_mask_bits(mask[b]), b++) {
 		for (uint32_t both = mask[b] & dirty[b]; both; both &= both - 1) {
 			uint32_t bitno = (uint32_t)__builtin_ctz(both), t = b * 8 + bitno;
-			uint32_t i = base + (uint32_t)__builtin_popcount(mask[b] & ((1u << bitno) - 1));
+			uint32_t i = base + volume_mask_bits(mask[b] & ((1u << bitno) - 1));
 			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 			w->touched[t] = 1;
 			if (tiles) {
@@ -402,6 +434,14 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 	return 0;
 }
 
+/* Appends tile t, a stored (so not all-zero) tile of another volume, to
+ * image k of vol, whose room the caller has reserved. */
+static int keep_tile(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *tile)
+{
+	memcpy(vol->images[k].tiles + (size_t)vol->images[k].tile_count * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
+	return volume_image_push(vol, k, t);
+}
+
 /* Image k of c->out anew: its clean tiles kept, its dirty ones composed
  * from the sources (gathered into w's dense image first), built in
  * c->tmp's image k and exchanged. */
@@ -410,12 +450,12 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
 	uint32_t dirty_count = 0;
 	for (uint32_t b = 0; b < c->mask_bytes; b++)
-		dirty_count += (uint32_t)__builtin_popcount(dirty[b]);
+		dirty_count += volume_mask_bits(dirty[b]);
 	if (!dirty_count)
 		return 0;
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
-		err = gather_dirty(c, w, &c->src[c->img_src[i]], k, dirty);
+		err = gather_dirty(c, w, &c->img_src[i], k, dirty);
 	struct volume_image *old = &c->out->images[k];
 	volume_image_clear(c->tmp, k);
 	if (err == 0)
@@ -425,7 +465,7 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 		bool had = bit(old->mask, t);
 		if (!bit(dirty, t)) {
 			if (had && err == 0)
-				err = volume_image_append(c->tmp, k, t, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
+				err = keep_tile(c->tmp, k, t, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
 			i += had;
 			continue;
 		}
@@ -443,28 +483,31 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	return err;
 }
 
-/* Calls fn(c, s, k) for each image k in which source s has tiles. */
-static void for_each_lit(struct compose *c, unsigned s, void (*fn)(struct compose *c, unsigned s, uint32_t k))
+typedef void (*lit_fn)(struct compose *c, unsigned s, uint32_t k, struct rle_span span);
+
+/* Calls fn(c, s, k, span) for each image k in which source s has tiles,
+ * with the mask bytes they lie in (all, where not known). */
+static void for_each_lit(struct compose *c, unsigned s, lit_fn fn)
 {
 	const struct compose_source *src = &c->src[s];
 	if (src->rle && src->rle->lit) {
 		for (uint32_t i = 0; i < src->rle->lit_count; i++)
-			fn(c, s, src->rle->lit[i]);
+			fn(c, s, src->rle->lit[i], src->rle->lit_span[i]);
 		return;
 	}
 	for (uint32_t k = 0; k < c->image_count; k++)
 		if (source_mask(src, k))
-			fn(c, s, k);
+			fn(c, s, k, (struct rle_span){ 0, c->mask_bytes - 1 });
 }
 
-static void count_lit(struct compose *c, unsigned s, uint32_t k)
+static void count_lit(struct compose *c, unsigned s, uint32_t k, struct rle_span span)
 {
 	c->img_first[k + 1]++;
 }
 
-static void place_lit(struct compose *c, unsigned s, uint32_t k)
+static void place_lit(struct compose *c, unsigned s, uint32_t k, struct rle_span span)
 {
-	c->img_src[c->img_first[k]++] = s;
+	c->img_src[c->img_first[k]++] = (struct img_source){ s, span };
 }
 
 /* The sources of each image (img_first, img_src): an object touches a
@@ -480,7 +523,7 @@ static int index_sources(struct compose *c)
 		c->img_first[k + 1] += c->img_first[k];
 	size_t total = c->img_first[c->image_count];
 	if (total > c->img_src_cap) {
-		uint32_t *a = realloc(c->img_src, total * sizeof(*a));
+		struct img_source *a = realloc(c->img_src, total * sizeof(*a));
 		if (!a)
 			return -ENOMEM;
 		c->img_src = a;
@@ -521,6 +564,15 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 
 void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src)
 {
+	const struct rle_volume *r = src->rle;
+	for (uint32_t i = 0; r && r->lit && i < r->lit_count; i++) {
+		const uint8_t *mask = r->images[r->lit[i]].data;
+		uint8_t *d = dirty + (size_t)r->lit[i] * mask_bytes;
+		for (uint32_t b = r->lit_span[i].first; b <= r->lit_span[i].last; b++)
+			d[b] |= mask[b];
+	}
+	if (r && r->lit)
+		return;
 	for (uint32_t k = 0; k < image_count; k++) {
 		const uint8_t *mask = source_mask(src, k);
 		uint8_t *d = dirty + (size_t)k * mask_bytes;

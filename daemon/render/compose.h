@@ -42,8 +42,16 @@ struct rle_volume {
 	uint64_t bytes;        /* memory held, structures included */
 	uint64_t packed_bytes; /* what the tiles take uncoded (tiles * tile_bytes) */
 	struct rle_image *images;
-	/* The images with tiles, in order (rle_volume_sum()), or NULL. */
+	/* The images with tiles, in order (rle_volume_sum()), or NULL; and
+	 * for each, the mask bytes its tiles lie between. */
 	uint32_t *lit, lit_count;
+	struct rle_span *lit_span;
+};
+
+/* Mask bytes first..last (inclusive): every set bit of an image's mask
+ * lies in them. */
+struct rle_span {
+	uint32_t first, last;
 };
 
 /* A tile of a canvas volume: an object rendered before the halftone, as

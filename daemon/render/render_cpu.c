@@ -285,10 +285,13 @@ static void cpu_destroy(struct renderer *base)
 	free(r);
 }
 
+static struct renderer *cpu_serial(const struct renderer *base);
+
 static const struct renderer_impl cpu_impl = {
 	.name = "cpu",
 	.render = cpu_render,
 	.render_canvas = cpu_render_canvas,
+	.serial = cpu_serial,
 	.destroy = cpu_destroy,
 };
 
@@ -308,6 +311,8 @@ struct renderer *render_cpu_create(const struct geometry *geom, unsigned threads
 	return render_cpu_create_opts(geom, &o);
 }
 
+static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halftone, unsigned threads);
+
 struct renderer *render_cpu_create_opts(const struct geometry *geom, const struct render_cpu_options *opts)
 {
 	halftone_fn halftone = halftone_pick(opts->simd);
@@ -315,6 +320,18 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom, const struc
 		errno = ENOENT;
 		return NULL;
 	}
+	return cpu_new(geom, halftone, opts->threads);
+}
+
+/* One thread, the same halftone variant (they all give the same bits). */
+static struct renderer *cpu_serial(const struct renderer *base)
+{
+	const struct render_cpu *r = (const struct render_cpu *)base;
+	return cpu_new(&base->geom, r->halftone, 1);
+}
+
+static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halftone, unsigned threads)
+{
 	if (geometry_validate(geom) < 0) {
 		errno = EINVAL;
 		return NULL;
@@ -325,7 +342,7 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom, const struc
 	r->base.impl = &cpu_impl;
 	r->base.geom = *geom;
 	r->halftone = halftone;
-	unsigned n = pick_threads(geom, opts->threads);
+	unsigned n = pick_threads(geom, threads);
 	r->workers = calloc(n, sizeof(*r->workers));
 	uint32_t images = geometry_images_per_volume(geom);
 	r->wedges = calloc(images, sizeof(*r->wedges));

@@ -75,6 +75,11 @@ struct renderer_impl {
 	 * k's phase, image k of out is image k of render(). 0 or negative
 	 * errno. */
 	int (*render_canvas)(struct renderer *r, const struct scene *scene, struct rle_volume *out);
+	/* Optional (the CPU renderer): a new renderer of r's engine and
+	 * geometry that renders on the calling thread alone, bit for bit as
+	 * r does: several render small scenes side by side (batch.h). NULL +
+	 * errno on failure. */
+	struct renderer *(*serial)(const struct renderer *r);
 	void (*destroy)(struct renderer *r);
 };
 

@@ -16,6 +16,7 @@
 #include "check.h"
 #include "compose.h"
 #include "draw.h"
+#include "pool.h"
 #include "render.h"
 #include "rtest.h"
 #include "snapshot.h"
@@ -234,17 +235,23 @@ struct run_totals {
 	struct cache_stats st;
 };
 
-/* steps volumes of random changes through a cache of budget bytes on r;
- * each composed volume against r's full render. */
-static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t seed, struct run_totals *out)
+/* steps volumes of random changes through a cache of budget bytes on r,
+ * composing on pool (or on this thread: NULL), as the daemon's pipeline
+ * does; each composed volume against r's full render. */
+static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned steps, uint64_t seed,
+		struct run_totals *out)
 {
 	const struct geometry *g = &r->geom;
 	rng_state = seed;
 	struct world w = { .geom = g, .turns = r->impl->render_canvas != NULL };
-	struct cache *c = cache_create(g, budget, NULL, r->impl->render_canvas != NULL);
+	struct cache *c = cache_create(g, budget, pool, r->impl->render_canvas != NULL);
 	CHECK(c != NULL);
-	struct volume *composed = volume_create(g), *full = volume_create(g);
-	CHECK(composed && full);
+	/* Handed out in turn, as the pipeline passes its volumes round (the
+	 * cache copies into one only what changed since it last had it); now
+	 * and then one is swapped with the full render's, whose contents the
+	 * cache did not make. */
+	struct volume *outs[3] = { volume_create(g), volume_create(g), volume_create(g) }, *full = volume_create(g);
+	CHECK(outs[0] && outs[1] && outs[2] && full);
 	for (int i = 0; i < MAX_OBJECTS / 2; i++)
 		create(&w, &w.obj[i]);
 	unsigned bad = 0;
@@ -260,6 +267,7 @@ static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t se
 			w.obj[0].turn = (uint16_t)((w.obj[0].turn + 1) % g->images_per_rev);
 		build(&w);
 		CHECK_EQ(cache_plan(c, &w.snap), 0);
+		struct volume *composed = outs[s % 3];
 		int err = cache_render(c, r, &w.snap.scene, composed);
 		cache_done(c, err);
 		CHECK_EQ(err, 0);
@@ -269,23 +277,31 @@ static void run(struct renderer *r, uint64_t budget, unsigned steps, uint64_t se
 				printf("  %s: step %u (%s): composed volume differs from the full render\n",
 				       r->impl->name, s, what);
 		}
+		if (s % 7 == 3) {
+			struct volume *next = outs[(s + 1) % 3];
+			outs[(s + 1) % 3] = full;
+			full = next;
+		}
 	}
 	CHECK_EQ(bad, 0);
 	cache_get_stats(c, &out->st);
 	out->volumes = steps;
 	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
-	       "turned %llu, misses %llu, creates %llu, invalidations %llu, evictions %llu, expired %llu\n",
+	       "turned %llu, misses %llu, creates %llu (batched %llu), invalidations %llu, evictions %llu, expired "
+	       "%llu\n",
 	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, steps,
 	       out->st.objects, out->st.cached, (unsigned long long)out->st.bytes, (unsigned long long)out->st.hits,
 	       (unsigned long long)out->st.turned, (unsigned long long)out->st.misses,
-	       (unsigned long long)out->st.creates, (unsigned long long)out->st.invalidations,
-	       (unsigned long long)out->st.evictions, (unsigned long long)out->st.expired);
+	       (unsigned long long)out->st.creates, (unsigned long long)out->st.batched,
+	       (unsigned long long)out->st.invalidations, (unsigned long long)out->st.evictions,
+	       (unsigned long long)out->st.expired);
 	CHECK(out->st.bytes <= budget || out->st.cached == 0);
 	cache_destroy(c);
 	for (int i = 0; i < MAX_OBJECTS; i++)
 		if (w.obj[i].alive)
 			destroy(&w.obj[i]);
-	volume_destroy(composed);
+	for (int i = 0; i < 3; i++)
+		volume_destroy(outs[i]);
 	volume_destroy(full);
 }
 
@@ -347,17 +363,23 @@ int main(void)
 	struct run_totals t;
 	struct renderer *cpu = render_cpu_create(&small, 2);
 	CHECK(cpu != NULL);
-	run(cpu, 64u << 20, 160, 1, &t);
+	/* Composed on two workers, new entries rendered side by side
+	 * (batch.h), as in the daemon; then on this thread alone. */
+	struct pool *pool = pool_create(2);
+	CHECK(pool != NULL);
+	run(cpu, pool, 64u << 20, 160, 1, &t);
 	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
-	CHECK(t.st.turned > 0);          /* turned objects composed from their canvases */
-	run(cpu, 40u << 10, 120, 2, &t); /* a few entries at a time */
+	CHECK(t.st.turned > 0); /* turned objects composed from their canvases */
+	CHECK(t.st.batched > 0);
+	run(cpu, NULL, 40u << 10, 120, 2, &t); /* a few entries at a time */
 	CHECK(t.st.evictions > 0);
-	run(cpu, 0, 40, 3, &t); /* nothing may be cached */
+	run(cpu, NULL, 0, 40, 3, &t); /* nothing may be cached */
+	CHECK_EQ(t.st.batched, 0);
 	CHECK_EQ(t.st.creates, 0);
 	render_destroy(cpu);
 	cpu = render_cpu_create(&odd, 1);
 	CHECK(cpu != NULL);
-	run(cpu, 64u << 20, 100, 4, &t);
+	run(cpu, pool, 64u << 20, 100, 4, &t);
 	render_destroy(cpu);
 	const char *gl[] = { "egl", "osmesa" };
 	for (int i = 0; i < 2; i++) {
@@ -367,7 +389,7 @@ int main(void)
 			printf("%s: not here, skipped\n", gl[i]);
 			continue;
 		}
-		run(r, 64u << 20, 60, 5 + (uint64_t)i, &t);
+		run(r, pool, 64u << 20, 60, 5 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0);
 		render_destroy(r);
 		/* Scenes over max_prims go to the CPU fallback, single objects
@@ -376,8 +398,9 @@ int main(void)
 		o.max_prims = 64;
 		r = render_gl_create(&small, &o);
 		CHECK(r != NULL);
-		run(r, 64u << 20, 40, 7 + (uint64_t)i, &t);
+		run(r, NULL, 64u << 20, 40, 7 + (uint64_t)i, &t);
 		render_destroy(r);
 	}
+	pool_destroy(pool);
 	return check_done();
 }

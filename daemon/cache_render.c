@@ -1,0 +1,257 @@
+/* The object cache's render thread (cache.h: cache_render()): the new
+ * entries, the rest and the turned objects rendered, the last composition
+ * patched, and handed out. */
+#include <errno.h>
+#include <stdatomic.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "batch.h"
+#include "cache.h"
+#include "cache_priv.h"
+#include "compose.h"
+#include "log.h"
+#include "pool.h"
+#include "renderer.h"
+#include "volume.h"
+
+/* New entries of at most this many segments and triangles are rendered
+ * side by side, one per worker (batch.h); larger ones one at a time with
+ * every worker on each. */
+#define BATCH_MAX_PRIMS 16384
+
+static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
+{
+	return (struct scene){ .draw_count = n, .draws = draws };
+}
+
+/* The canvases to make (each object's draws with turn 0, rendered up to
+ * the halftone), then every turned object composed at its turn into
+ * c->turned_vol (the CPU renderer's halftone: RENDER_ENGINE_CPU). */
+static int render_turned(struct cache *c, struct renderer *r, const struct scene *scene)
+{
+	c->turned_rendered = false;
+	if (!c->turned_count && !c->canvas_count)
+		return 0;
+	unsigned n = 0;
+	for (uint32_t i = 0; i < c->canvas_count; i++) {
+		const struct entry *e = c->canvases[i];
+		if (e->draw_count > c->unturned_cap) {
+			if (!cache_resize(&c->unturned, e->draw_count, sizeof(*c->unturned)))
+				return -ENOMEM;
+			c->unturned_cap = e->draw_count;
+		}
+		memcpy(c->unturned, scene->draws + e->first_draw, e->draw_count * sizeof(*c->unturned));
+		for (uint32_t d = 0; d < e->draw_count; d++)
+			c->unturned[d].turn = 0;
+		struct rle_volume *cv = rle_volume_new(c->prev->image_count, c->prev->mask_bytes,
+						       volume_tiles_per_image(c->prev), CANVAS_TILE_BYTES);
+		if (!cv)
+			return -ENOMEM;
+		c->made_canvas[i] = cv;
+		struct scene one = sub_scene(c->unturned, e->draw_count);
+		int err = r->impl->render_canvas(r, &one, cv);
+		if (err < 0)
+			return err;
+		c->turned_src[n++] = (struct turned_source){ .canvas = cv, .turn = e->turn };
+	}
+	for (uint32_t i = 0; i < c->turned_count; i++)
+		c->turned_src[n++] =
+			(struct turned_source){ .canvas = c->turneds[i]->canvas, .turn = c->turneds[i]->turn };
+	int err = compose_turned(c->compose, c->turned_vol, c->turned_src, n);
+	c->turned_rendered = err == 0;
+	return err;
+}
+
+/* Segments and triangles of scene, at most what binning keeps. */
+static uint64_t scene_prims(const struct scene *s)
+{
+	uint64_t n = 0;
+	for (uint32_t i = 0; i < s->draw_count; i++)
+		if (s->draws[i].prim != SCENE_POINTS)
+			n += s->draws[i].count / (s->draws[i].prim == SCENE_LINES ? 2 : 3);
+	return n;
+}
+
+/* The scene rendered whole, nothing composed; cache_done() drops what
+ * another engine made. */
+static int render_whole(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out, int64_t t0)
+{
+	int err = render_volume(r, scene, out);
+	c->whole = true;
+	c->engine = r->stats.engine;
+	c->render_us = (uint32_t)((now_ns() - t0) / 1000);
+	c->compose_us = 0;
+	return err;
+}
+
+/* The sources of a composition, and whether they come from one engine
+ * (a GL renderer may hand a scene to its CPU fallback: too large, or for
+ * good): OR is exact only among volumes of one. */
+struct parts {
+	unsigned n;
+	enum render_engine engine; /* 0: none yet */
+	bool mixed;
+};
+
+static void add_part(struct cache *c, struct parts *p, struct compose_source src, enum render_engine engine,
+		     bool footprint)
+{
+	p->mixed |= p->engine && engine != p->engine;
+	p->engine = engine;
+	c->sources[p->n] = src;
+	if (footprint) /* new in the composition */
+		cache_add_footprint(c, &c->sources[p->n]);
+	p->n++;
+}
+
+/* Puts the new entries to render side by side first in c->creates (their
+ * scenes in c->batched) and returns how many: the small ones, when there
+ * are two or more, the renderer has a serial form and there are workers
+ * (the batch made for this renderer at first need). */
+static uint32_t batch_creates(struct cache *c, struct renderer *r, const struct scene *scene)
+{
+	if (c->create_count < 2 || !c->pool || pool_workers(c->pool) < 2 || !r->impl->serial)
+		return 0;
+	if (c->batch && batch_parent(c->batch) != r) {
+		batch_destroy(c->batch);
+		c->batch = NULL;
+	}
+	if (!c->batch && !(c->batch = batch_create(r, c->pool)))
+		return 0; /* one at a time, then */
+	uint32_t n = 0;
+	for (uint32_t i = 0; i < c->create_count; i++) {
+		struct entry *e = c->creates[i];
+		struct scene one = sub_scene(scene->draws + e->first_draw, e->draw_count);
+		if (scene_prims(&one) > BATCH_MAX_PRIMS)
+			continue;
+		c->creates[i] = c->creates[n]; /* [n, i) are large */
+		c->creates[n] = e;
+		c->batched[n++] = one;
+	}
+	return n;
+}
+
+/* What is rendered this time: the rest, the new entries, the turned. */
+static int render_parts(struct cache *c, struct renderer *r, const struct scene *scene, struct parts *p)
+{
+	int err;
+	c->rest_rendered = false;
+	if (c->rest_count) {
+		struct scene rest = sub_scene(c->rest, c->rest_count);
+		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
+			return err;
+		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, true);
+		c->rest_rendered = true;
+	}
+	uint32_t n = batch_creates(c, r, scene);
+	if (n && (err = batch_render(c->batch, c->batched, n, c->created)) < 0)
+		return err;
+	c->stats.batched += n;
+	for (uint32_t i = 0; i < c->create_count; i++) {
+		const struct entry *e = c->creates[i];
+		struct scene one = sub_scene(scene->draws + e->first_draw, e->draw_count);
+		if (i >= n && (err = render_volume(r, &one, c->tmp)) < 0)
+			return err;
+		if (i >= n && !(c->created[i] = rle_volume_encode(c->tmp)))
+			return -ENOMEM;
+		c->created_by[i] = i < n ? batch_engine(c->batch) : r->stats.engine;
+		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, c->created_by[i], true);
+	}
+	if ((err = render_turned(c, r, scene)) < 0)
+		return err;
+	if (c->turned_rendered) /* halftoned as the CPU renderer does */
+		add_part(c, p, (struct compose_source){ .vol = c->turned_vol }, RENDER_ENGINE_CPU, true);
+	return 0;
+}
+
+/* The images the composition about to be made may change (c->gen's
+ * flags): those with dirty tiles, or all when it is made whole. */
+static void note_changes(struct cache *c)
+{
+	uint32_t n = c->prev->image_count, mb = c->prev->mask_bytes;
+	uint8_t *changed = c->changed + (size_t)(++c->gen % CHANGED_HISTORY) * n;
+	for (uint32_t k = 0; k < n; k++) {
+		const uint8_t *d = c->dirty + (size_t)k * mb;
+		uint8_t any = !c->prev_valid;
+		for (uint32_t b = 0; b < mb && !any; b++)
+			any = d[b];
+		changed[k] = any != 0;
+	}
+}
+
+/* Whether image k changed in a composition after had (up to c->gen, at
+ * most CHANGED_HISTORY back). */
+static bool changed_since(const struct cache *c, uint64_t had, uint32_t k)
+{
+	uint32_t n = c->prev->image_count;
+	for (uint64_t g = had + 1; g <= c->gen; g++)
+		if (c->changed[(size_t)(g % CHANGED_HISTORY) * n + k])
+			return true;
+	return false;
+}
+
+/* The composition copied into out: only the images changed since the one
+ * out holds, when out is a volume handed out lately and unchanged since
+ * (its origin mark), else whole. out is then marked. */
+static int hand_out(struct cache *c, struct volume *out)
+{
+	static atomic_uint_fast64_t origins;
+	uint64_t had = 0;
+	for (unsigned i = 0; out->origin && i < HANDED_VOLUMES; i++)
+		if (c->handed[i].origin == out->origin)
+			had = c->handed[i].gen;
+	int err = 0;
+	if (!had || c->gen - had >= CHANGED_HISTORY) {
+		err = volume_copy(out, c->prev);
+	} else {
+		for (uint32_t k = 0; k < out->image_count && err == 0; k++)
+			if (changed_since(c, had, k))
+				err = volume_copy_image(out, k, c->prev);
+		out->seq = c->prev->seq;
+		out->shown_ns = c->prev->shown_ns;
+	}
+	if (err < 0)
+		return err;
+	out->origin = atomic_fetch_add(&origins, 1) + 1;
+	c->handed[c->handed_next++ % HANDED_VOLUMES] = (struct handed){ out->origin, c->gen };
+	return 0;
+}
+
+int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
+{
+	if (!c->planned)
+		return render_volume(r, scene, out);
+	int64_t t0 = now_ns();
+	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
+	/* Nothing from the cache; or a scene the renderer would hand to
+	 * another engine whole (a GL renderer, one with a turn or too
+	 * large), whose parts would each stay native. */
+	if ((!c->use_count && !c->create_count && !c->turned_count && !c->canvas_count) ||
+	    (r->native_prims && scene_prims(scene) > r->native_prims) ||
+	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count)))
+		return render_whole(c, r, scene, out, t0);
+	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
+	int err = render_parts(c, r, scene, &p);
+	if (err < 0)
+		return err;
+	int64_t t1 = now_ns();
+	for (uint32_t i = 0; i < c->use_count; i++)
+		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
+	if (p.mixed)
+		return render_whole(c, r, scene, out, t0);
+	c->engine = p.engine;
+	/* The last composition, patched where something may have changed
+	 * (or composed whole when there is none), then handed out. */
+	note_changes(c);
+	if (c->prev_valid)
+		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, p.n);
+	else
+		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
+	if (err == 0)
+		err = hand_out(c, out);
+	c->composed = err == 0;
+	c->render_us = (uint32_t)((t1 - t0) / 1000);
+	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);
+	return err;
+}
