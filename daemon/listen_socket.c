@@ -36,11 +36,37 @@ static int remove_stale(const struct sockaddr_un *addr)
 	return unlink(addr->sun_path) < 0 ? -errno : 0;
 }
 
+/* The socket's directory, made when it is missing (what systemd's
+ * RuntimeDirectory= does for the unit, for a daemon run by hand): one
+ * level, mode 0755, as /run/spindle. */
+static int make_directory(const char *path)
+{
+	char dir[sizeof(((struct sockaddr_un *)0)->sun_path)];
+	snprintf(dir, sizeof(dir), "%s", path);
+	char *slash = strrchr(dir, '/');
+	if (!slash || slash == dir)
+		return 0;
+	*slash = '\0';
+	if (mkdir(dir, 0755) == 0) {
+		log_info("created %s for the socket", dir);
+		return 0;
+	}
+	if (errno == EEXIST)
+		return 0;
+	int r = -errno;
+	log_error("cannot make %s for the socket %s: %s (make it, or give another path with --socket PATH)", dir, path,
+		  strerror(errno));
+	return r;
+}
+
 static int bind_path(struct listen_socket *ls, const char *path)
 {
 	struct sockaddr_un addr = { .sun_family = AF_UNIX };
 	snprintf(addr.sun_path, sizeof(addr.sun_path), "%s", path);
-	int r = remove_stale(&addr);
+	int r = make_directory(addr.sun_path);
+	if (r < 0)
+		return r;
+	r = remove_stale(&addr);
 	if (r < 0) {
 		log_error("socket %s: %s", addr.sun_path,
 			  r == -EADDRINUSE ? "another spindled is listening there" : strerror(-r));

@@ -545,6 +545,11 @@ uint32_t spindle_get_error_code(struct spindle *sp)
 	return sp->error_code;
 }
 
+const char *spindle_library_version(void)
+{
+	return SPINDLE_VERSION; /* of the headers this library was built with */
+}
+
 void spindle_set_listener(struct spindle *sp, const struct spindle_listener *listener, void *data)
 {
 	sp->listener = listener;

@@ -38,6 +38,11 @@ static void test_device_info(void)
 	CHECK(info->width == W && info->height == H && info->images_per_rev == 128 && info->mirrored);
 	CHECK(info->half_height == 1.0f && info->rpm == 1800.0f);
 	CHECK(spindle_get_version(sp) == SPINDLE_PROTOCOL_VERSION);
+	/* The library run is the one built with these headers. */
+	CHECK(strcmp(spindle_library_version(), SPINDLE_VERSION) == 0);
+	char ver[32];
+	snprintf(ver, sizeof(ver), "%d.%d.%d", SPINDLE_VERSION_MAJOR, SPINDLE_VERSION_MINOR, SPINDLE_VERSION_MICRO);
+	CHECK(strcmp(ver, SPINDLE_VERSION) == 0);
 	struct spindle_status st;
 	CHECK(spindle_get_status(sp, &st) == 0);
 	CHECK(st.clients == 1 && st.projector_present);

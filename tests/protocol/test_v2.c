@@ -133,7 +133,7 @@ static void test_bad_index(void)
 	struct spindle_buffer *idx = spindle_buffer_create(sp, bad, sizeof(bad));
 	spindle_list_draw_indexed(s.list, SPINDLE_LINES, verts, 0, 8, 0, idx, 0, 2, SPINDLE_INDEX_U16);
 	CHECK(spindle_roundtrip(sp) == -EPIPE);
-	CHECK(spindle_get_error_code(sp) == 4 /* invalid_value */);
+	CHECK(spindle_get_error_code(sp) == SPINDLE_ERROR_INVALID_VALUE);
 	CHECK(strstr(spindle_get_error(sp), "index 1"));
 	CHECK(spindle_roundtrip(witness) == 0);
 	spindle_disconnect(sp);
@@ -180,7 +180,7 @@ static void test_nested_transforms(void)
 	/* A pop with nothing pushed is fatal. */
 	CHECK(spindle_list_pop(s.list) == 0);
 	CHECK(spindle_list_pop(s.list) == 0);
-	CHECK(spindle_roundtrip(sp) == -EPIPE && spindle_get_error_code(sp) == 4);
+	CHECK(spindle_roundtrip(sp) == -EPIPE && spindle_get_error_code(sp) == SPINDLE_ERROR_INVALID_VALUE);
 	volume_destroy(ref);
 	volume_destroy(nested);
 	spindle_disconnect(sp);

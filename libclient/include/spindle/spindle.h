@@ -25,8 +25,12 @@
 extern "C" {
 #endif
 
-/* The protocol version this library speaks at most. */
-#define SPINDLE_PROTOCOL_VERSION 4
+/* SPINDLE_PROTOCOL_VERSION and the daemon's fatal error codes (enum
+ * spindle_error_code), generated from the protocol's description; the
+ * library's version (SPINDLE_VERSION_*, and spindle_library_version() for
+ * the library a program runs with). */
+#include <spindle/spindle-errors.h>
+#include <spindle/spindle-version.h>
 
 /* Default socket path, used when neither a path nor SPINDLE_SOCKET is given. */
 #define SPINDLE_DEFAULT_SOCKET "/run/spindle/spindle.sock"
@@ -196,9 +200,14 @@ int spindle_roundtrip(struct spindle *sp);
 /* Why the connection failed: the daemon's error message, or a local one;
  * NULL while it is healthy. Owned by the library. */
 const char *spindle_get_error(struct spindle *sp);
-/* The code of the daemon's fatal error (docs/protocol.md, display.error),
- * 0 while healthy or when the failure was local. */
+/* The code of the daemon's fatal error (enum spindle_error_code,
+ * docs/protocol.md, display.error), 0 while healthy or when the failure
+ * was local. */
 uint32_t spindle_get_error_code(struct spindle *sp);
+
+/* The version of the libspindle the program runs with ("MAJOR.MINOR.MICRO"),
+ * which may be newer than the SPINDLE_VERSION it was built against. */
+const char *spindle_library_version(void);
 
 /* A buffer of vertex or index data: a copy of size bytes from data, sent
  * inline when it is small (at most SPINDLE_INLINE_MAX bytes, protocol
