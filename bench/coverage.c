@@ -104,7 +104,7 @@ static inline uint64_t row_source_fetch(const struct row_source *s, int c, int y
 }
 
 /* Image k's neighbours across the revolution: k - 1, k, k + 1, and whether
- * each is seen mirrored (DESIGN.md section 3, mirrored half turn). */
+ * each is seen mirrored (docs/design.md section 3, mirrored half turn). */
 static void neighbours(const struct volume *vol, uint32_t k, uint32_t img[3], bool mirror[3])
 {
 	uint32_t n = vol->image_count;

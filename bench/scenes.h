@@ -1,4 +1,4 @@
-/* The benchmark scenes of DESIGN.md section 7 (bench/README.md): fixed,
+/* The benchmark scenes of docs/design.md section 7 (bench/README.md): fixed,
  * deterministic scene snapshots for a geometry, some animated per volume. */
 #ifndef SPINDLE_BENCH_SCENES_H
 #define SPINDLE_BENCH_SCENES_H

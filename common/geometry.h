@@ -1,4 +1,4 @@
-/* Device geometry and the volume-space conventions of DESIGN.md section 3.
+/* Device geometry and the volume-space conventions of docs/design.md section 3.
  *
  * Volume space: right-handed, y up along the rotation axis, unit = display
  * radius. Image k of N is shown at theta_k = 2*pi*k/N (from +x towards +z);

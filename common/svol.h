@@ -1,4 +1,4 @@
-/* The .svol capture format (DESIGN.md section 3, binding): a 64-byte
+/* The .svol capture format (docs/design.md section 3, binding): a 64-byte
  * little-endian header, then for each image, planes R, G, B of H rows of
  * ceil(W/8) bytes, MSB = leftmost pixel. */
 #ifndef SPINDLE_SVOL_H

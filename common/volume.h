@@ -4,7 +4,7 @@
  * Each image is cut into 32x32-pixel tiles, tiles_x = ceil(W/32) across and
  * tiles_y = ceil(H/32) down, numbered t = ty * tiles_x + tx. A tile holds the
  * three bit planes R, G, B in that order, each 32 rows of 4 bytes, most
- * significant bit = leftmost pixel (the dense convention of DESIGN.md, cut
+ * significant bit = leftmost pixel (the dense convention of docs/design.md, cut
  * into tiles). Pixels past W or H in edge tiles are always 0. Only non-empty
  * tiles are stored, in increasing t; the occupancy mask has bit t set
  * (byte t / 8, bit t % 8) for each stored tile. */

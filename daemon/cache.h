@@ -1,4 +1,4 @@
-/* The object cache and compositor (DESIGN.md section 5: the seed thesis'
+/* The object cache and compositor (docs/design.md section 5: the seed thesis'
  * automatic impostors, in volume form).
  *
  * Each object of a scene (a layer: its list placed by its transform, struct

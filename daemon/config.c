@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry.h"
 #include "log.h"
 #include "sim_rotor.h"
 #include "wire.h"
@@ -82,6 +83,22 @@ static int set_optional(char *dst, size_t size, const char *value)
 
 static const char *const policy_names[] = { "none", "admin", "any" };
 
+const char *config_key_values(const char *key)
+{
+	static const struct {
+		const char *key, *values;
+	} keys[] = {
+		{ "device", "sim, hw" },
+		{ "profile", "perspecta, small" },
+		{ "renderer", "auto, cpu, egl, osmesa" },
+		{ "exclusive", "none, admin, any" },
+	};
+	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
+		if (!strcmp(key, keys[i].key))
+			return keys[i].values;
+	return NULL;
+}
+
 const char *config_policy_name(enum policy p)
 {
 	return policy_names[p];
@@ -127,8 +144,11 @@ int config_set(struct config *cfg, const char *key, const char *value)
 		return strcmp(value, "sim") && strcmp(value, "hw")
 			       ? -EINVAL
 			       : set_string(cfg->device, sizeof(cfg->device), value);
-	if (!strcmp(key, "profile"))
-		return set_string(cfg->profile, sizeof(cfg->profile), value);
+	if (!strcmp(key, "profile")) {
+		struct geometry g;
+		return geometry_from_profile(value, &g) < 0 ? -EINVAL
+							    : set_string(cfg->profile, sizeof(cfg->profile), value);
+	}
 	if (!strcmp(key, "renderer")) {
 		/* Every name is accepted in every build: one without OSMesa
 		 * (or a machine without EGL) falls back to the CPU renderer
@@ -282,7 +302,9 @@ static int parse_line(struct config *cfg, const char *path, unsigned n, char *li
 	char *key = trim(s), *value = trim(eq + 1);
 	int e = config_set(cfg, key, value);
 	if (e < 0) {
-		log_error("%s:%u: %s '%s'", path, n, e == -ENOENT ? "unknown key" : "bad value for", key);
+		const char *values = config_key_values(key);
+		log_error("%s:%u: %s '%s'%s%s%s", path, n, e == -ENOENT ? "unknown key" : "bad value for", key,
+			  values ? " (one of: " : "", values ? values : "", values ? ")" : "");
 		return -EINVAL;
 	}
 	return 0;

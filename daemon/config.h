@@ -61,6 +61,9 @@ void config_defaults(struct config *cfg);
 /* Sets one key ("profile", "max-objects", ...) from text. 0, or -EINVAL
  * (bad value) or -ENOENT (unknown key). */
 int config_set(struct config *cfg, const char *key, const char *value);
+/* The values a key with a fixed set of them takes ("auto, cpu, ..."), for
+ * messages; NULL for other keys. */
+const char *config_key_values(const char *key);
 
 /* Reads "key = value" lines ('#' comments). A missing file is fine when
  * required is false. 0 or negative errno; errors are logged with the line. */

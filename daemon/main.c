@@ -36,8 +36,10 @@ static void usage(FILE *f)
 static int set_option(struct config *cfg, const char *key, const char *value)
 {
 	int r = config_set(cfg, key, value);
+	const char *values = config_key_values(key);
 	if (r < 0)
-		fprintf(stderr, "spindled: %s '%s'\n", r == -ENOENT ? "unknown key" : "bad value for", key);
+		fprintf(stderr, "spindled: %s '%s'%s%s%s\n", r == -ENOENT ? "unknown key" : "bad value for", key,
+			values ? " (one of: " : "", values ? values : "", values ? ")" : "");
 	return r;
 }
 

@@ -249,7 +249,8 @@ static const struct frames_listener frames_listener = {
 };
 
 /* Waiting captures get the volume on display: as the projector holds it
- * when it can tell, else as the daemon sent it. */
+ * when it can tell, else as the daemon sent it, else (nothing shown yet)
+ * the empty volume. */
 static void serve_captures(struct server *srv)
 {
 	if (!frames_capture_waiting(&srv->frames))
@@ -257,7 +258,9 @@ static void serve_captures(struct server *srv)
 	const struct volume *v = devices_shown(srv->dev);
 	if (!v && srv->pipe)
 		v = pipeline_shown(srv->pipe);
-	frames_serve_captures(&srv->frames, v);
+	if (!v && !srv->empty && !(srv->empty = volume_create(&srv->geom)))
+		log_error("capture: out of memory for the empty volume");
+	frames_serve_captures(&srv->frames, v ? v : srv->empty);
 }
 
 /* ---- the pipeline ---- */
@@ -483,6 +486,10 @@ static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
 	struct server *srv = data;
 	srv->state_ns = now_ns();
 	expire_handshakes(data);
+	/* A dark display (not turning, or no timing yet) has no revolution
+	 * to wait for: captures get what it holds at once. */
+	if (srv->dev && !devices_lit(srv->dev))
+		serve_captures(srv);
 	push_state(data);
 	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
 	return 0;
@@ -622,6 +629,7 @@ void server_finish(struct server *srv)
 		client_destroy(c);
 	}
 	pipeline_destroy(srv->pipe);
+	volume_destroy(srv->empty);
 	srv->pipe = NULL;          /* the devices may still report while they close */
 	devices_destroy(srv->dev); /* blanks the projector */
 	watchdog_destroy(srv->watchdog);

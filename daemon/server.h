@@ -42,6 +42,7 @@ struct server {
 	struct client_env client_env;
 	struct client_totals totals; /* against memory-budget and max-mappings */
 	struct watchdog *watchdog;   /* fed while nothing below is stuck */
+	struct volume *empty;        /* what a capture gets before any volume was shown */
 	/* Signs of progress, for the watchdog (CLOCK_MONOTONIC ns). */
 	int64_t dead_since_ns; /* the oldest dead client not yet reaped; 0: none */
 	int64_t state_ns;      /* the state timer's last run */

@@ -6,6 +6,7 @@
  *
  *   hello [SECONDS]        (socket: $SPINDLE_SOCKET, else the default) */
 #include <errno.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,6 +16,12 @@
 
 int main(int argc, char **argv)
 {
+	if (argc > 2 || (argc == 2 && (argv[1][0] < '0' || argv[1][0] > '9'))) {
+		bool help = !strcmp(argv[1], "--help") || !strcmp(argv[1], "-h");
+		fprintf(help ? stdout : stderr,
+			"usage: hello [SECONDS]   (socket: $SPINDLE_SOCKET, else the default)\n");
+		return help ? 0 : 2;
+	}
 	unsigned hold = argc > 1 ? (unsigned)atoi(argv[1]) : 0;
 	struct spindle *sp = spindle_connect(NULL);
 	if (!sp) {

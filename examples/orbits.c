@@ -15,6 +15,7 @@
 #include <math.h>
 #include <poll.h>
 #include <signal.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -209,8 +210,9 @@ int main(int argc, char **argv)
 		else if (!strcmp(argv[i], "--socket") && i + 1 < argc)
 			socket = argv[++i];
 		else {
-			fprintf(stderr, "usage: orbits [--seconds S] [--socket PATH]\n");
-			return 2;
+			bool help = !strcmp(argv[i], "--help") || !strcmp(argv[i], "-h");
+			fprintf(help ? stdout : stderr, "usage: orbits [--seconds S] [--socket PATH]\n");
+			return help ? 0 : 2;
 		}
 	}
 	signal(SIGINT, on_signal);

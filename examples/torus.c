@@ -14,6 +14,7 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -137,8 +138,9 @@ int main(int argc, char **argv)
 		else if (!strcmp(argv[i], "--socket") && i + 1 < argc)
 			socket = argv[++i];
 		else {
-			fprintf(stderr, "usage: torus [--rings N] [--exclusive] [--socket PATH]\n");
-			return 2;
+			bool help = !strcmp(argv[i], "--help") || !strcmp(argv[i], "-h");
+			fprintf(help ? stdout : stderr, "usage: torus [--rings N] [--exclusive] [--socket PATH]\n");
+			return help ? 0 : 2;
 		}
 	}
 	if (rings < 3 || rings > 4096) {

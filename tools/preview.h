@@ -1,5 +1,5 @@
 /* A picture of a volume as a person standing beside the display sees it:
- * every lit voxel is a point of light at its place in volume space (DESIGN.md
+ * every lit voxel is a point of light at its place in volume space (docs/design.md
  * section 3), seen in perspective through the transparent, emissive volume,
  * added up and tone-mapped onto a dark background.
  *

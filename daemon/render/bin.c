@@ -284,7 +284,7 @@ static uint8_t point_size(const struct scene_draw *d)
 }
 
 /* A point lights one voxel (a square of them when larger) in each lobe's
- * image (DESIGN.md section 3). On a mirrored device both lobes usually fold
+ * image (docs/design.md section 3). On a mirrored device both lobes usually fold
  * onto one volume image and then give one record: the square is placed in
  * the volume image's own columns, which the mirrored half turn shows
  * mirrored. */

@@ -1,4 +1,4 @@
-/* Per-volume binning (DESIGN.md section 5), shared by the renderers.
+/* Per-volume binning (docs/design.md section 5), shared by the renderers.
  *
  * Every draw's vertices are transformed to volume space once per volume and
  * primitives with a non-finite vertex are dropped. Each vertex gets its

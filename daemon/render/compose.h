@@ -5,7 +5,7 @@
  * halftone, and a pixel of value c is lit iff c > its threshold, so for one
  * image and pixel threshold(max(a, b)) = threshold(a) OR threshold(b): the
  * volume of a scene is exactly the OR of the volumes of any split of its
- * draws, rendered apart by the same renderer (DESIGN.md sections 3 and 5).
+ * draws, rendered apart by the same renderer (docs/design.md sections 3 and 5).
  * Composition is that OR, tile by tile.
  *
  * The compressed form (struct rle_volume) keeps, per image, the occupancy

@@ -1,4 +1,4 @@
-/* The ordered dither of DESIGN.md section 3 (the threshold of a pixel in an
+/* The ordered dither of docs/design.md section 3 (the threshold of a pixel in an
  * image), and halftone + pack of one canvas tile: 8-bit RGB in, 1 bit per
  * channel out, in several bit-identical variants chosen at run time by what
  * the CPU supports.

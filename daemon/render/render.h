@@ -1,7 +1,7 @@
 /* Renderers: take a scene snapshot, produce a packed tile-sparse volume.
  *
  * Every renderer lights, for each image k of the volume, the voxels of
- * DESIGN.md section 3: both lobes of image k's bow tie, colours combined per
+ * docs/design.md section 3: both lobes of image k's bow tie, colours combined per
  * channel by MAX, then ordered-dithered to 1 bit per channel with a threshold
  * phase that depends on k only (halftone.h), and packed. Image k + N/2 of a
  * mirrored device is never rendered: the hardware mirrors image k.

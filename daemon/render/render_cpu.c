@@ -1,5 +1,5 @@
 /* The exact CPU sectioning renderer: the reference every other renderer is
- * measured against, and the fast path without a GPU (DESIGN.md section 5).
+ * measured against, and the fast path without a GPU (docs/design.md section 5).
  * Per volume, a persistent pool of workers transforms and bins the scene
  * (bin.h); then the workers take images one at a time, light the points
  * binned there, section the primitives of the image's runs into an 8-bit

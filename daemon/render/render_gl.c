@@ -1,4 +1,4 @@
-/* The GL renderer: DESIGN.md section 5's pipeline on OpenGL ES 3.1 (EGL) or
+/* The GL renderer: docs/design.md section 5's pipeline on OpenGL ES 3.1 (EGL) or
  * desktop OpenGL 4.5 (OSMesa), with the same GLSL (gl_shaders.h).
  *
  * Per volume the CPU bins the scene exactly as the CPU renderer does

@@ -4,7 +4,7 @@
 
 #include "renderer.h"
 
-/* The GL pipeline of DESIGN.md section 5 on an EGL (surfaceless or device)
+/* The GL pipeline of docs/design.md section 5 on an EGL (surfaceless or device)
  * or OSMesa context. NULL + errno when there is no usable context or a
  * shader does not build (ENOENT: backend not built in), with a log line
  * saying why. After a failure while rendering (context lost, GL error, a

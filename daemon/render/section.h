@@ -1,5 +1,5 @@
 /* Exact sectioning by one image's bow tie, and conservative rasterisation of
- * the sections into an 8-bit RGB canvas (DESIGN.md section 3).
+ * the sections into an 8-bit RGB canvas (docs/design.md section 3).
  *
  * Image k's bow tie is two closed wedges meeting at the y axis, bounded by
  * the planes through the axis at azimuths theta_k - D/2 and theta_k + D/2:

@@ -1,5 +1,5 @@
 /* Which slot of the revolution an azimuth falls in, from slopes instead of
- * atan2 (DESIGN.md section 5, binning).
+ * atan2 (docs/design.md section 5, binning).
  *
  * Slot j of N is the closed wedge of azimuths [(j - 1/2) D, (j + 1/2) D],
  * D = 2 pi / N: the s >= 0 lobe of image j. The four planes through the

@@ -71,7 +71,7 @@ struct volume *capture_volume(struct spindle *sp);
  * until shown. The objects stay alive until the connection is closed. */
 void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g, uint8_t b);
 
-/* Expectations from DESIGN.md section 3 (computed here, not by spindled):
+/* Expectations from docs/design.md section 3 (computed here, not by spindled):
  * the volume image, column and row a point lights. */
 struct voxel {
 	uint32_t k, u, v;

@@ -1,5 +1,5 @@
 /* Shapes, checks and helpers shared by the protocol test programs: the
- * small profile's geometry (DESIGN.md section 3, computed here, not by
+ * small profile's geometry (docs/design.md section 3, computed here, not by
  * spindled), shapes as vertex arrays, and libspindle shorthands. */
 #ifndef SPINDLE_TEST_SCENES_H
 #define SPINDLE_TEST_SCENES_H

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """The example clients (examples/) against spindled on the simulated device:
 each runs to its end, exits 0 and shows what it says it shows.
-Usage: test-examples.py SPINDLED ORBITS TORUS"""
+Usage: test-examples.py SPINDLED ORBITS TORUS HELLO"""
 import os
 import re
 import shutil
@@ -11,7 +11,7 @@ import sys
 import tempfile
 import time
 
-spindled, orbits, torus = sys.argv[1:4]
+spindled, orbits, torus, hello = sys.argv[1:5]
 tmp = tempfile.mkdtemp(prefix='spindle-examples-')
 
 
@@ -19,6 +19,15 @@ def check(cond, what):
     if not cond:
         print('FAIL:', what)
         sys.exit(1)
+
+
+# --help: the usage on stdout, exit 0; a bad option: usage on stderr, exit 2.
+for prog in (orbits, torus, hello):
+    name = os.path.basename(prog)
+    p = subprocess.run([prog, '--help'], capture_output=True, text=True, timeout=10)
+    check(p.returncode == 0 and p.stdout.startswith(f'usage: {name}'), f'{name} --help: {p.returncode} {p.stdout!r}')
+    p = subprocess.run([prog, '--bogus'], capture_output=True, text=True, timeout=10)
+    check(p.returncode == 2 and p.stderr.startswith(f'usage: {name}'), f'{name} --bogus: {p.returncode} {p.stderr!r}')
 
 
 def start(config):

@@ -131,7 +131,12 @@ def test_config():
     check(p.returncode == 2, 'a named config file that is missing is an error')
     p = subprocess.run([spindled, '-p', 'huge', '-s', sock, '-c', '/dev/null'], capture_output=True,
                        text=True, timeout=10)
-    check(p.returncode != 0 and "unknown profile 'huge'" in p.stderr, f'unknown profile: {p.stderr!r}')
+    check(p.returncode == 2 and "bad value for 'profile' (one of: perspecta, small)" in p.stderr,
+          f'unknown profile: exit 2 naming the profiles: {p.returncode} {p.stderr!r}')
+    p = subprocess.run([spindled, '-r', 'vulkan', '-s', sock, '-c', '/dev/null'], capture_output=True,
+                       text=True, timeout=10)
+    check(p.returncode == 2 and "(one of: auto, cpu, egl, osmesa)" in p.stderr,
+          f'unknown renderer: exit 2 naming the renderers: {p.returncode} {p.stderr!r}')
 
 
 

@@ -1,6 +1,6 @@
 /* The protocol test suite: spindled on the simulated device at the small
  * profile, driven through libspindle and raw sockets. Every expectation is
- * computed here from DESIGN.md section 3. Usage: test-protocol NAME. */
+ * computed here from docs/design.md section 3. Usage: test-protocol NAME. */
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -735,7 +735,34 @@ static void test_gl_bad_shader(void)
 	test_gl_unavailable("shader", "shader does not compile");
 }
 
+/* A capture on a display that has shown nothing is answered at once with
+ * the empty volume: while it is still dark (the simulated rotor spinning
+ * up, no timing yet) and once it is lit with an empty scene. */
+static void test_capture_empty(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	for (int lit = 0; lit < 2; lit++) {
+		if (lit)
+			CHECK(spindle_commit_and_wait(sp, NULL) == 0); /* answered once shown lit */
+		struct timespec t0, t1;
+		clock_gettime(CLOCK_MONOTONIC, &t0);
+		struct volume *vol = capture_volume(sp);
+		clock_gettime(CLOCK_MONOTONIC, &t1);
+		double s = (double)(t1.tv_sec - t0.tv_sec) + (double)(t1.tv_nsec - t0.tv_nsec) / 1e9;
+		printf("capture %s: %llu tiles in %.3f s\n", lit ? "lit" : "dark",
+		       (unsigned long long)volume_tile_count(vol), s);
+		CHECK(volume_tile_count(vol) == 0);
+		CHECK(s < 2.0); /* a state timer period or a revolution, with room for a loaded machine */
+		volume_destroy(vol);
+	}
+	spindle_disconnect(sp);
+	daemon_stop(&d);
+}
+
 static const struct named_test tests[] = {
+	{ "capture-empty", test_capture_empty },
 	{ "device-info", test_device_info },
 	{ "axis-line", test_axis_line },
 	{ "disk", test_disk },

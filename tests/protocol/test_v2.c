@@ -243,7 +243,7 @@ static void test_vertex_colour(void)
 }
 
 /* A point of size 3 lights the 3 x 3 pixels around its voxel, and only
- * them (DESIGN.md section 3, computed here). */
+ * them (docs/design.md section 3, computed here). */
 static void test_point_size(void)
 {
 	struct daemon d;

@@ -137,7 +137,7 @@ uint32_t rtest_edge_points(const struct geometry *g, struct rtest_mesh *m)
 	return n + 1;
 }
 
-/* floor(f) clamped to 0 .. n - 1 (DESIGN.md: "both clamped"). */
+/* floor(f) clamped to 0 .. n - 1 (docs/design.md: "both clamped"). */
 static uint32_t design_index(double f, uint32_t n)
 {
 	double i = floor(f);

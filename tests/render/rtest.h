@@ -1,6 +1,6 @@
 /* Helpers shared by the renderer tests: geometries, scenes and meshes, and
  * reading rendered volumes back. Expectations are computed by the tests from
- * DESIGN.md section 3 and common/geometry.c, never from the renderer's code. */
+ * docs/design.md section 3 and common/geometry.c, never from the renderer's code. */
 #ifndef SPINDLE_RTEST_H
 #define SPINDLE_RTEST_H
 
@@ -43,7 +43,7 @@ void rtest_wall(struct rtest_mesh *m, double a, double b);
 uint32_t rtest_edge_points(const struct geometry *g, struct rtest_mesh *m);
 
 /* The voxels of point p in its two images, lobe s >= 0 then s < 0
- * (DESIGN.md section 3: image round(phi / D) mod N, folded onto the volume's
+ * (docs/design.md section 3: image round(phi / D) mod N, folded onto the volume's
  * images when mirrored; column of s = p . d_k in volume image k, row of y),
  * computed from the formulas, not with common/geometry.c. On a mirrored
  * device the two are usually the same voxel. */

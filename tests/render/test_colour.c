@@ -1,4 +1,4 @@
-/* Colour: MAX combine, and the ordered dither of DESIGN.md section 3 (0
+/* Colour: MAX combine, and the ordered dither of docs/design.md section 3 (0
  * never lit, 255 always, c lights about c/255, a fixed phase per image that
  * differs between images). */
 #include <math.h>

@@ -1,5 +1,5 @@
 /* The GL renderers (EGL, and OSMesa where the build has it) against the CPU
- * reference. They are not bit-identical to it (DESIGN.md section 5: a
+ * reference. They are not bit-identical to it (docs/design.md section 5: a
  * jittered perspective slab, shader clipping with a bias at the axis), but
  * they must light what it lights within one voxel (coverage >= 99.5%) and
  * little else (stray <= 5%), with clear padding, at the small profile and

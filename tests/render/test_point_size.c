@@ -2,7 +2,7 @@
  * size s lights, in each volume image it lies in, the s x s square of
  * columns u - (s-1)/2 .. u + s/2 and rows v - (s-1)/2 .. v + s/2 around its
  * voxel (u, v), clipped to the image; 0 counts as 1, sizes above 16 as 16.
- * The expected squares come from DESIGN.md section 3's formulas
+ * The expected squares come from docs/design.md section 3's formulas
  * (rtest_point_voxels()) for points at and beyond the image edges and
  * corners (rtest_edge_points()), mirrored (the square lies in the volume
  * image's own columns) and not, and are compared pixel for pixel. */

@@ -1,4 +1,4 @@
-/* Points light exactly the voxels DESIGN.md section 3 assigns them: image
+/* Points light exactly the voxels docs/design.md section 3 assigns them: image
  * round(phi / D) mod N (lobe s >= 0) and round((phi - pi) / D) mod N (lobe
  * s < 0), folded onto N/2 volume images when mirrored, column from
  * s = p . d_k of the volume image, row from y, both clamped. */

@@ -1,6 +1,6 @@
 /* Per-primitive colours (scene.h prim_rgb) on the CPU renderer: each point,
  * segment and triangle lights in its own colour instead of the draw's,
- * colours still combine per channel by MAX and dither as DESIGN.md section
+ * colours still combine per channel by MAX and dither as docs/design.md section
  * 3 says, and a primitive dropped for a non-finite vertex does not shift
  * the colours of those after it. The draws' own rgb is white throughout,
  * so a renderer that ignored prim_rgb would light every channel. */

@@ -431,7 +431,7 @@ static void check_within_one(const char *what, const struct volume *ref, const s
 
 /* 4. A turn is the rotation about the axis, to within one voxel. Except
  * for a point exactly on the axis: it lies in image 0 however it is
- * rotated (phi = atan2(0, 0) = 0, DESIGN.md section 3), while a turn moves
+ * rotated (phi = atan2(0, 0) = 0, docs/design.md section 3), while a turn moves
  * it to image m with its draw (both within a voxel of the axis in space,
  * not in image index), so the scene here has none. */
 static void check_geometry(const char *name, const struct geometry *g)

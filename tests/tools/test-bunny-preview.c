@@ -1,5 +1,5 @@
 /* A visual check of the preview: light what a renderer would light for the
- * bunny's vertices (DESIGN section 3 point ownership) at the small and the
+ * bunny's vertices (docs/design.md section 3 point ownership) at the small and the
  * perspecta profiles, and write previews to look at. The checks are coarse
  * (the bunny's picture is lit where it should be and nowhere near the
  * corners); the pictures are for a person.

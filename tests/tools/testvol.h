@@ -28,7 +28,7 @@ struct testvol *testvol_create(const struct geometry *geom);
 void testvol_destroy(struct testvol *tv);
 /* ORs rgb_bits (bit 0 R, 1 G, 2 B) into voxel (k, u, v). */
 void testvol_set(struct testvol *tv, uint32_t k, uint32_t u, uint32_t v, unsigned rgb_bits);
-/* Lights the voxel owning volume-space point p in its s >= 0 lobe (DESIGN
+/* Lights the voxel owning volume-space point p in its s >= 0 lobe (docs/design.md
  * section 3 ownership; a mirrored volume stores image k + N/2 as image k). */
 void testvol_light_point(struct testvol *tv, const double p[3], unsigned rgb_bits);
 /* A new volume holding the lit voxels (exits on failure). */

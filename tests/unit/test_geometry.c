@@ -1,4 +1,4 @@
-/* common/geometry: profiles, validation and the DESIGN.md section 3
+/* common/geometry: profiles, validation and the docs/design.md section 3
  * formulas (columns, rows, ownership of azimuths), edges and clamping. */
 #include <errno.h>
 #include <math.h>

@@ -1,4 +1,4 @@
-/* common/svol: the 64-byte header at exactly DESIGN.md's byte offsets
+/* common/svol: the 64-byte header at exactly docs/design.md's byte offsets
  * (little-endian), rejection of malformed headers, and file round trips. */
 #include <errno.h>
 #include <stdlib.h>

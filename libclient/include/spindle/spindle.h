@@ -5,7 +5,7 @@
  * list's placement in the shared volume), and commits: everything set since
  * the last commit shows together, from one volume on. Geometry conventions
  * (volume space, y up along the rotation axis, unit = display radius) are
- * those of Spindle's DESIGN.md and docs/protocol.md.
+ * those of docs/design.md and docs/protocol.md.
  *
  * Threading: a struct spindle and its objects are used from one thread at a
  * time. Errors: functions returning int return 0 (or a count) on success and
