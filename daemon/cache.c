@@ -45,9 +45,11 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->tmp = volume_create(geom);
 	if (c->prev) {
 		c->dirty = calloc(c->prev->image_count, c->prev->mask_bytes);
-		c->changed = calloc(CHANGED_HISTORY, c->prev->image_count);
+		c->changed = calloc(CHANGED_HISTORY, (size_t)c->prev->image_count * c->prev->mask_bytes);
+		c->changed_mask = calloc(1, c->prev->mask_bytes);
 	}
-	if (!c->compose || !c->prev || !c->dirty || !c->changed || !c->rest_vol || !c->tmp || !c->turned_vol) {
+	if (!c->compose || !c->prev || !c->dirty || !c->changed || !c->changed_mask || !c->rest_vol || !c->tmp ||
+	    !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -132,6 +134,7 @@ void cache_destroy(struct cache *c)
 	volume_destroy(c->prev);
 	free(c->dirty);
 	free(c->changed);
+	free(c->changed_mask);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);

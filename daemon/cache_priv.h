@@ -104,12 +104,13 @@ struct cache {
 	struct compose_source *sources;
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */
-	/* Handing out: compositions made (gen), the images each of the last
-	 * CHANGED_HISTORY changed (image_count flags at changed[gen %
+	/* Handing out: compositions made (gen), the tiles each of the last
+	 * CHANGED_HISTORY changed (image_count masks at changed[gen %
 	 * CHANGED_HISTORY]), and the last volumes handed out, known by the
 	 * origin mark (volume.h) each got and the composition it holds. */
 	uint64_t gen;
 	uint8_t *changed;
+	uint8_t *changed_mask; /* one image's, work space */
 	struct handed {
 		uint64_t origin, gen;
 	} handed[HANDED_VOLUMES];

@@ -165,30 +165,51 @@ static int render_parts(struct cache *c, struct renderer *r, const struct scene 
 	return 0;
 }
 
-/* The images the composition about to be made may change (c->gen's
- * flags): those with dirty tiles, or all when it is made whole. */
+/* The tiles the composition about to be made may change (c->gen's
+ * masks): the dirty ones, or all when it is made whole. */
 static void note_changes(struct cache *c)
 {
-	uint32_t n = c->prev->image_count, mb = c->prev->mask_bytes;
-	uint8_t *changed = c->changed + (size_t)(++c->gen % CHANGED_HISTORY) * n;
-	for (uint32_t k = 0; k < n; k++) {
-		const uint8_t *d = c->dirty + (size_t)k * mb;
-		uint8_t any = !c->prev_valid;
-		for (uint32_t b = 0; b < mb && !any; b++)
-			any = d[b];
-		changed[k] = any != 0;
-	}
+	size_t bytes = (size_t)c->prev->image_count * c->prev->mask_bytes;
+	uint8_t *changed = c->changed + (size_t)(++c->gen % CHANGED_HISTORY) * bytes;
+	memset(changed, c->prev_valid ? 0 : 0xff, bytes);
+	if (c->prev_valid)
+		memcpy(changed, c->dirty, bytes);
 }
 
-/* Whether image k changed in a composition after had (up to c->gen, at
- * most CHANGED_HISTORY back). */
-static bool changed_since(const struct cache *c, uint64_t had, uint32_t k)
+/* The tiles of image k changed in the compositions after had (up to
+ * c->gen, at most CHANGED_HISTORY back), into mask; whether any. */
+static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8_t *mask)
 {
-	uint32_t n = c->prev->image_count;
-	for (uint64_t g = had + 1; g <= c->gen; g++)
-		if (c->changed[(size_t)(g % CHANGED_HISTORY) * n + k])
-			return true;
-	return false;
+	uint32_t mb = c->prev->mask_bytes;
+	size_t bytes = (size_t)c->prev->image_count * mb;
+	uint8_t any = 0;
+	memset(mask, 0, mb);
+	for (uint64_t g = had + 1; g <= c->gen; g++) {
+		const uint8_t *m = c->changed + (size_t)(g % CHANGED_HISTORY) * bytes + (size_t)k * mb;
+		for (uint32_t b = 0; b < mb; b++)
+			any |= mask[b] |= m[b];
+	}
+	return any != 0;
+}
+
+/* Image k of prev into out, which holds an earlier composition that
+ * differs at most in the tiles of changed: where both store the same
+ * tiles, only the changed ones are copied, in place. */
+static int copy_changed(struct volume *out, const struct volume *prev, uint32_t k, const uint8_t *changed)
+{
+	const struct volume_image *src = &prev->images[k];
+	struct volume_image *dst = &out->images[k];
+	if (src->tile_count != dst->tile_count || memcmp(src->mask, dst->mask, prev->mask_bytes))
+		return volume_copy_image(out, k, prev);
+	uint32_t base = 0; /* the stored index of the first tile of byte b */
+	for (uint32_t b = 0; b < prev->mask_bytes; base += volume_mask_bits(src->mask[b]), b++)
+		for (uint32_t d = changed[b] & src->mask[b]; d; d &= d - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctz(d);
+			size_t at = (size_t)(base + volume_mask_bits(src->mask[b] & ((1u << bitno) - 1))) *
+				    VOLUME_TILE_BYTES;
+			memcpy(dst->tiles + at, src->tiles + at, VOLUME_TILE_BYTES);
+		}
+	return 0;
 }
 
 /* The composition copied into out: only the images changed since the one
@@ -206,8 +227,8 @@ static int hand_out(struct cache *c, struct volume *out)
 		err = volume_copy(out, c->prev);
 	} else {
 		for (uint32_t k = 0; k < out->image_count && err == 0; k++)
-			if (changed_since(c, had, k))
-				err = volume_copy_image(out, k, c->prev);
+			if (changed_since(c, had, k, c->changed_mask))
+				err = copy_changed(out, c->prev, k, c->changed_mask);
 		out->seq = c->prev->seq;
 		out->shown_ns = c->prev->shown_ns;
 	}

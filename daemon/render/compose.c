@@ -442,9 +442,35 @@ static int keep_tile(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *
 	return volume_image_push(vol, k, t);
 }
 
-/* Image k of c->out anew: its clean tiles kept, its dirty ones composed
- * from the sources (gathered into w's dense image first), built in
- * c->tmp's image k and exchanged. */
+/* Where every dirty tile of old is as present as it was (an object moving
+ * over a static one), the gathered tiles are written over old's in place,
+ * leaving w's dense image zero: true. Else nothing is done: false. */
+static bool patch_in_place(const struct compose *c, struct compose_worker *w, struct volume_image *old,
+			   const uint8_t *dirty)
+{
+	for (uint32_t b = 0; b < c->mask_bytes; b++)
+		for (uint32_t d = dirty[b]; d; d &= d - 1) {
+			uint32_t t = b * 8 + (uint32_t)__builtin_ctz(d);
+			if (w->touched[t] != bit(old->mask, t))
+				return false;
+		}
+	uint32_t base = 0; /* the stored index of the first tile of byte b */
+	for (uint32_t b = 0; b < c->mask_bytes; base += volume_mask_bits(old->mask[b]), b++)
+		for (uint32_t d = dirty[b] & old->mask[b]; d; d &= d - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctz(d), t = b * 8 + bitno;
+			uint32_t i = base + volume_mask_bits(old->mask[b] & ((1u << bitno) - 1));
+			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+			memcpy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
+			memset(tile, 0, VOLUME_TILE_BYTES);
+			w->touched[t] = 0;
+		}
+	return true;
+}
+
+/* Image k of c->out anew: its dirty tiles composed from the sources
+ * (gathered into w's dense image first), written over in place where the
+ * tiles present stay the same, else the image built in c->tmp's image k
+ * (clean tiles kept) and exchanged. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
@@ -457,6 +483,8 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
 		err = gather_dirty(c, w, &c->img_src[i], k, dirty);
 	struct volume_image *old = &c->out->images[k];
+	if (err == 0 && patch_in_place(c, w, old, dirty))
+		return 0;
 	volume_image_clear(c->tmp, k);
 	if (err == 0)
 		err = volume_image_reserve(c->tmp, k, old->tile_count + dirty_count);
