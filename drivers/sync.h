@@ -1,6 +1,7 @@
 /* Rotation sync sources: the index pulse, once per revolution (rising edge),
  * timestamped with CLOCK_MONOTONIC. Backends: "sim" (a simulated rotor) and
- * "gpiod" (a GPIO line through libgpiod, sync_gpiod.c). The estimator
+ * "gpiod" (a GPIO line through libgpiod: sync_gpiod_common.c, with
+ * sync_gpiod.c for libgpiod 1 or sync_gpiod2.c for libgpiod 2). The estimator
  * turning edges into period/phase/lock lives in sync_estimator.h and is
  * shared by every backend. */
 #ifndef SPINDLE_SYNC_H

@@ -1,11 +1,10 @@
-/* The gpiod sync source without a GPIO chip: its edge reader runs on a pipe
- * fed with kernel-format GPIO uAPI v1 event records (struct
- * gpioevent_data), so libgpiod's own record parsing runs as on a real line.
- * sync_gpiod_create() is checked for its failures only; with a gpiochip on
- * the machine, the missing-chip case is skipped. */
+/* The gpiod sync source's libgpiod 1 backend (sync_gpiod.c) without a GPIO
+ * chip: its edge reader runs on a pipe fed with kernel-format GPIO uAPI v1
+ * event records (struct gpioevent_data), so libgpiod's own record parsing
+ * runs as on a real line. Built only with that backend; the clock picker
+ * and sync_gpiod_create()'s failures are test_sync_gpiod_common.c's. */
 #include <errno.h>
 #include <fcntl.h>
-#include <glob.h>
 #include <linux/gpio.h>
 #include <math.h>
 #include <poll.h>
@@ -67,43 +66,6 @@ static void pipe_source_destroy(struct sync_source *s, int p[2])
 	close(p[0]);
 	if (p[1] >= 0)
 		close(p[1]);
-}
-
-static void test_pick_clock(void)
-{
-	int64_t mono = 1000 * NSEC, real = 1700000000 * NSEC;
-	bool sure;
-	/* Clocks far apart: any recent edge settles it. */
-	CHECK_EQ(sync_gpiod_pick_clock(mono - 1000, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	CHECK(sure);
-	CHECK_EQ(sync_gpiod_pick_clock(real - 1000, mono, real, &sure), SYNC_GPIOD_CLOCK_REALTIME);
-	CHECK(sure);
-	CHECK_EQ(sync_gpiod_pick_clock(mono, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	/* Ahead of both clocks, or negative: no timestamp at all. */
-	CHECK_EQ(sync_gpiod_pick_clock(real + 1, mono, real, &sure), SYNC_GPIOD_CLOCK_UNKNOWN);
-	CHECK(!sure);
-	CHECK_EQ(sync_gpiod_pick_clock(-5, mono, real, &sure), SYNC_GPIOD_CLOCK_UNKNOWN);
-	CHECK(!sure);
-	/* Just ahead of MONOTONIC: only REALTIME fits, but an edge 1.7e9 s
-	 * old is garbage, never the kernel's: nothing settled. */
-	CHECK_EQ(sync_gpiod_pick_clock(mono + 1, mono, real, &sure), SYNC_GPIOD_CLOCK_REALTIME);
-	CHECK(!sure);
-	/* Clocks 50 ms apart (no RTC, before NTP). A MONOTONIC edge is
-	 * picked right at any age but never rules REALTIME out... */
-	real = mono + 50000000;
-	CHECK_EQ(sync_gpiod_pick_clock(mono - 5000000, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	CHECK(!sure);
-	CHECK_EQ(sync_gpiod_pick_clock(mono - 5 * NSEC, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	/* ...a young REALTIME edge lies ahead of MONOTONIC: sure... */
-	CHECK_EQ(sync_gpiod_pick_clock(real - 5000000, mono, real, &sure), SYNC_GPIOD_CLOCK_REALTIME);
-	CHECK(sure);
-	/* ...and one older than the clocks' distance is misread, unsure. */
-	CHECK_EQ(sync_gpiod_pick_clock(real - 80000000, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	CHECK(!sure);
-	/* REALTIME behind MONOTONIC, the mirror case. */
-	real = mono - 50000000;
-	CHECK_EQ(sync_gpiod_pick_clock(mono - 5000000, mono, real, &sure), SYNC_GPIOD_CLOCK_MONOTONIC);
-	CHECK(sure);
 }
 
 static void test_batch(void)
@@ -262,68 +224,15 @@ static void test_estimator(void)
 	check_lock_730(CLOCK_REALTIME);
 }
 
-/* Runs create(cfg) with stderr captured into log; returns its errno. */
-static int create_fails(const struct sync_gpiod_config *cfg, char *log, size_t size)
-{
-	int p[2], saved = dup(2);
-	CHECK(saved >= 0);
-	CHECK_EQ(pipe2(p, O_CLOEXEC | O_NONBLOCK), 0);
-	fflush(stderr);
-	dup2(p[1], 2);
-	errno = 0;
-	struct sync_source *s = sync_gpiod_create(cfg);
-	int err = errno;
-	fflush(stderr);
-	dup2(saved, 2);
-	close(saved);
-	close(p[1]);
-	ssize_t n = read(p[0], log, size - 1);
-	log[n > 0 ? n : 0] = '\0';
-	close(p[0]);
-	CHECK(!s);
-	return err;
-}
-
-static void test_create_fails(void)
-{
-	char log[2048];
-	struct sync_gpiod_config cfg = { .chip = "/dev/null", .line = "17" };
-	/* Not a GPIO chip at all: libgpiod's ioctl fails. */
-	CHECK(create_fails(&cfg, log, sizeof(log)) != 0);
-	CHECK_MSG(strstr(log, "/dev/null") && strstr(log, "17"), "log: %s", log);
-	memset(&cfg, 0, sizeof(cfg));
-	strcpy(cfg.chip, "gpiochip0");
-	CHECK_EQ(create_fails(&cfg, log, sizeof(log)), EINVAL); /* no line */
-	CHECK_EQ(create_fails(NULL, log, sizeof(log)), EINVAL);
-	memset(cfg.line, 'x', sizeof(cfg.line)); /* not terminated */
-	CHECK_EQ(create_fails(&cfg, log, sizeof(log)), EINVAL);
-
-	glob_t g;
-	int chips = glob("/dev/gpiochip*", 0, NULL, &g);
-	globfree(&g);
-	if (chips == 0) {
-		printf("skipped: a GPIO chip exists, no chip is sure to be missing\n");
-		return;
-	}
-	struct sync_gpiod_config missing = { .chip = "gpiochip-spindle-test", .line = "ROTOR_INDEX" };
-	CHECK_EQ(create_fails(&missing, log, sizeof(log)), ENOENT);
-	CHECK_MSG(strstr(log, "gpiochip-spindle-test") && strstr(log, "ROTOR_INDEX"), "log: %s", log);
-	strcpy(missing.chip, "/dev/gpiochip7");
-	strcpy(missing.line, "17");
-	CHECK_EQ(create_fails(&missing, log, sizeof(log)), ENOENT);
-}
-
 int main(void)
 {
 	int fds = count_fds();
-	test_pick_clock();
 	test_batch();
 	test_more_than_max();
 	test_falling_ignored();
 	test_bad_input();
 	test_realtime();
 	test_estimator();
-	test_create_fails();
 	CHECK_EQ(count_fds(), fds);
 	return check_done();
 }
