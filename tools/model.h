@@ -4,12 +4,27 @@
  * Coordinates are the file's own, with every node transform of the file's
  * scene graph applied. Polygons are triangulated; OBJ `l` elements become
  * line segments (a polyline of n vertices gives n-1 segments); point clouds
- * (a PLY with vertices only) and point primitives become points. */
+ * (a PLY with vertices only) and point primitives become points.
+ *
+ * A model file is untrusted input: model_load() parses it in a short-lived
+ * child process without privileges (model_sandbox.c: nobody when started
+ * as root, no_new_privs, memory and CPU limits, a seccomp filter that
+ * allows reading the open file and writing the result, little else) and
+ * checks what comes back again before using it: counts, indices, finite
+ * coordinates. A loader that crashes, hangs or breaks the rules is an
+ * error naming the file, never a crash of the caller. */
 #ifndef SPINDLE_TOOLS_MODEL_H
 #define SPINDLE_TOOLS_MODEL_H
 
 #include <stddef.h>
+#include <stdint.h>
 
+/* Colours: when the file gives any vertex a colour other than opaque white
+ * (per-vertex colours: PLY red/green/blue[/alpha], assimp's first colour
+ * set; else the diffuse colour of a mesh's material, assimp's default
+ * material counting as white), the three colour arrays hold R, G, B, A for
+ * every vertex of the matching primitive array; otherwise all three are
+ * NULL. */
 struct model {
 	float *triangles; /* 9 floats (3 vertices x, y, z) per triangle */
 	size_t triangle_count;
@@ -17,6 +32,9 @@ struct model {
 	size_t line_count;
 	float *points; /* 3 floats per point */
 	size_t point_count;
+	uint8_t *triangle_colors; /* NULL, or 12 bytes (3 x RGBA) per triangle */
+	uint8_t *line_colors;     /* NULL, or 8 bytes per segment */
+	uint8_t *point_colors;    /* NULL, or 4 bytes per point */
 };
 
 /* Uniform scale about a centre: v' = (v - centre) * scale. */
@@ -25,10 +43,15 @@ struct model_fit {
 	float scale;
 };
 
-/* Loads a model file. Returns a model owned by the caller (free it with
- * model_destroy()), or NULL with errno set (ENOENT, ENOMEM, EINVAL for a
- * file assimp can't read, ENODATA for a file with no primitives). When err is
- * not NULL it receives a one-line reason on failure (NUL-terminated, cut to
+/* Loads a model file in the sandboxed loader. Returns a model owned by the
+ * caller (free it with model_destroy()), or NULL with errno set: ENOENT
+ * (and the other errors of open(2)), ENOMEM, EINVAL for a file that can't
+ * be read as a model (assimp refuses it, a vertex is NaN or infinite, the
+ * loader crashed, timed out or sent a malformed result), E2BIG for a model
+ * over the limits of model_wire.h, ENODATA for a file with no primitives,
+ * EPERM when the loader could not give up its privileges. When err is not
+ * NULL it receives a one-line reason on failure naming the file
+ * ("FILE: the model loader crashed (signal 11)"; NUL-terminated, cut to
  * err_size bytes). */
 struct model *model_load(const char *path, char *err, size_t err_size);
 

@@ -44,8 +44,9 @@ static const char usage_text[] =
 	"commands:\n"
 	"  status                          device geometry and daemon state\n"
 	"  show FILE [--no-fit] [--color RRGGBB]\n"
-	"                                  show a model (STL, OBJ, PLY, ...) until\n"
-	"                                  SIGINT/SIGTERM; prints \"shown SEQ\"\n"
+	"                                  show a model (STL, OBJ, PLY, ...) in its\n"
+	"                                  own colours until SIGINT/SIGTERM; prints\n"
+	"                                  \"shown SEQ\"\n"
 	"  capture OUT.svol                save the next volume shown\n"
 	"  preview IN.svol OUT.png [--size N]\n"
 	"                                  picture of a captured volume (no daemon)\n"
@@ -202,21 +203,77 @@ static int draw_array(struct spindle *sp, struct spindle_list *list, const float
 	return ret;
 }
 
-static int build_scene(struct spindle *sp, const struct model *m, const uint8_t rgb[3], struct spindle_list **list_out,
-		       struct spindle_layer **layer_out)
+/* Like draw_array(), with the model's colours: 16-byte vertices (xyz,
+ * RGBA8), protocol version 2. */
+static int draw_colored(struct spindle *sp, struct spindle_list *list, enum spindle_mode mode, const float *xyz,
+			const uint8_t *rgba, size_t vertices)
 {
-	struct spindle_list *list = spindle_list_create(sp);
-	struct spindle_layer *layer = spindle_layer_create(sp);
-	int ret = list && layer ? 0 : -errno;
+	if (vertices == 0)
+		return 0;
+	if (vertices > UINT32_MAX / 16)
+		return -E2BIG;
+	uint8_t *data = malloc(16 * vertices);
+	if (!data)
+		return -ENOMEM;
+	for (size_t i = 0; i < vertices; i++) {
+		memcpy(&data[16 * i], &xyz[3 * i], 12);
+		memcpy(&data[16 * i + 12], &rgba[4 * i], 4);
+	}
+	struct spindle_buffer *buf = spindle_buffer_create(sp, data, 16 * vertices);
+	free(data);
+	if (!buf)
+		return -errno;
+	int ret = spindle_list_draw(list, mode, buf, 0, (uint32_t)vertices, 0);
+	spindle_buffer_destroy(buf);
+	return ret;
+}
 
+static int draw_model_colored(struct spindle *sp, struct spindle_list *list, const struct model *m)
+{
+	int ret = spindle_list_set_vertex_format(list, SPINDLE_XYZ_RGBA8);
 	if (ret == 0)
-		ret = spindle_list_set_color(list, rgb[0], rgb[1], rgb[2], 255);
+		ret = draw_colored(sp, list, SPINDLE_TRIANGLES, m->triangles, m->triangle_colors,
+				   3 * m->triangle_count);
+	if (ret == 0)
+		ret = draw_colored(sp, list, SPINDLE_LINES, m->lines, m->line_colors, 2 * m->line_count);
+	if (ret == 0)
+		ret = draw_colored(sp, list, SPINDLE_POINTS, m->points, m->point_colors, m->point_count);
+	return ret;
+}
+
+static int draw_model_plain(struct spindle *sp, struct spindle_list *list, const struct model *m, const uint8_t rgb[3])
+{
+	int ret = spindle_list_set_color(list, rgb[0], rgb[1], rgb[2], 255);
 	if (ret == 0)
 		ret = draw_array(sp, list, m->triangles, 3 * m->triangle_count, spindle_list_triangles);
 	if (ret == 0)
 		ret = draw_array(sp, list, m->lines, 2 * m->line_count, spindle_list_lines);
 	if (ret == 0)
 		ret = draw_array(sp, list, m->points, m->point_count, spindle_list_points);
+	return ret;
+}
+
+/* The model in its own colours, unless --color says otherwise or the
+ * daemon is too old for per-vertex colour (then white, with a warning). */
+static int build_scene(struct spindle *sp, const struct model *m, const struct ctl_args *a,
+		       struct spindle_list **list_out, struct spindle_layer **layer_out)
+{
+	static const uint8_t white[3] = { 255, 255, 255 };
+	struct spindle_list *list = spindle_list_create(sp);
+	struct spindle_layer *layer = spindle_layer_create(sp);
+	int ret = list && layer ? 0 : -errno;
+	bool own_colors = m->triangle_colors && !a->has_color;
+
+	if (own_colors && spindle_get_version(sp) < 2) {
+		fprintf(stderr,
+			"spindlectl: %s: the daemon speaks protocol %u, the model's colours need 2: "
+			"shown in white\n",
+			a->operand[0], spindle_get_version(sp));
+		own_colors = false;
+	}
+	if (ret == 0)
+		ret = own_colors ? draw_model_colored(sp, list, m)
+				 : draw_model_plain(sp, list, m, a->has_color ? a->color : white);
 	if (ret == 0)
 		ret = spindle_layer_set_list(layer, list);
 	*list_out = list;
@@ -295,7 +352,6 @@ static int announce_and_hold(struct spindle *sp, uint64_t seq)
 
 static int show_model(struct spindle *sp, struct model *m, const struct ctl_args *a)
 {
-	static const uint8_t white[3] = { 255, 255, 255 };
 	struct spindle_list *list = NULL;
 	struct spindle_layer *layer = NULL;
 	struct spindle_frame frame;
@@ -303,7 +359,7 @@ static int show_model(struct spindle *sp, struct model *m, const struct ctl_args
 
 	int ret = a->no_fit ? 0 : fit_to_device(m, spindle_get_device_info(sp));
 	if (ret == 0)
-		ret = build_scene(sp, m, a->has_color ? a->color : white, &list, &layer);
+		ret = build_scene(sp, m, a, &list, &layer);
 	if (ret == 0)
 		ret = spindle_commit_and_wait(sp, &frame);
 	if (ret < 0) {

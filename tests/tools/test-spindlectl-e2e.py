@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
 """The demo path end to end: spindled on the simulated device (small profile),
 spindlectl show (the Stanford bunny), status, capture, preview; the model
-stays shown until SIGTERM, and both programs exit cleanly.
+stays shown until SIGTERM, and both programs exit cleanly. Then a model with
+colours of its own (a PLY with red and blue vertices) shown without
+--color: the capture lights red and blue, never green.
 Usage: test-spindlectl-e2e.py SPINDLED SPINDLECTL DATA_DIR WORK_DIR"""
 import os
 import signal
@@ -40,6 +42,53 @@ def ctl_run(sock, *args):
     return p.stdout
 
 
+def lit_planes(data, w=128, h=128, images=64):
+    planes = [0, 0, 0]
+    stride = h * (w // 8)
+    for k in range(images):
+        for c in range(3):
+            off = 64 + (k * 3 + c) * stride
+            planes[c] += sum(bin(b).count('1') for b in data[off:off + stride])
+    return planes
+
+
+def colored_cube(path):
+    """A cube, its -x vertices red, its +x vertices blue."""
+    verts = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    with open(path, 'w') as f:
+        f.write('ply\nformat ascii 1.0\nelement vertex 8\nproperty float x\nproperty float y\n'
+                'property float z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n'
+                'element face 6\nproperty list uchar int vertex_indices\nend_header\n')
+        for x, y, z in verts:
+            f.write(f'{x} {y} {z} ' + ('255 0 0' if x < 0 else '0 0 255') + '\n')
+        for q in quads:
+            f.write('4 ' + ' '.join(map(str, q)) + '\n')
+
+
+def show_colored(sock):
+    ply = os.path.join(work, 'e2e-colored.ply')
+    colored_cube(ply)
+    show = subprocess.Popen([ctl, '--socket', sock, 'show', ply], stdout=subprocess.PIPE, text=True)
+    try:
+        line = show.stdout.readline()
+        if not line.startswith('shown '):
+            fail(f'show of a coloured model printed {line!r}')
+        svol = os.path.join(work, 'e2e-colored.svol')
+        ctl_run(sock, 'capture', svol)
+        with open(svol, 'rb') as f:
+            planes = lit_planes(f.read())
+        print('coloured model: lit voxels per plane (R, G, B)', planes)
+        if not (planes[0] > 500 and planes[2] > 500 and planes[1] == 0):
+            fail(f'coloured model: lit voxels per plane {planes}, want red and blue only')
+        show.send_signal(signal.SIGTERM)
+        if show.wait(timeout=10) != 0:
+            fail(f'show exited {show.returncode} on SIGTERM')
+    finally:
+        if show.poll() is None:
+            show.kill()
+
+
 def main():
     tmp = tempfile.mkdtemp(prefix='spindle-e2e-')
     sock = os.path.join(tmp, 'spindle.sock')
@@ -73,12 +122,7 @@ def main():
         if len(data) != 64 + images * 3 * h * (w // 8):
             fail('capture size')
         # Yellow (ffcc00): red and green planes lit, blue dark.
-        planes = [0, 0, 0]
-        stride = h * (w // 8)
-        for k in range(images):
-            for c in range(3):
-                off = 64 + (k * 3 + c) * stride
-                planes[c] += sum(bin(b).count('1') for b in data[off:off + stride])
+        planes = lit_planes(data, w, h, images)
         if not (planes[0] > 1000 and planes[1] > 500 and planes[2] == 0):
             fail(f'lit voxels per plane {planes}')
 
@@ -92,6 +136,7 @@ def main():
         if show.wait(timeout=10) != 0:
             fail(f'show exited {show.returncode} on SIGTERM')
         show = None
+        show_colored(sock)
     finally:
         if show:
             show.kill()
