@@ -23,8 +23,6 @@ static void sleep_ms(int ms)
 	nanosleep(&ts, NULL);
 }
 
-static void print_log(struct daemon *d);
-
 void daemon_start(struct daemon *d)
 {
 	const char *r = getenv("SPINDLE_TEST_RENDERER");
@@ -45,14 +43,14 @@ void daemon_require_renderer(struct daemon *d, const char *name)
 	if (daemon_log_contains(d, line)) {
 		printf("SKIP: spindled cannot run the %s renderer here; its log:\n", name);
 		fflush(stdout);
-		print_log(d);
+		daemon_print_log(d);
 		daemon_stop(d);
 		exit(77);
 	}
 	snprintf(line, sizeof(line), "renderer: %s\n", name);
 	if (!daemon_log_contains(d, line)) {
 		fprintf(stderr, "spindled does not run the %s renderer; its log:\n", name);
-		print_log(d);
+		daemon_print_log(d);
 		CHECK(false);
 	}
 }
@@ -134,7 +132,7 @@ bool daemon_alive(struct daemon *d)
 	return waitpid(d->pid, &status, WNOHANG) == 0;
 }
 
-static void print_log(struct daemon *d)
+void daemon_print_log(struct daemon *d)
 {
 	FILE *f = fopen(d->log, "r");
 	char line[512];
@@ -158,7 +156,7 @@ void daemon_stop_keep_log(struct daemon *d)
 		sleep_ms(10);
 	if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
 		fprintf(stderr, "spindled did not exit cleanly (status %#x); its log:\n", status);
-		print_log(d);
+		daemon_print_log(d);
 		kill(d->pid, SIGKILL);
 		exit(1);
 	}
@@ -167,7 +165,7 @@ void daemon_stop_keep_log(struct daemon *d)
 	if (d->strict_gl && daemon_log_contains(d, "falling back to the CPU renderer")) {
 		fprintf(stderr, "the %s renderer failed and the CPU renderer took over; spindled's log:\n",
 			d->renderer);
-		print_log(d);
+		daemon_print_log(d);
 		CHECK(false);
 	}
 }

@@ -25,6 +25,9 @@ struct daemon {
 	bool strict_gl;    /* a GL renderer must render every volume itself */
 };
 
+/* Copies the daemon's log to stdout (for a failure's report). */
+void daemon_print_log(struct daemon *d);
+
 /* Starts spindled (path in $SPINDLED) with --device sim --profile small,
  * and waits until its socket accepts connections. With
  * $SPINDLE_TEST_RENDERER set (egl, osmesa, cpu, auto) it passes --renderer

@@ -50,14 +50,22 @@ def main():
         wait = f'for i in $(seq 200); do [ -S {sock} ] && break; sleep 0.1; done'
         script = re.sub(r'^sleep 1\b.*$', wait, script, flags=re.M)
         print(script)
+        # A developer's shell: none of the test runner's library paths (an
+        # ASan build's libspindle would be found before the one the README
+        # builds) nor its socket.
         env = dict(os.environ)
-        for k in ('SPINDLE_SOCKET', 'PKG_CONFIG_PATH', 'LISTEN_FDS', 'LISTEN_PID'):
+        for k in ('SPINDLE_SOCKET', 'PKG_CONFIG_PATH', 'LISTEN_FDS', 'LISTEN_PID', 'LD_LIBRARY_PATH', 'LD_PRELOAD'):
             env.pop(k, None)
-        r = subprocess.run(['bash', '-euo', 'pipefail', '-c', script], cwd=tree, env=env, capture_output=True,
-                           text=True, timeout=300)
-        subprocess.run(['pkill', '-f', sock], check=False)  # the daemon, if a command failed before kill
+        out_path, err_path = os.path.join(tmp, 'out'), os.path.join(tmp, 'err')
+        try:
+            with open(out_path, 'w') as out, open(err_path, 'w') as err:  # files: a daemon left running holds no pipe
+                r = subprocess.run(['bash', '-euo', 'pipefail', '-c', script], cwd=tree, env=env, stdout=out,
+                                   stderr=err, timeout=240)
+        finally:
+            subprocess.run(['pkill', '-f', sock], check=False)  # the daemon, if a command failed before kill
+        r.stdout = open(out_path).read()
         print(r.stdout)
-        print(r.stderr, file=sys.stderr)
+        print(open(err_path).read(), file=sys.stderr)
         if r.returncode != 0:
             sys.exit(f'the README commands failed (exit {r.returncode})')
         shown = re.findall(r'^hello: shown in volume (\d+) \(libspindle ([0-9.]+), protocol (\d+)\)$', r.stdout,

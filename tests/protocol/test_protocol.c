@@ -744,8 +744,13 @@ static void test_capture_empty(void)
 	daemon_start(&d);
 	struct spindle *sp = client_connect(&d);
 	for (int lit = 0; lit < 2; lit++) {
-		if (lit)
-			CHECK(spindle_commit_and_wait(sp, NULL) == 0); /* answered once shown lit */
+		int r = lit ? spindle_commit_and_wait(sp, NULL) : 0; /* answered once shown lit */
+		if (r < 0) {
+			printf("commit_and_wait: %s (%s); the daemon's log:\n", strerror(-r),
+			       spindle_get_error(sp) ? spindle_get_error(sp) : "no daemon error");
+			daemon_print_log(&d);
+		}
+		CHECK(r == 0);
 		struct timespec t0, t1;
 		clock_gettime(CLOCK_MONOTONIC, &t0);
 		struct volume *vol = capture_volume(sp);
