@@ -18,6 +18,7 @@
 
 #include "model.h"
 #include "preview.h"
+#include "status_json.h"
 #include "svol.h"
 
 #ifndef SPINDLE_VERSION
@@ -25,6 +26,16 @@
 #endif
 
 #define FIT_MARGIN 0.95f
+
+/* Exit statuses (spindlectl(1), EXIT STATUS). */
+enum {
+	CTL_OK = 0,
+	CTL_FAILED = 1,  /* a request failed, the connection broke, an output file could not be written */
+	CTL_USAGE = 2,   /* bad command line */
+	CTL_CONNECT = 3, /* no daemon at the socket, or no common protocol version */
+	CTL_REFUSED = 4, /* the daemon refused: capture not allowed, a commit over quota or policy */
+	CTL_INPUT = 5,   /* an input file that cannot be read or used: a model, an .svol */
+};
 
 struct ctl_args {
 	const char *socket; /* NULL: libspindle's default */
@@ -36,13 +47,15 @@ struct ctl_args {
 	uint8_t color[3];
 	bool has_size;
 	uint32_t size;
+	bool json;
 };
 
 static const char usage_text[] =
 	"usage: spindlectl [--socket PATH] COMMAND [ARGS]\n"
 	"\n"
 	"commands:\n"
-	"  status                          device geometry and daemon state\n"
+	"  status [--json]                 device geometry and daemon state (--json:\n"
+	"                                  one JSON object)\n"
 	"  show FILE [--no-fit] [--color RRGGBB]\n"
 	"                                  show a model (STL, OBJ, PLY, ...) in its\n"
 	"                                  own colours until SIGINT/SIGTERM; prints\n"
@@ -62,7 +75,7 @@ static int usage_error(const char *fmt, const char *arg)
 	fprintf(stderr, "spindlectl: ");
 	fprintf(stderr, fmt, arg);
 	fprintf(stderr, "\nTry 'spindlectl --help'.\n");
-	return 1;
+	return CTL_USAGE;
 }
 
 /* The path libspindle will use, for messages. */
@@ -125,9 +138,10 @@ static void print_status(const struct spindle_status *st)
 	printf("upload rate: %llu bytes/s\n", (unsigned long long)st->upload_rate);
 	printf("render time: %.3f ms\n", st->render_us / 1e3);
 	printf("clients: %u\n", st->clients);
-	if (!st->limits_known)
-		return;
-	const struct spindle_limits *l = &st->limits;
+}
+
+static void print_limits(const struct spindle_limits *l)
+{
 	printf("clients in handshake: %u\n", l->clients_in_handshake);
 	printf("refused clients: %llu over max-clients, %llu over max-clients-per-user, %llu over "
 	       "max-incomplete-clients\n",
@@ -140,9 +154,10 @@ static void print_status(const struct spindle_status *st)
 	       (unsigned long long)l->memory_budget, (unsigned long long)l->refused_memory);
 	printf("mappings: %u of %u; %llu clients refused over it\n", l->mappings, l->mapping_budget,
 	       (unsigned long long)l->refused_mappings);
-	if (!st->composition_known)
-		return;
-	const struct spindle_service *s = &st->service;
+}
+
+static void print_service(const struct spindle_service *s)
+{
 	printf("client fds: at most %u each; %llu clients disconnected over it\n", s->max_client_fds,
 	       (unsigned long long)s->refused_fds);
 	if (s->watchdog_ms)
@@ -150,7 +165,10 @@ static void print_status(const struct spindle_status *st)
 		       (unsigned long long)s->watchdog_fed, (unsigned long long)s->watchdog_withheld);
 	else
 		printf("watchdog: none\n");
-	const struct spindle_composition *c = &st->composition;
+}
+
+static void print_composition(const struct spindle_composition *c)
+{
 	if (!c->cache) {
 		printf("object cache: off\n");
 		return;
@@ -169,17 +187,28 @@ static int cmd_status(const struct ctl_args *a)
 	struct spindle_status st;
 	struct spindle *sp = connect_daemon(a);
 	if (!sp)
-		return 1;
+		return CTL_CONNECT;
 	int ret = spindle_get_status(sp, &st);
 	if (ret < 0) {
 		report_failure(sp, "status", ret);
 		spindle_disconnect(sp);
-		return 1;
+		return CTL_FAILED;
+	}
+	if (a->json) {
+		status_print_json(stdout, socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st);
+		spindle_disconnect(sp);
+		return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
 	}
 	printf("socket: %s\n", socket_path(a));
 	printf("protocol version: %u\n", spindle_get_version(sp));
 	print_device(spindle_get_device_info(sp));
 	print_status(&st);
+	if (st.limits_known) /* protocol 3 */
+		print_limits(&st.limits);
+	if (st.composition_known) { /* protocol 4 */
+		print_service(&st.service);
+		print_composition(&st.composition);
+	}
 	spindle_disconnect(sp);
 	return fflush(stdout) == 0 ? 0 : 1;
 }
@@ -309,7 +338,7 @@ static int hold_until_signal(struct spindle *sp, int sfd)
 			if (errno == EINTR)
 				continue;
 			report_failure(NULL, "poll", -errno);
-			return 1;
+			return CTL_FAILED;
 		}
 		if (fds[1].revents & POLLIN)
 			return 0;
@@ -317,7 +346,7 @@ static int hold_until_signal(struct spindle *sp, int sfd)
 			int ret = spindle_dispatch(sp);
 			if (ret < 0 || (fds[0].revents & (POLLHUP | POLLERR))) {
 				report_failure(sp, "connection to spindled lost", ret < 0 ? ret : -EPIPE);
-				return 1;
+				return CTL_FAILED;
 			}
 		}
 	}
@@ -342,7 +371,7 @@ static int announce_and_hold(struct spindle *sp, uint64_t seq)
 	int sfd = open_signalfd();
 	if (sfd < 0) {
 		report_failure(NULL, "signalfd", sfd);
-		return 1;
+		return CTL_FAILED;
 	}
 	printf("shown %llu\n", (unsigned long long)seq);
 	int status = fflush(stdout) == 0 ? hold_until_signal(sp, sfd) : 1;
@@ -355,14 +384,25 @@ static int show_model(struct spindle *sp, struct model *m, const struct ctl_args
 	struct spindle_list *list = NULL;
 	struct spindle_layer *layer = NULL;
 	struct spindle_frame frame;
-	int status = 1;
+	int status = CTL_FAILED;
 
 	int ret = a->no_fit ? 0 : fit_to_device(m, spindle_get_device_info(sp));
-	if (ret == 0)
-		ret = build_scene(sp, m, a, &list, &layer);
+	if (ret < 0) {
+		fprintf(stderr, "spindlectl: %s: cannot fit the model into the display: %s\n", a->operand[0],
+			strerror(-ret));
+		return CTL_INPUT;
+	}
+	ret = build_scene(sp, m, a, &list, &layer);
 	if (ret == 0)
 		ret = spindle_commit_and_wait(sp, &frame);
-	if (ret < 0) {
+	if (ret == -EDQUOT || ret == -EACCES || ret == -EBUSY) {
+		fprintf(stderr, "spindlectl: show: the daemon refused the model: %s\n",
+			ret == -EDQUOT  ? "more primitives than this client may show (max-primitives)"
+			: ret == -EBUSY ? "another client's exclusive layer is showing"
+					: "not allowed by the daemon's policy");
+		status = CTL_REFUSED;
+		goto out_destroy;
+	} else if (ret < 0) {
 		report_failure(sp, "show", ret);
 		goto out_destroy;
 	}
@@ -378,13 +418,14 @@ out_destroy:
 static int cmd_show(const struct ctl_args *a)
 {
 	char err[512];
-	int status = 1;
+	int status = CTL_FAILED;
 	struct model *m = model_load(a->operand[0], err, sizeof(err));
 	if (!m) {
 		fprintf(stderr, "spindlectl: %s\n", err);
-		return 1;
+		return CTL_INPUT;
 	}
 	struct spindle *sp = connect_daemon(a);
+	status = sp ? CTL_FAILED : CTL_CONNECT;
 	if (sp) {
 		status = show_model(sp, m, a);
 		spindle_disconnect(sp);
@@ -432,7 +473,7 @@ static int save_capture(int fd, size_t size, const char *path)
 	int out = open(path, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
 	if (out < 0) {
 		fprintf(stderr, "spindlectl: %s: %s\n", path, strerror(errno));
-		return 1;
+		return CTL_FAILED;
 	}
 	int ret = copy_fd(fd, out, size);
 	if (close(out) < 0 && ret == 0)
@@ -440,7 +481,7 @@ static int save_capture(int fd, size_t size, const char *path)
 	if (ret < 0) {
 		fprintf(stderr, "spindlectl: %s: %s\n", path, strerror(-ret));
 		unlink(path);
-		return 1;
+		return CTL_FAILED;
 	}
 	return 0;
 }
@@ -452,10 +493,12 @@ static int cmd_capture(const struct ctl_args *a)
 	int fd = -1, status = 1;
 	struct spindle *sp = connect_daemon(a);
 	if (!sp)
-		return 1;
+		return CTL_CONNECT;
 	int ret = spindle_capture(sp, &fd, &size);
 	if (ret == -EACCES) {
-		fprintf(stderr, "spindlectl: capture refused: needs root or the daemon's user\n");
+		fprintf(stderr, "spindlectl: capture refused: only root, the daemon's user and members of its admin "
+				"group (spindled's admin-group, default spindle-admin) may capture\n");
+		status = CTL_REFUSED;
 		goto out_disconnect;
 	} else if (ret < 0) {
 		report_failure(sp, "capture", ret);
@@ -484,7 +527,7 @@ static int cmd_preview(const struct ctl_args *a)
 	FILE *f = fopen(a->operand[0], "rb");
 	if (!f) {
 		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[0], strerror(errno));
-		return 1;
+		return CTL_INPUT;
 	}
 	struct volume *vol = svol_read(f);
 	int e = errno;
@@ -492,7 +535,7 @@ static int cmd_preview(const struct ctl_args *a)
 	if (!vol) {
 		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[0],
 			e == EINVAL ? "not a valid .svol file" : strerror(e));
-		return 1;
+		return CTL_INPUT;
 	}
 	preview_default_options(&opt);
 	if (a->has_size)
@@ -501,7 +544,7 @@ static int cmd_preview(const struct ctl_args *a)
 	volume_destroy(vol);
 	if (ret < 0) {
 		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[1], strerror(-ret));
-		return 1;
+		return CTL_FAILED;
 	}
 	return 0;
 }
@@ -533,16 +576,13 @@ static int parse_size(const char *s, uint32_t *out)
 	return 0;
 }
 
-enum { OPT_NO_FIT = 256, OPT_COLOR, OPT_SIZE };
+enum { OPT_NO_FIT = 256, OPT_COLOR, OPT_SIZE, OPT_JSON };
 
 static const struct option long_options[] = {
-	{ "socket", required_argument, NULL, 's' },
-	{ "help", no_argument, NULL, 'h' },
-	{ "version", no_argument, NULL, 'V' },
-	{ "no-fit", no_argument, NULL, OPT_NO_FIT },
-	{ "color", required_argument, NULL, OPT_COLOR },
-	{ "size", required_argument, NULL, OPT_SIZE },
-	{ NULL, 0, NULL, 0 },
+	{ "socket", required_argument, NULL, 's' },      { "help", no_argument, NULL, 'h' },
+	{ "version", no_argument, NULL, 'V' },           { "no-fit", no_argument, NULL, OPT_NO_FIT },
+	{ "color", required_argument, NULL, OPT_COLOR }, { "size", required_argument, NULL, OPT_SIZE },
+	{ "json", no_argument, NULL, OPT_JSON },         { NULL, 0, NULL, 0 },
 };
 
 /* Returns -1 to go on, else the exit status (help, version, bad usage). */
@@ -567,24 +607,27 @@ static int parse_option(int c, struct ctl_args *a)
 	case OPT_SIZE:
 		a->has_size = true;
 		return parse_size(optarg, &a->size) < 0 ? usage_error("bad size '%s' (want 16..16384)", optarg) : -1;
+	case OPT_JSON:
+		a->json = true;
+		return -1;
 	default: /* getopt has said what was wrong */
 		fprintf(stderr, "Try 'spindlectl --help'.\n");
-		return 1;
+		return CTL_USAGE;
 	}
 }
 
 struct ctl_command {
 	const char *name;
 	int operands;
-	bool show_opts, preview_opts;
+	bool show_opts, preview_opts, status_opts;
 	int (*run)(const struct ctl_args *a);
 };
 
 static const struct ctl_command commands[] = {
-	{ "status", 0, false, false, cmd_status },
-	{ "show", 1, true, false, cmd_show },
-	{ "capture", 1, false, false, cmd_capture },
-	{ "preview", 2, false, true, cmd_preview },
+	{ "status", 0, false, false, true, cmd_status },
+	{ "show", 1, true, false, false, cmd_show },
+	{ "capture", 1, false, false, false, cmd_capture },
+	{ "preview", 2, false, true, false, cmd_preview },
 };
 
 /* Picks the command and checks its operands and options. */
@@ -594,7 +637,7 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 	for (size_t i = 0; i < sizeof(commands) / sizeof(commands[0]); i++)
 		if (strcmp(commands[i].name, a->command) == 0)
 			cmd = &commands[i];
-	*status = 1;
+	*status = CTL_USAGE;
 	if (!cmd)
 		usage_error("unknown command '%s'", a->command);
 	else if (a->operand_count != cmd->operands)
@@ -603,6 +646,8 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 		usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
 	else if (a->has_size && !cmd->preview_opts)
 		usage_error("--size goes with 'preview', not '%s'", cmd->name);
+	else if (a->json && !cmd->status_opts)
+		usage_error("--json goes with 'status', not '%s'", cmd->name);
 	else
 		return cmd;
 	return NULL;

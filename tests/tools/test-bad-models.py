@@ -50,7 +50,7 @@ for path in bad_files():
     else:
         rc, err = show(path)
     print(f'{os.path.basename(path)}: exit {rc}: {err.strip()}')
-    expect(rc == 1, f'{path}: exit status 1, got {rc}')
+    expect(rc == 5, f'{path}: exit status 5 (a bad input file), got {rc}')
     # The last line names the file (a crashing assimp may have said something first).
     last = err.splitlines()[-1] if err else ''
     expect(last.startswith(f'spindlectl: {path}: '), f'{path}: a last line naming it: {err!r}')
@@ -58,13 +58,13 @@ for path in bad_files():
 
 for name in ('bunny.ply', 'cube.stl', 'lines.obj', 'points.ply', 'transformed.gltf'):
     rc, err = show(os.path.join(data_dir, name))
-    expect(rc == 1 and 'cannot connect to spindled' in err, f'{name} loads: {err!r}')
+    expect(rc == 3 and 'cannot connect to spindled' in err, f'{name} loads: {err!r}')
 
 bunny = os.path.join(data_dir, 'bunny.ply')
 for hook, sig in (('segv', 11), ('abort', 6)):
     rc, err = show(bunny, ctl_hooks, {'SPINDLE_MODEL_TEST_HOOK': hook})
     want = f'spindlectl: {bunny}: the model loader crashed (signal {sig})\n'
-    expect(rc == 1 and err == want, f'hook {hook}: exit {rc}, {err!r}, expected {want!r}')
+    expect(rc == 5 and err == want, f'hook {hook}: exit {rc}, {err!r}, expected {want!r}')
 rc, err = show(bunny, ctl, {'SPINDLE_MODEL_TEST_HOOK': 'segv'})
 expect('cannot connect' in err, f'the installed spindlectl ignores the test hooks: {err!r}')
 

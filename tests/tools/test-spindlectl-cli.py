@@ -26,9 +26,13 @@ def expect(cond, what):
         print('FAIL:', what)
 
 
-def expect_error(args, needle, env=None):
+# Exit statuses (spindlectl(1)): 2 usage, 3 no daemon, 5 a bad input file.
+USAGE, CONNECT, INPUT = 2, 3, 5
+
+
+def expect_error(args, needle, status, env=None):
     rc, out, err = run(*args, env=env)
-    expect(rc == 1, f'{args}: exit 1, got {rc}')
+    expect(rc == status, f'{args}: exit {status}, got {rc}')
     expect(needle in err, f'{args}: stderr has {needle!r}: {err!r}')
 
 
@@ -58,24 +62,25 @@ expect(rc == 0 and 'usage: spindlectl' in out, '--help')
 rc, out, _ = run('--version')
 expect(rc == 0 and out.startswith('spindlectl '), '--version')
 
-expect_error([], 'no command')
-expect_error(['frobnicate'], "unknown command 'frobnicate'")
-expect_error(['status', 'extra'], 'wrong number of arguments')
-expect_error(['--bogus', 'status'], '--help')
-expect_error(['show', 'x.stl', '--color', 'red'], 'bad colour')
-expect_error(['status', '--no-fit'], "go with 'show'")
-expect_error(['preview', 'a', 'b', '--size', '3'], 'bad size')
-expect_error(['show', os.path.join(work, 'missing.stl')], 'No such file')
-expect_error(['preview', os.path.join(work, 'missing.svol'), 'x.png'], 'No such file')
-expect_error(['preview', os.path.join(data_dir, 'cube.stl'), 'x.png'], 'not a valid .svol')
+expect_error([], 'no command', USAGE)
+expect_error(['frobnicate'], "unknown command 'frobnicate'", USAGE)
+expect_error(['status', 'extra'], 'wrong number of arguments', USAGE)
+expect_error(['--bogus', 'status'], '--help', USAGE)
+expect_error(['show', 'x.stl', '--color', 'red'], 'bad colour', USAGE)
+expect_error(['status', '--no-fit'], "go with 'show'", USAGE)
+expect_error(['preview', 'a', 'b', '--size', '3'], 'bad size', USAGE)
+expect_error(['show', os.path.join(work, 'missing.stl')], 'No such file', INPUT)
+expect_error(['preview', os.path.join(work, 'missing.svol'), 'x.png'], 'No such file', INPUT)
+expect_error(['preview', os.path.join(data_dir, 'cube.stl'), 'x.png'], 'not a valid .svol', INPUT)
 
 nosock = os.path.join(work, 'no-daemon.sock')
-expect_error(['--socket', nosock, 'status'], 'cannot connect to spindled at ' + nosock)
-expect_error(['status'], 'cannot connect to spindled at ' + nosock, env={'SPINDLE_SOCKET': nosock})
+expect_error(['--socket', nosock, 'status'], 'cannot connect to spindled at ' + nosock, CONNECT)
+expect_error(['status'], 'cannot connect to spindled at ' + nosock, CONNECT, env={'SPINDLE_SOCKET': nosock})
 expect_error(['--socket', nosock, 'show', os.path.join(data_dir, 'cube.stl')],
-             'cannot connect to spindled')
+             'cannot connect to spindled', CONNECT)
 expect_error(['--socket', nosock, 'capture', os.path.join(work, 'c.svol')],
-             'cannot connect to spindled')
+             'cannot connect to spindled', CONNECT)
+expect_error(['capture', 'c.svol', '--json'], "--json goes with 'status'", USAGE)
 
 svol = os.path.join(work, 'cli-tiny.svol')
 png = os.path.join(work, 'cli-tiny.png')

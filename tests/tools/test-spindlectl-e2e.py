@@ -5,6 +5,7 @@ stays shown until SIGTERM, and both programs exit cleanly. Then a model with
 colours of its own (a PLY with red and blue vertices) shown without
 --color: the capture lights red and blue, never green.
 Usage: test-spindlectl-e2e.py SPINDLED SPINDLECTL DATA_DIR WORK_DIR"""
+import json
 import os
 import signal
 import socket
@@ -111,6 +112,10 @@ def main():
                 fail(f'status {key}: {status.get(key)!r}, expected {want!r}')
         if int(status['volumes shown']) < 1:
             fail('no volume shown')
+        js = json.loads(ctl_run(sock, 'status', '--json'))  # one JSON object, the same figures
+        if (js['device']['width'], js['device']['mirrored'], js['display']['clients'], js['protocol']) != \
+                (128, True, 2, 4) or js['display']['volumes_shown'] < 1 or 'composition' not in js:
+            fail(f'status --json: {js!r}')
 
         svol = os.path.join(work, 'e2e-bunny.svol')
         ctl_run(sock, 'capture', svol)
