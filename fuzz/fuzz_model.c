@@ -105,7 +105,7 @@ static void import_file(uint8_t sel, const uint8_t *data, size_t size)
 	if (fd < 0)
 		return;
 	if (size == 0 || write(fd, data, size) == (ssize_t)size) {
-		if (model_import_fd(fd, size, name, &mesh, reason, sizeof(reason)) == 0) {
+		if (model_import_fd(fd, size, name, NULL, &mesh, reason, sizeof(reason)) == 0) {
 			check_mesh(&mesh);
 			round_trip(&mesh);
 			model_mesh_free(&mesh);

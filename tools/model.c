@@ -13,6 +13,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "model_import.h"
 #include "model_sandbox.h"
 
 static void set_err(char *err, size_t err_size, const char *path, const char *reason)
@@ -49,7 +50,10 @@ struct model *model_load(const char *path, char *err, size_t err_size)
 		errno = -fd;
 		return NULL;
 	}
-	int ret = model_sandbox_load(fd, size, path, &m, reason, sizeof(reason));
+	struct model_companions comp;
+	model_companions_read(fd, size, path, &comp); /* an OBJ's .mtl files */
+	int ret = model_sandbox_load(fd, size, path, &comp, &m, reason, sizeof(reason));
+	model_companions_free(&comp);
 	close(fd);
 	if (ret < 0) {
 		set_err(err, err_size, path, reason);

@@ -39,9 +39,12 @@
 /* ---- the file, read through callbacks ---- */
 
 struct fd_source {
-	int fd;
+	int fd;              /* the model, or -1: */
+	const uint8_t *data; /* a companion in memory */
 	uint64_t size;
 	const char *name;
+	const struct model_companions *comp;
+	struct fd_source *companion; /* MODEL_COMPANIONS, made by fd_open() */
 };
 
 struct fd_file {
@@ -59,6 +62,10 @@ static size_t fd_read(struct aiFile *f, char *buf, size_t size, size_t count)
 	if (want > ff->src->size - ff->pos)
 		want = (size_t)(ff->src->size - ff->pos);
 	size_t got = 0;
+	if (ff->src->data) {
+		memcpy(buf, ff->src->data + ff->pos, want);
+		got = want;
+	}
 	while (got < want) {
 		ssize_t n = pread(ff->src->fd, buf + got, want - got, (off_t)(ff->pos + got));
 		if (n < 0 && errno == EINTR)
@@ -104,11 +111,31 @@ static void fd_flush(struct aiFile *f)
 {
 }
 
-/* The model file only, for reading: no other name opens. */
+/* The source for a name assimp opens: the model, or a companion read for
+ * it (matched by its file name: they all lie beside the model); NULL for
+ * any other. */
+static const struct fd_source *source_of(struct fd_source *model, const char *name)
+{
+	if (!strcmp(name, model->name))
+		return model;
+	const char *base = strrchr(name, '/');
+	base = base ? base + 1 : name;
+	for (unsigned i = 0; model->comp && i < model->comp->count; i++) {
+		const struct model_companion *c = &model->comp->file[i];
+		if (!strcmp(base, c->name)) {
+			model->companion[i] =
+				(struct fd_source){ .fd = -1, .data = c->data, .size = c->size, .name = c->name };
+			return &model->companion[i];
+		}
+	}
+	return NULL;
+}
+
+/* The model file or a companion, for reading: no other name opens. */
 static struct aiFile *fd_open(struct aiFileIO *io, const char *name, const char *mode)
 {
-	const struct fd_source *src = (const struct fd_source *)io->UserData;
-	if (!name || !mode || strcmp(name, src->name) != 0 || strpbrk(mode, "wa+"))
+	const struct fd_source *src = name ? source_of((struct fd_source *)io->UserData, name) : NULL;
+	if (!src || !mode || strpbrk(mode, "wa+"))
 		return NULL;
 	struct fd_file *ff = calloc(1, sizeof(*ff));
 	if (!ff)
@@ -349,17 +376,18 @@ static int alloc_mesh(struct model_mesh *mesh, const struct walk *w)
 	return mesh->vertices && mesh->colors && mesh->indices ? 0 : -ENOMEM;
 }
 
-/* An OBJ's materials are in its .mtl file, which the loader never opens:
- * assimp makes up a grey one for every `usemtl`. */
-static bool own_materials(const char *name)
+/* An OBJ's materials are in its .mtl files: without them (none read for
+ * it) assimp makes up a grey one for every `usemtl`. */
+static bool own_materials(const char *name, const struct model_companions *comp)
 {
 	const char *dot = strrchr(name, '.');
-	return !dot || strcasecmp(dot, ".obj") != 0;
+	return !dot || strcasecmp(dot, ".obj") != 0 || (comp && comp->count > 0);
 }
 
-static int convert_scene(const struct aiScene *scene, const char *name, struct model_mesh *mesh, const char **why)
+static int convert_scene(const struct aiScene *scene, const char *name, const struct model_companions *comp,
+			 struct model_mesh *mesh, const char **why)
 {
-	struct walk w = { .scene = scene, .materials = own_materials(name) };
+	struct walk w = { .scene = scene, .materials = own_materials(name, comp) };
 	if (!walk_scene(&w)) {
 		*why = w.error;
 		return -w.status;
@@ -407,9 +435,11 @@ static const struct aiScene *import(const char *name, struct aiFileIO *io, char 
 	return scene;
 }
 
-int model_import_fd(int fd, uint64_t size, const char *name, struct model_mesh *mesh, char *reason, size_t reason_size)
+int model_import_fd(int fd, uint64_t size, const char *name, const struct model_companions *comp,
+		    struct model_mesh *mesh, char *reason, size_t reason_size)
 {
-	struct fd_source src = { .fd = fd, .size = size, .name = name };
+	struct fd_source companion[MODEL_COMPANIONS];
+	struct fd_source src = { .fd = fd, .size = size, .name = name, .comp = comp, .companion = companion };
 	struct aiFileIO io = { .OpenProc = fd_open, .CloseProc = fd_close, .UserData = (aiUserData)&src };
 	const char *why = NULL;
 
@@ -417,7 +447,7 @@ int model_import_fd(int fd, uint64_t size, const char *name, struct model_mesh *
 	const struct aiScene *scene = import(name, &io, reason, reason_size);
 	if (!scene)
 		return -EINVAL;
-	int ret = convert_scene(scene, name, mesh, &why);
+	int ret = convert_scene(scene, name, comp, mesh, &why);
 	aiReleaseImport(scene);
 	if (ret < 0) {
 		snprintf(reason, reason_size, "%s", why);

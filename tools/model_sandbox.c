@@ -33,7 +33,7 @@ struct loader {
 };
 
 static __attribute__((noreturn)) void child_main(int in_fd, int out_fd, uint64_t size, const char *path,
-						 const struct model_confine *c)
+						 const struct model_companions *comp, const struct model_confine *c)
 {
 	char why[512];
 	struct model_mesh mesh;
@@ -43,7 +43,7 @@ static __attribute__((noreturn)) void child_main(int in_fd, int out_fd, uint64_t
 #ifdef SPINDLE_MODEL_TEST_HOOKS
 	model_test_hook(in_fd, out_fd);
 #endif
-	ret = model_import_fd(in_fd, size, path, &mesh, why, sizeof(why));
+	ret = model_import_fd(in_fd, size, path, comp, &mesh, why, sizeof(why));
 	if (ret < 0)
 		ret = model_wire_send_error(out_fd, -ret, why);
 	else
@@ -58,7 +58,8 @@ static int64_t now_ms(void)
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
-static int start(struct loader *l, int fd, uint64_t size, const char *path, const struct model_confine *c)
+static int start(struct loader *l, int fd, uint64_t size, const char *path, const struct model_companions *comp,
+		 const struct model_confine *c)
 {
 	int p[2];
 	if (pipe2(p, O_CLOEXEC) < 0)
@@ -72,7 +73,7 @@ static int start(struct loader *l, int fd, uint64_t size, const char *path, cons
 	}
 	if (l->pid == 0) {
 		close(p[0]);
-		child_main(fd, p[1], size, path, c);
+		child_main(fd, p[1], size, path, comp, c);
 	}
 	close(p[1]);
 	l->rfd = p[0];
@@ -203,7 +204,8 @@ static int verdict(const struct model_wire_header *h, const uint8_t *payload, st
 	return ret;
 }
 
-int model_sandbox_load(int fd, uint64_t size, const char *path, struct model **out, char *reason, size_t reason_size)
+int model_sandbox_load(int fd, uint64_t size, const char *path, const struct model_companions *comp, struct model **out,
+		       char *reason, size_t reason_size)
 {
 	struct model_confine c;
 	struct loader l = { .timeout_ms = MODEL_LOADER_TIMEOUT_MS };
@@ -216,7 +218,7 @@ int model_sandbox_load(int fd, uint64_t size, const char *path, struct model **o
 	model_test_limits(&l.timeout_ms, &c);
 #endif
 	l.cpu_s = c.cpu_s;
-	int ret = start(&l, fd, size, path, &c);
+	int ret = start(&l, fd, size, path, comp, &c);
 	if (ret < 0) {
 		snprintf(reason, reason_size, "cannot start the model loader: %s", strerror(-ret));
 		return ret;

@@ -20,10 +20,13 @@
 #define MODEL_LOADER_MEMORY (4ull << 30)
 
 /* Runs the loader on fd (open for reading, a regular file of size bytes;
- * path for the importer and messages). 0 with *out set, or -errno with
+ * path for the importer and messages), with the companion files read for
+ * it (model_import.h; may be NULL). 0 with *out set, or -errno with
  * reason filled (without the path): a reason the loader gave, or what went
  * wrong with it ("the model loader crashed (signal 11)"). */
-int model_sandbox_load(int fd, uint64_t size, const char *path, struct model **out, char *reason, size_t reason_size);
+struct model_companions;
+int model_sandbox_load(int fd, uint64_t size, const char *path, const struct model_companions *comp, struct model **out,
+		       char *reason, size_t reason_size);
 
 /* ---- model_confine.c ---- */
 

@@ -105,10 +105,19 @@ static void test_material_colors(void)
 		CHECK(memcmp(&m->triangle_colors[4 * v], "\xff\x80\x00\xff", 4) == 0);
 	model_destroy(m);
 
-	/* An OBJ's .mtl is another file: the loader may not open it, so the
-	 * model loads without its colours. */
-	write_file("side.mtl", "newmtl red\nKd 1 0 0\n");
-	m = load_path(write_file("side.obj", "mtllib side.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n"));
+	/* An OBJ's .mtl is another file: read beside it by the parent and
+	 * handed to the loader, which may open nothing itself. */
+	write_file("side.mtl", "newmtl red\nKd 1 0 0\nnewmtl green\nKd 0 1 0\n");
+	m = load_path(write_file("side.obj", "mtllib side.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n"
+					     "usemtl green\nf 3 2 1"));
+	CHECK(m->triangle_count == 2 && m->triangle_colors);
+	for (int v = 0; v < 6; v++)
+		CHECK(memcmp(&m->triangle_colors[4 * v], v < 3 ? "\xff\x00\x00\xff" : "\x00\xff\x00\xff", 4) == 0);
+	model_destroy(m);
+	/* Only plain names beside the model are followed (no path, nothing
+	 * hidden), and a missing one is no error: the materials show white. */
+	m = load_path(write_file("far.obj", "mtllib ../side.mtl .side.mtl missing.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+					    "usemtl red\nf 1 2 3\n"));
 	CHECK(m->triangle_count == 1 && !m->triangle_colors);
 	model_destroy(m);
 }
