@@ -210,14 +210,15 @@ static enum change compare(const struct entry *e, const struct scene_draw *draws
 /* The entry now follows these draws (with references to their data). */
 static int follow(struct entry *e, const struct scene_draw *draws, struct vdata *const *data, uint32_t n)
 {
-	struct scene_draw *d = malloc(n * sizeof(*d));
-	struct vdata **refs = malloc(n * sizeof(*refs));
+	struct scene_draw *d = malloc((n ? n : 1) * sizeof(*d)); /* an object may draw nothing */
+	struct vdata **refs = malloc((n ? n : 1) * sizeof(*refs));
 	if (!d || !refs) {
 		free(d);
 		free(refs);
 		return -ENOMEM;
 	}
-	memcpy(d, draws, n * sizeof(*d));
+	if (n)
+		memcpy(d, draws, n * sizeof(*d));
 	for (uint32_t i = 0; i < n; i++)
 		refs[i] = vdata_ref(data[i]);
 	release_draws(e);
@@ -324,7 +325,8 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 			return -ENOMEM;
 		c->rest_cap = cap;
 	}
-	memcpy(c->rest + c->rest_count, draws, n * sizeof(*draws));
+	if (n)
+		memcpy(c->rest + c->rest_count, draws, n * sizeof(*draws));
 	c->rest_count += n;
 	c->rest_objects++;
 	return 0;
@@ -462,8 +464,11 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 	sweep_absent(c);
 	c->planned = true;
 	evict_to(c, c->budget);
-	memset(c->created, 0, c->create_count * sizeof(*c->created));
-	memset(c->made_canvas, 0, c->canvas_count * sizeof(*c->made_canvas));
+	/* (An empty scene has allocated neither: memset() may not take NULL.) */
+	if (c->create_count)
+		memset(c->created, 0, c->create_count * sizeof(*c->created));
+	if (c->canvas_count)
+		memset(c->made_canvas, 0, c->canvas_count * sizeof(*c->made_canvas));
 	return 0;
 }
 
