@@ -54,14 +54,7 @@ static void check_model(struct model *m, const struct model_mesh *mesh)
 /* The mesh as the parent receives it: header and payload in memory. */
 static void round_trip(const struct model_mesh *mesh)
 {
-	struct model_wire_header h = {
-		.magic = MODEL_WIRE_MAGIC,
-		.flags = mesh->colored ? MODEL_WIRE_COLORS : 0,
-		.vertex_count = mesh->vertex_count,
-		.triangle_count = mesh->triangle_count,
-		.line_count = mesh->line_count,
-		.point_count = mesh->point_count,
-	};
+	struct model_wire_header h = model_wire_mesh_header(mesh);
 	size_t len = 0, v = 12 * mesh->vertex_count, c = mesh->colored ? 4 * mesh->vertex_count : 0;
 	char why[256];
 	if (model_wire_check_header(&h, &len, why, sizeof(why)) != 0)

@@ -39,9 +39,9 @@ static size_t index_count(size_t triangles, size_t lines, size_t points)
 	return 3 * triangles + 2 * lines + points;
 }
 
-int model_wire_send_mesh(int fd, const struct model_mesh *mesh)
+struct model_wire_header model_wire_mesh_header(const struct model_mesh *mesh)
 {
-	struct model_wire_header h = {
+	return (struct model_wire_header){
 		.magic = MODEL_WIRE_MAGIC,
 		.flags = mesh->colored ? MODEL_WIRE_COLORS : 0,
 		.vertex_count = mesh->vertex_count,
@@ -49,6 +49,11 @@ int model_wire_send_mesh(int fd, const struct model_mesh *mesh)
 		.line_count = mesh->line_count,
 		.point_count = mesh->point_count,
 	};
+}
+
+int model_wire_send_mesh(int fd, const struct model_mesh *mesh)
+{
+	struct model_wire_header h = model_wire_mesh_header(mesh);
 	size_t indices = index_count(mesh->triangle_count, mesh->line_count, mesh->point_count);
 	int ret = write_all(fd, &h, sizeof(h));
 	if (ret == 0)

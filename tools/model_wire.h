@@ -51,6 +51,9 @@ struct model_mesh {
 
 void model_mesh_free(struct model_mesh *mesh);
 
+/* The header that goes before mesh. */
+struct model_wire_header model_wire_mesh_header(const struct model_mesh *mesh);
+
 /* The child's side: 0 or -errno (the pipe broke). */
 int model_wire_send_mesh(int fd, const struct model_mesh *mesh);
 int model_wire_send_error(int fd, int status, const char *text);
