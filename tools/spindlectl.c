@@ -17,6 +17,7 @@
 #include <spindle/spindle.h>
 
 #include "model.h"
+#include "patterns.h"
 #include "preview.h"
 #include "status_json.h"
 #include "svol.h"
@@ -61,6 +62,9 @@ static const char usage_text[] =
 	"                                  own colours until SIGINT/SIGTERM; prints\n"
 	"                                  \"shown SEQ\"\n"
 	"  capture OUT.svol                save the next volume shown\n"
+	"  pattern NAME                    show a test pattern until SIGINT/SIGTERM:\n"
+	"                                  axis, rings, grid-cube, colour-bars,\n"
+	"                                  walls, slice-index\n"
 	"  preview IN.svol OUT.png [--size N]\n"
 	"                                  picture of a captured volume (no daemon)\n"
 	"\n"
@@ -291,7 +295,7 @@ static int build_scene(struct spindle *sp, const struct model *m, const struct c
 	struct spindle_list *list = spindle_list_create(sp);
 	struct spindle_layer *layer = spindle_layer_create(sp);
 	int ret = list && layer ? 0 : -errno;
-	bool own_colors = m->triangle_colors && !a->has_color;
+	bool own_colors = (m->triangle_colors || m->line_colors || m->point_colors) && !a->has_color;
 
 	if (own_colors && spindle_get_version(sp) < 2) {
 		fprintf(stderr,
@@ -431,6 +435,32 @@ static int cmd_show(const struct ctl_args *a)
 		spindle_disconnect(sp);
 	}
 	model_destroy(m);
+	return status;
+}
+
+/* ---- pattern ---- */
+
+static int cmd_pattern(const struct ctl_args *a)
+{
+	struct model *probe = pattern_build(a->operand[0], 1.0f);
+	if (!probe && errno == EINVAL) {
+		char msg[256];
+		snprintf(msg, sizeof(msg), "unknown pattern '%.64s' (one of: %s)", a->operand[0], pattern_names);
+		return usage_error("%s", msg);
+	}
+	model_destroy(probe);
+	struct spindle *sp = connect_daemon(a);
+	if (!sp)
+		return CTL_CONNECT;
+	/* In volume space as it is: made for this display's half height. */
+	struct model *m = pattern_build(a->operand[0], spindle_get_device_info(sp)->half_height);
+	struct ctl_args as_is = *a;
+	as_is.no_fit = true;
+	int status = m ? show_model(sp, m, &as_is) : CTL_FAILED;
+	if (!m)
+		report_failure(NULL, "pattern", -errno);
+	model_destroy(m);
+	spindle_disconnect(sp);
 	return status;
 }
 
@@ -624,9 +654,8 @@ struct ctl_command {
 };
 
 static const struct ctl_command commands[] = {
-	{ "status", 0, false, false, true, cmd_status },
-	{ "show", 1, true, false, false, cmd_show },
-	{ "capture", 1, false, false, false, cmd_capture },
+	{ "status", 0, false, false, true, cmd_status },    { "show", 1, true, false, false, cmd_show },
+	{ "capture", 1, false, false, false, cmd_capture }, { "pattern", 1, false, false, false, cmd_pattern },
 	{ "preview", 2, false, true, false, cmd_preview },
 };
 
