@@ -63,6 +63,11 @@ struct model *model_load(const char *path, char *err, size_t err_size)
 	return m;
 }
 
+void model_set_progress(FILE *f)
+{
+	model_sandbox_set_progress(f);
+}
+
 void model_destroy(struct model *m)
 {
 	if (!m)

@@ -18,6 +18,7 @@
 
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 /* Colours: when the file gives any vertex a colour other than opaque white
  * (per-vertex colours: PLY red/green/blue[/alpha], assimp's first colour
@@ -54,6 +55,9 @@ struct model_fit {
  * ("FILE: the model loader crashed (signal 11)"; NUL-terminated, cut to
  * err_size bytes). */
 struct model *model_load(const char *path, char *err, size_t err_size);
+/* Where model_load() says that a load taking over a second goes on (a line
+ * every 2 s, and the time it took), or NULL: silent (the default). */
+void model_set_progress(FILE *f);
 
 /* Accepts NULL. */
 void model_destroy(struct model *m);

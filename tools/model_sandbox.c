@@ -22,9 +22,19 @@
 #include "model_import.h"
 #include "model_wire.h"
 
+/* Where model_load() says that a slow load goes on, or NULL. */
+static FILE *progress;
+
+void model_sandbox_set_progress(FILE *f)
+{
+	progress = f;
+}
+
 struct loader {
 	pid_t pid;
 	int rfd; /* the read end of the result pipe */
+	const char *path;
+	int64_t start_ms, note_ms; /* the next progress line, 0: none yet due */
 	int64_t deadline_ms;
 	int timeout_ms;
 	unsigned cpu_s;
@@ -78,19 +88,37 @@ static int start(struct loader *l, int fd, uint64_t size, const char *path, cons
 	close(p[1]);
 	l->rfd = p[0];
 	l->deadline_ms = now_ms() + l->timeout_ms;
+	l->start_ms = now_ms();
+	l->note_ms = l->start_ms; /* note_progress() sets the first at 1 s */
+	l->path = path;
 	return 0;
 }
 
 /* Exactly len bytes before the deadline: 0, -ETIMEDOUT, -EPIPE (the pipe
  * ended first) or -errno. */
+/* A load that takes over a second says so, and again every two seconds. */
+static void note_progress(struct loader *l, int64_t now)
+{
+	if (!progress || now < l->note_ms)
+		return;
+	if (l->note_ms > l->start_ms) {
+		fprintf(progress, "spindlectl: %s: loading, %.0f s so far\n", l->path, (now - l->start_ms) / 1000.0);
+		fflush(progress);
+	}
+	l->note_ms = l->note_ms > l->start_ms ? l->note_ms + 2000 : l->start_ms + 1000;
+}
+
 static int read_full(struct loader *l, void *buf, size_t len)
 {
 	uint8_t *p = buf;
 	while (len > 0) {
-		int64_t left = l->deadline_ms - now_ms();
+		int64_t now = now_ms(), left = l->deadline_ms - now;
 		struct pollfd pfd = { .fd = l->rfd, .events = POLLIN };
 		if (left <= 0)
 			return -ETIMEDOUT;
+		note_progress(l, now);
+		if (progress && l->note_ms - now < left)
+			left = l->note_ms - now;
 		int n = poll(&pfd, 1, left > INT_MAX ? INT_MAX : (int)left);
 		if (n < 0 && errno != EINTR)
 			return -errno;
@@ -224,6 +252,10 @@ int model_sandbox_load(int fd, uint64_t size, const char *path, const struct mod
 		return ret;
 	}
 	int rx = receive(&l, &h, &payload, why, sizeof(why));
+	if (progress && rx == 0 && now_ms() - l.start_ms >= 1000) {
+		fprintf(progress, "spindlectl: %s: read in %.1f s\n", path, (now_ms() - l.start_ms) / 1000.0);
+		fflush(progress);
+	}
 	reap(&l, rx < 0 && rx != -EPIPE);
 	close(l.rfd);
 	ret = rx == -ENOMEM ? -ENOMEM : loader_failure(&l, rx, why, reason, reason_size);

@@ -8,6 +8,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 #include <sys/types.h>
 
 #include "model.h"
@@ -25,6 +26,9 @@
  * reason filled (without the path): a reason the loader gave, or what went
  * wrong with it ("the model loader crashed (signal 11)"). */
 struct model_companions;
+/* Where a load that takes over a second says that it goes on (every 2 s),
+ * or NULL (the default): spindlectl passes stderr. */
+void model_sandbox_set_progress(FILE *f);
 int model_sandbox_load(int fd, uint64_t size, const char *path, const struct model_companions *comp, struct model **out,
 		       char *reason, size_t reason_size);
 

@@ -423,6 +423,7 @@ static int cmd_show(const struct ctl_args *a)
 {
 	char err[512];
 	int status = CTL_FAILED;
+	model_set_progress(stderr); /* a large model takes seconds */
 	struct model *m = model_load(a->operand[0], err, sizeof(err));
 	if (!m) {
 		fprintf(stderr, "spindlectl: %s\n", err);
