@@ -229,127 +229,162 @@ static long rss_kb(void)
 	return kb;
 }
 
-int main(int argc, char **argv)
+/* What every scene runs on: the renderer, a fresh cache per scene (on the
+ * pool, as the daemon's pipeline composes), the orbits, the icosahedron. */
+struct bench {
+	struct opts o;
+	struct geometry g;
+	struct renderer *r;
+	struct pool *pool;
+	struct orbiter *orb;
+	struct vbuf ico;
+	struct bscene b;
+	struct cache *cache;
+};
+
+/* The scene in be->b measured whole and, with a new cache, composed. */
+static void measure_cached(struct bench *be, animate_fn fn, void *arg, struct result *res)
 {
-	struct opts o = { .volumes = 100, .seconds = 4, .profile = "perspecta" };
+	cache_destroy(be->cache);
+	be->cache = cache_create(&be->g, 256ull << 20, be->pool, true);
+	if (!be->cache)
+		abort();
+	measure(be->r, be->cache, &be->b, fn, arg, &be->o, res);
+}
+
+static void reset_scene(struct bench *be)
+{
+	bscene_free(&be->b);
+	memset(&be->b, 0, sizeof(be->b));
+}
+
+/* An animated icosahedron alone, beside the static dragon, and the dragon
+ * turning one image a volume. */
+static void bench_dragon(struct bench *be)
+{
+	struct result solo, res;
+	struct scene_draw d = icosahedron(&be->ico, orange);
+	bscene_add(&be->b, &d);
+	be->orb->first = 0;
+	be->orb->fraction = 1;
+	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &solo);
+	row("icosahedron alone", "full render", &solo, "");
+	reset_scene(be);
+	char err[256], note[128];
+	struct bench_scene dragon = { 0 };
+	struct bench_files files = { .dragon = be->o.dragon };
+	if (!be->o.dragon || bench_scene_build("S3-dragon", &be->g, &files, &dragon, err, sizeof(err)) < 0) {
+		printf("\n(no dragon: %s)\n", be->o.dragon ? err : "give dragon_vrip.ply");
+		return;
+	}
+	bscene_add(&be->b, &dragon.draws[0]);
+	bscene_add(&be->b, &d);
+	be->orb->first = 1;
+	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &res);
+	row("dragon (static) + icosahedron", "full render", &res, "");
+	measure_cached(be, animate_orbits, be->orb, &res);
+	snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
+	row("dragon (static) + icosahedron", "cache", &res, note);
+	reset_scene(be);
+	bscene_add(&be->b, &dragon.draws[0]); /* turning one image step per volume */
+	measure(be->r, NULL, &be->b, animate_turntable, &be->g, &be->o, &res);
+	row("dragon turning one image a volume", "full render", &res, "");
+	measure_cached(be, animate_turntable, &be->g, &res);
+	row("dragon turning one image a volume", "cache", &res, "");
+	reset_scene(be);
+	bench_scene_free(&dragon);
+}
+
+/* S4: 1,000 icosahedra; all move each volume, or a random 10%. */
+static void bench_s4(struct bench *be)
+{
+	static const uint8_t six[6][3] = { { 255, 0, 0 },   { 0, 255, 0 },   { 0, 0, 255 },
+					   { 255, 255, 0 }, { 255, 0, 255 }, { 0, 255, 255 } };
+	struct result all, res;
+	for (uint32_t i = 0; i < 1000; i++) {
+		struct scene_draw di = icosahedron(&be->ico, six[i % 6]);
+		bscene_add(&be->b, &di);
+		pose(&be->b, be->orb, i, 0);
+	}
+	be->orb->first = 0;
+	be->orb->fraction = 1;
+	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &all);
+	row("S4: 1,000 objects, all move", "full render", &all, "");
+	be->orb->fraction = 0.1;
+	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &res);
+	row("S4: 1,000 objects, 10% move", "full render", &res, "");
+	measure_cached(be, animate_orbits, be->orb, &res);
+	char note[128];
+	snprintf(note, sizeof(note), "%.2fx the full render of all moving", res.vol_s / all.vol_s);
+	row("S4: 1,000 objects, 10% move", "cache", &res, note);
+	printf("\nRSS at the end: %.0f MB; cache working volumes %.1f MB.\n", rss_kb() / 1024.0,
+	       res.st.working_bytes / 1048576.0);
+	reset_scene(be);
+}
+
+/* 0, or the exit status for a bad command line. */
+static int parse(int argc, char **argv, struct opts *o)
+{
+	*o = (struct opts){ .volumes = 100, .seconds = 4, .profile = "perspecta" };
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--volumes") && i + 1 < argc)
-			o.volumes = (unsigned)atoi(argv[++i]);
+			o->volumes = (unsigned)atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--seconds") && i + 1 < argc)
-			o.seconds = atof(argv[++i]);
+			o->seconds = atof(argv[++i]);
 		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
-			o.profile = argv[++i];
+			o->profile = argv[++i];
 		else if (argv[i][0] != '-')
-			o.dragon = argv[i];
+			o->dragon = argv[i];
 		else {
 			fprintf(stderr, "usage: %s [--volumes N] [--seconds S] [--profile P] [DRAGON.ply]\n", argv[0]);
 			return 2;
 		}
 	}
-	if (o.volumes < 1)
-		o.volumes = 1;
-	struct geometry g;
-	if (geometry_from_profile(o.profile, &g) < 0) {
-		fprintf(stderr, "unknown profile %s\n", o.profile);
-		return 2;
-	}
-	log_set_level(LOG_LEVEL_WARN);
-	struct renderer *r = render_cpu_create(&g, 0);
-	/* The cache composes on a pool of its own, as the daemon's pipeline
-	 * gives it. */
-	struct pool *pool = pool_create(r ? r->stats.threads : 1);
-	struct cache *cache = pool ? cache_create(&g, 256ull << 20, pool, true) : NULL;
-	if (!r || !cache)
-		return 1;
+	if (o->volumes < 1)
+		o->volumes = 1;
+	return 0;
+}
+
+static void header(const struct bench *be)
+{
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
 	       "warm-up volumes, then up to %u volumes or %.0f s; ms per volume (plan + render + compose, animation "
 	       "included), median and p99; render / compose: the cache's split, medians; hits / misses: objects, "
 	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
-	       o.profile, g.width, g.height, g.images_per_rev, g.mirrored ? ", mirrored" : "", r->stats.threads,
-	       o.volumes, o.seconds);
+	       be->o.profile, be->g.width, be->g.height, be->g.images_per_rev, be->g.mirrored ? ", mirrored" : "",
+	       be->r->stats.threads, be->o.volumes, be->o.seconds);
 	printf("| scene | how | volumes | vol/s | median ms | p99 ms | render ms | compose ms | hits / misses | cache "
-	       "MB "
-	       "| |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
+	       "MB | |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
+}
 
-	struct vbuf ico = { 0 };
-	shape_icosahedron(&ico, 0.03);
-	struct orbiter *orb = calloc(1, sizeof(*orb));
-	orb->volume_s = 1.0 / (g.rpm / 60.0 * (g.mirrored ? 2 : 1));
-	orb->rng = rng_seed(0x5350494e444c4534u);
+int main(int argc, char **argv)
+{
+	static struct bench be; /* large: the scenes' arrays */
+	int status = parse(argc, argv, &be.o);
+	if (status)
+		return status;
+	if (geometry_from_profile(be.o.profile, &be.g) < 0) {
+		fprintf(stderr, "unknown profile %s\n", be.o.profile);
+		return 2;
+	}
+	log_set_level(LOG_LEVEL_WARN);
+	be.r = render_cpu_create(&be.g, 0);
+	be.pool = be.r ? pool_create(be.r->stats.threads) : NULL;
+	be.orb = calloc(1, sizeof(*be.orb));
+	if (!be.r || !be.pool || !be.orb)
+		return 1;
+	header(&be);
+	shape_icosahedron(&be.ico, 0.03);
+	be.orb->volume_s = 1.0 / (be.g.rpm / 60.0 * (be.g.mirrored ? 2 : 1));
+	be.orb->rng = rng_seed(0x5350494e444c4534u);
 	for (uint32_t i = 0; i < MAX_OBJECTS; i++)
-		bench_orbit_random(&orb->o[i], &orb->rng, g.half_height);
-	struct result solo, res;
-
-	/* An animated object alone, and beside the static dragon. */
-	struct bscene *b = calloc(1, sizeof(*b));
-	struct scene_draw d = icosahedron(&ico, orange);
-	bscene_add(b, &d);
-	orb->first = 0;
-	orb->fraction = 1;
-	measure(r, NULL, b, animate_orbits, orb, &o, &solo);
-	row("icosahedron alone", "full render", &solo, "");
-	bscene_free(b);
-	char err[256];
-	struct bench_scene dragon = { 0 };
-	struct bench_files files = { .dragon = o.dragon };
-	if (o.dragon && bench_scene_build("S3-dragon", &g, &files, &dragon, err, sizeof(err)) == 0) {
-		memset(b, 0, sizeof(*b));
-		bscene_add(b, &dragon.draws[0]);
-		bscene_add(b, &d);
-		orb->first = 1;
-		measure(r, NULL, b, animate_orbits, orb, &o, &res);
-		row("dragon (static) + icosahedron", "full render", &res, "");
-		measure(r, cache, b, animate_orbits, orb, &o, &res);
-		char note[128];
-		snprintf(note, sizeof(note), "%.0f%% of the icosahedron's solo rate", 100 * res.vol_s / solo.vol_s);
-		row("dragon (static) + icosahedron", "cache", &res, note);
-		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, pool, true);
-		bscene_free(b);
-
-		/* Turntable: one image step per volume. */
-		memset(b, 0, sizeof(*b));
-		bscene_add(b, &dragon.draws[0]);
-		measure(r, NULL, b, animate_turntable, &g, &o, &res);
-		row("dragon turning one image a volume", "full render", &res, "");
-		measure(r, cache, b, animate_turntable, &g, &o, &res);
-		row("dragon turning one image a volume", "cache", &res, "");
-		cache_destroy(cache);
-		cache = cache_create(&g, 256ull << 20, pool, true);
-		bscene_free(b);
-	} else {
-		printf("\n(no dragon: %s)\n", o.dragon ? err : "give dragon_vrip.ply");
-	}
-
-	/* S4: 1,000 icosahedra; all move each volume, or a random 10%. */
-	memset(b, 0, sizeof(*b));
-	for (uint32_t i = 0; i < 1000; i++) {
-		static const uint8_t six[6][3] = { { 255, 0, 0 },   { 0, 255, 0 },   { 0, 0, 255 },
-						   { 255, 255, 0 }, { 255, 0, 255 }, { 0, 255, 255 } };
-		struct scene_draw di = icosahedron(&ico, six[i % 6]);
-		bscene_add(b, &di);
-		pose(b, orb, i, 0);
-	}
-	orb->first = 0;
-	orb->fraction = 1;
-	measure(r, NULL, b, animate_orbits, orb, &o, &solo);
-	row("S4: 1,000 objects, all move", "full render", &solo, "");
-	orb->fraction = 0.1;
-	measure(r, NULL, b, animate_orbits, orb, &o, &res);
-	row("S4: 1,000 objects, 10% move", "full render", &res, "");
-	measure(r, cache, b, animate_orbits, orb, &o, &res);
-	char note[128];
-	snprintf(note, sizeof(note), "%.2fx the full render of all moving", res.vol_s / solo.vol_s);
-	row("S4: 1,000 objects, 10% move", "cache", &res, note);
-	printf("\nRSS at the end: %.0f MB; cache working volumes %.1f MB.\n", rss_kb() / 1024.0,
-	       res.st.working_bytes / 1048576.0);
-	bscene_free(b);
-	free(b);
-	free(orb);
-	bench_scene_free(&dragon);
-	cache_destroy(cache);
-	pool_destroy(pool);
-	render_destroy(r);
-	vbuf_free(&ico);
+		bench_orbit_random(&be.orb->o[i], &be.orb->rng, be.g.half_height);
+	bench_dragon(&be);
+	bench_s4(&be);
+	free(be.orb);
+	cache_destroy(be.cache);
+	pool_destroy(be.pool);
+	render_destroy(be.r);
+	vbuf_free(&be.ico);
 	return 0;
 }

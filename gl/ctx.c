@@ -244,6 +244,29 @@ void sgl_ctx_pop(struct sgl_ctx *c)
 		stack_op(c->proj, &c->proj_top, false);
 }
 
+bool sgl_ctx_matrix_op(struct sgl_ctx *c, enum sgl_op_kind kind, const float *m, unsigned mode)
+{
+	switch (kind) {
+	case SGL_OP_MULT:
+		sgl_ctx_mult(c, m);
+		return true;
+	case SGL_OP_LOAD:
+		sgl_ctx_load(c, m);
+		return true;
+	case SGL_OP_PUSH:
+		sgl_ctx_push(c);
+		return true;
+	case SGL_OP_POP:
+		sgl_ctx_pop(c);
+		return true;
+	case SGL_OP_MODE:
+		c->matrix_mode = mode;
+		return true;
+	default:
+		return false;
+	}
+}
+
 bool sgl_ctx_drawing(struct sgl_ctx *c)
 {
 	return c->render_mode == GL_RENDER && c->program == 0;

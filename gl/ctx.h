@@ -25,6 +25,10 @@ void sgl_ctx_mult(struct sgl_ctx *c, const float m[16]);
 void sgl_ctx_load(struct sgl_ctx *c, const float m[16]);
 void sgl_ctx_push(struct sgl_ctx *c);
 void sgl_ctx_pop(struct sgl_ctx *c);
+/* One matrix-stack operation (mult, load, push, pop: on the current
+ * matrix mode's stack; mode: sets it), done now or replayed from a list;
+ * false for any other kind. */
+bool sgl_ctx_matrix_op(struct sgl_ctx *c, enum sgl_op_kind kind, const float *m, unsigned mode);
 /* Whether geometry drawn now is recorded for the frame (GL_RENDER mode,
  * no shader program). */
 bool sgl_ctx_drawing(struct sgl_ctx *c);

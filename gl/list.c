@@ -230,19 +230,11 @@ static void exec_op(struct sgl_ctx *c, struct sgl_list *l, const struct sgl_op *
 		sgl_frame_add_call(c, l, l->segs[op->a]);
 		break;
 	case SGL_OP_MULT:
-		sgl_ctx_mult(c, op->m);
-		break;
 	case SGL_OP_LOAD:
-		sgl_ctx_load(c, op->m);
-		break;
 	case SGL_OP_PUSH:
-		sgl_ctx_push(c);
-		break;
 	case SGL_OP_POP:
-		sgl_ctx_pop(c);
-		break;
 	case SGL_OP_MODE:
-		c->matrix_mode = op->a;
+		sgl_ctx_matrix_op(c, op->kind, op->m, op->a);
 		break;
 	case SGL_OP_CALL:
 		sgl_list_call(c, op->a + (op->b ? c->list_base : 0), depth + 1);

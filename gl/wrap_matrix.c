@@ -12,25 +12,7 @@ static void matrix_op(enum sgl_op_kind kind, const float *m, GLenum mode)
 		sgl_rec_matrix(c->rec, kind, m, mode);
 		return;
 	}
-	switch (kind) {
-	case SGL_OP_MULT:
-		sgl_ctx_mult(c, m);
-		break;
-	case SGL_OP_LOAD:
-		sgl_ctx_load(c, m);
-		break;
-	case SGL_OP_PUSH:
-		sgl_ctx_push(c);
-		break;
-	case SGL_OP_POP:
-		sgl_ctx_pop(c);
-		break;
-	case SGL_OP_MODE:
-		c->matrix_mode = mode;
-		break;
-	default:
-		break;
-	}
+	sgl_ctx_matrix_op(c, kind, m, mode);
 }
 
 static void mult(const float m[16])
