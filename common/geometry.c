@@ -9,9 +9,9 @@ static const struct {
 	struct geometry geom;
 } profiles[] = {
 	/* Actuality Perspecta: 198 images of 768x768 per half turn, 730 rpm. */
-	{ "perspecta", { 768, 768, 396, true, 1.0f, 730.0f } },
+	{ "perspecta", { 768, 768, 396, true, 1.0f, 730.0f, GEOMETRY_BRIGHTNESS_EXACT } },
 	/* Small and quick, for tests. */
-	{ "small", { 128, 128, 128, true, 1.0f, 1800.0f } },
+	{ "small", { 128, 128, 128, true, 1.0f, 1800.0f, GEOMETRY_BRIGHTNESS_EXACT } },
 };
 
 int geometry_from_profile(const char *name, struct geometry *out)
@@ -37,7 +37,33 @@ int geometry_validate(const struct geometry *g)
 		return -EINVAL;
 	if (!(g->rpm > 1.0f && g->rpm < 100000.0f))
 		return -EINVAL;
+	if (!geometry_brightness_name(g->brightness))
+		return -EINVAL;
 	return 0;
+}
+
+static const char *const brightness_names[] = { "exact", "even", "uniform" };
+
+const char *geometry_brightness_name(unsigned brightness)
+{
+	return brightness < sizeof(brightness_names) / sizeof(brightness_names[0]) ? brightness_names[brightness]
+										       : NULL;
+}
+
+int geometry_brightness_parse(const char *name, uint8_t *out)
+{
+	for (unsigned i = 0; i < sizeof(brightness_names) / sizeof(brightness_names[0]); i++) {
+		if (!strcmp(name, brightness_names[i])) {
+			*out = (uint8_t)i;
+			return 0;
+		}
+	}
+	return -EINVAL;
+}
+
+double geometry_r0_px(const struct geometry *g)
+{
+	return g->images_per_rev / (2.0 * M_PI);
 }
 
 uint32_t geometry_turn_source(const struct geometry *g, uint32_t k, uint32_t t, bool *mirror)

@@ -9,6 +9,23 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+/* How the renderers spread light near the axis (docs/rendering.md,
+ * "Brightness"). A lit voxel's light covers its world cell, a wedge one
+ * pixel wide and r * D deep at radius r: inside r0 = 1 / D pixels of the
+ * axis the cells of neighbouring images overlap. */
+enum geometry_brightness {
+	/* Every voxel a primitive touches is lit: docs/design.md section 3 as
+	 * it stands, the fidelity reference (a surface crossing the slices
+	 * glows as 1/r inside r0). */
+	GEOMETRY_BRIGHTNESS_EXACT = 0,
+	/* Inside r0, a primitive lights each pixel-sized cell of world space
+	 * about once per half turn (the daemon's default). */
+	GEOMETRY_BRIGHTNESS_EVEN = 1,
+	/* The same light per unit area at every radius and orientation, at
+	 * the price of brightness where slices are sparse. */
+	GEOMETRY_BRIGHTNESS_UNIFORM = 2,
+};
+
 struct geometry {
 	uint32_t width;          /* W, pixels per image row */
 	uint32_t height;         /* H, rows per image */
@@ -16,7 +33,20 @@ struct geometry {
 	bool mirrored;           /* image k + N/2 is image k mirrored (N even) */
 	float half_height;       /* h, half height / radius */
 	float rpm;               /* nominal rotor speed */
+	/* enum geometry_brightness: a render setting every stage that
+	 * halftones needs, so it travels with the geometry; profiles give
+	 * EXACT (0) and the daemon sets its configured one. */
+	uint8_t brightness;
 };
+
+/* "exact", "even", "uniform"; NULL for an unknown value. */
+const char *geometry_brightness_name(unsigned brightness);
+/* Parses one of those names. Returns 0, or -EINVAL. */
+int geometry_brightness_parse(const char *name, uint8_t *out);
+
+/* r0 = 1 / D = N / (2 pi): the radius in pixels of an image inside which the
+ * cells of neighbouring images overlap. */
+double geometry_r0_px(const struct geometry *g);
 
 /* Named profiles ("perspecta", "small"). Returns 0, or -ENOENT. */
 int geometry_from_profile(const char *name, struct geometry *out);

@@ -32,6 +32,7 @@ void config_defaults(struct config *cfg)
 		.max_scene_primitives = 16u << 20,
 		.cache = true,
 		.half_turn_swaps = true,
+		.brightness = GEOMETRY_BRIGHTNESS_EVEN,
 		.cache_budget = 256ull << 20,
 		.exclusive = POLICY_ADMIN,
 	};
@@ -92,6 +93,7 @@ const char *config_key_values(const char *key)
 		{ "profile", "perspecta, small" },
 		{ "renderer", "auto, cpu, egl, osmesa" },
 		{ "exclusive", "none, admin, any" },
+		{ "brightness", "exact, even, uniform" },
 	};
 	for (size_t i = 0; i < sizeof(keys) / sizeof(keys[0]); i++)
 		if (!strcmp(key, keys[i].key))
@@ -159,6 +161,8 @@ int config_set(struct config *cfg, const char *key, const char *value)
 				return set_string(cfg->renderer, sizeof(cfg->renderer), value);
 		return -EINVAL;
 	}
+	if (!strcmp(key, "brightness"))
+		return geometry_brightness_parse(value, &cfg->brightness);
 	if (!strcmp(key, "render-threads"))
 		return set_u32(&cfg->render_threads, value, 0, 256);
 	if (!strcmp(key, "projector-buffers"))

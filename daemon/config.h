@@ -49,6 +49,7 @@ struct config {
 	uint64_t max_scene_primitives;         /* all clients, per volume: priority decides */
 	bool cache;                            /* the object cache and compositor (cache.h) */
 	bool half_turn_swaps;                  /* swap at half-turn starts where the projector can */
+	uint8_t brightness;                    /* enum geometry_brightness (geometry.h) */
 	uint64_t cache_budget;                 /* bytes it may hold */
 	enum policy exclusive;                 /* who may have exclusive layers */
 	char admin_group[32];                  /* may capture, and be exclusive under "admin" */

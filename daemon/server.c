@@ -607,6 +607,7 @@ static int setup_render(struct server *srv)
 	if (!r)
 		return -errno;
 	log_info("renderer: %s", r->impl->name);
+	log_info("brightness: %s", geometry_brightness_name(srv->geom.brightness));
 	struct pipeline_config pc = {
 		.event = srv->event,
 		.stage = &srv->stage,
@@ -668,6 +669,7 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		log_error("unknown profile '%s'", cfg->profile);
 		return r;
 	}
+	srv->geom.brightness = cfg->brightness;
 	if ((r = setup_loop(srv)) < 0) {
 		log_error("event loop: %s", strerror(-r));
 		return r;

@@ -15,7 +15,7 @@ struct geometry rtest_small(void)
 
 struct geometry rtest_odd(void)
 {
-	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f };
+	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	return g;
 }
 

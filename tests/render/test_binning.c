@@ -202,7 +202,7 @@ int main(void)
 	check_slots(50);
 	check_slots(45);
 	struct geometry small = rtest_small(), odd = rtest_odd();
-	struct geometry odd_n = { 96, 64, 45, false, 1.25f, 600.0f };
+	struct geometry odd_n = { 96, 64, 45, false, 1.25f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	check_against_brute_force(&small);
 	check_against_brute_force(&odd);
 	check_against_brute_force(&odd_n);

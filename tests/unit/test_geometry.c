@@ -23,7 +23,7 @@ static void check_profiles(void)
 
 static void check_validate(void)
 {
-	struct geometry ok = { 100, 72, 50, false, 0.75f, 600.0f }, g;
+	struct geometry ok = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT }, g;
 	CHECK(geometry_validate(&ok) == 0);
 	CHECK(geometry_images_per_volume(&ok) == 50);
 	CHECK(geometry_row_bytes(&ok) == 13);
@@ -45,7 +45,7 @@ static void check_validate(void)
 
 static void check_columns_rows(void)
 {
-	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f };
+	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	CHECK(geometry_column(&g, -1.0) == 0);
 	CHECK(geometry_column(&g, 0.0) == 50);
 	CHECK(geometry_column(&g, -1e-12) == 49);
@@ -68,7 +68,7 @@ static void check_columns_rows(void)
 
 static void check_azimuths(void)
 {
-	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f };
+	struct geometry g = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	double d = 2 * M_PI / 50;
 	CHECK(geometry_image_angle(&g, 0) == 0.0);
 	CHECK(fabs(geometry_image_angle(&g, 25) - M_PI) < 1e-12);

@@ -136,7 +136,7 @@ static void check_round_trip(const struct geometry *g)
 
 int main(void)
 {
-	struct geometry small, odd = { 100, 72, 50, false, 0.75f, 600.0f };
+	struct geometry small, odd = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	geometry_from_profile("small", &small);
 	check_header_layout();
 	check_round_trip(&small);

@@ -9,7 +9,7 @@
 #include "check.h"
 #include "volume.h"
 
-static const struct geometry odd = { 100, 72, 50, false, 0.75f, 600.0f };
+static const struct geometry odd = { 100, 72, 50, false, 0.75f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 
 static uint32_t lcg(uint32_t *s)
 {
