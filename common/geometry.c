@@ -46,8 +46,9 @@ static const char *const brightness_names[] = { "exact", "even", "uniform" };
 
 const char *geometry_brightness_name(unsigned brightness)
 {
-	return brightness < sizeof(brightness_names) / sizeof(brightness_names[0]) ? brightness_names[brightness]
-										       : NULL;
+	return brightness < sizeof(brightness_names) / sizeof(brightness_names[0])
+		       ? brightness_names[brightness]
+		       : NULL;
 }
 
 int geometry_brightness_parse(const char *name, uint8_t *out)

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "brightness.h"
 #include "halftone.h"
 #include "pool.h"
 
@@ -211,8 +212,8 @@ struct compose {
 	struct volume *tmp; /* patching builds images here, then exchanges them */
 	struct geometry geom;
 	halftone_fn halftone;
-	struct halftone_table *thr; /* per volume image, made once */
-	uint8_t *all_dirty;         /* every tile of every image: compose_volumes() */
+	struct brightness_tables thr; /* per volume image, made once */
+	uint8_t *all_dirty;           /* every tile of every image: compose_volumes() */
 	const struct turned_source *turned;
 	/* Patching: the sources with tiles in image k are img_src[img_first[k]
 	 * .. img_first[k + 1]), each with the mask bytes it lies in there. */
@@ -248,11 +249,13 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	c->mask_bytes = probe->mask_bytes;
 	c->image_count = probe->image_count;
 	c->tmp = probe;
-	c->thr = calloc(c->image_count, sizeof(*c->thr));
-	if (!c->thr)
+	struct brightness_map bright;
+	if (brightness_map_init(&bright, geom) < 0)
 		goto fail;
-	for (uint32_t k = 0; k < c->image_count; k++)
-		halftone_table_init(&c->thr[k], k);
+	int err = brightness_tables_init(&c->thr, &bright);
+	brightness_map_finish(&bright);
+	if (err < 0)
+		goto fail;
 	if (!(c->all_dirty = calloc(c->image_count, c->mask_bytes)))
 		goto fail;
 	for (uint32_t k = 0; k < c->image_count; k++)
@@ -283,7 +286,7 @@ void compose_destroy(struct compose *c)
 		free(c->w[i].touched);
 	}
 	free(c->w);
-	free(c->thr);
+	brightness_tables_finish(&c->thr);
 	free(c->all_dirty);
 	free(c->img_first);
 	free(c->img_src);
@@ -642,13 +645,13 @@ static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k,
 	uint32_t rows;
 	memcpy(&rows, buf, sizeof(rows));
 	const uint8_t *canvas = buf + sizeof(rows);
+	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
 	if (mirror) {
-		uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
 		mirror_canvas(canvas, mirrored);
 		canvas = mirrored;
 		t = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
 	}
-	if (c->halftone(canvas, rows, &c->thr[k], packed)) {
+	if (c->halftone(canvas, rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
 		*count += !w->touched[t];
 		w->touched[t] = 1;
 		or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);

@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "bin.h"
+#include "brightness.h"
 #include "compose.h"
 #include "halftone.h"
 #include "log.h"
@@ -35,7 +36,8 @@ struct render_cpu {
 	struct cpu_worker *workers;
 	struct bin_set bins;
 	struct section_wedge *wedges; /* per volume image */
-	struct halftone_table *thr;   /* per volume image, made once */
+	struct brightness_map bright; /* geom.brightness's weights */
+	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
 	/* Per render: */
 	struct volume *out;
@@ -75,7 +77,6 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	struct section_canvas *c = &w->canvas;
-	const struct halftone_table *thr = &r->thr[k];
 	int err = 0;
 	uint32_t tiles = c->tiles_x * c->tiles_y;
 	for (uint32_t t = 0; t < tiles; t++) {
@@ -86,6 +87,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
 		if (!dst && err == 0)
 			err = -ENOMEM;
+		const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
 		if (dst && r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst)) {
 			err = volume_image_push(r->out, k, t);
 			w->tiles++;
@@ -214,7 +216,7 @@ static int render_to(struct render_cpu *r, const struct scene *scene, struct vol
 		return err;
 	base->stats.prims = r->bins.prim_count + r->bins.point_count;
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
-		struct section_canvas c = r->workers[i].canvas;
+		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		r->workers[i] = (struct cpu_worker){ .canvas = c };
 	}
 	r->out = out;
@@ -280,7 +282,8 @@ static void cpu_destroy(struct renderer *base)
 	}
 	free(r->stage);
 	free(r->wedges);
-	free(r->thr);
+	brightness_tables_finish(&r->thr);
+	brightness_map_finish(&r->bright);
 	bin_finish(&r->bins);
 	free(r);
 }
@@ -346,16 +349,16 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->workers = calloc(n, sizeof(*r->workers));
 	uint32_t images = geometry_images_per_volume(geom);
 	r->wedges = calloc(images, sizeof(*r->wedges));
-	r->thr = calloc(images, sizeof(*r->thr));
-	if (!r->workers || !r->wedges || !r->thr || bin_init(&r->bins, geom) < 0)
+	if (!r->workers || !r->wedges || bin_init(&r->bins, geom) < 0)
 		goto err_free;
-	for (uint32_t k = 0; k < images; k++) {
+	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
+		goto err_free;
+	for (uint32_t k = 0; k < images; k++)
 		section_wedge_init(&r->wedges[k], geom, k);
-		halftone_table_init(&r->thr[k], k);
-	}
 	for (unsigned i = 0; i < n; i++) {
 		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
 			goto err_free;
+		r->workers[i].canvas.bright = &r->bright;
 		r->base.stats.threads = i + 1; /* canvases to free */
 	}
 	r->pool = pool_create(n);

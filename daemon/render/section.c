@@ -98,6 +98,40 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 	}
 }
 
+/* A primitive's brightness weights in one image, worked out the first time
+ * a span of it reaches the thinned band (most primitives never do). */
+struct section_weight {
+	const struct brightness_map *m;
+	const double (*v)[3];
+	int n;
+	double dx, dz;
+	bool ready;
+	struct brightness_weight w;
+};
+
+/* Columns u0..u1 of row v, weighted where they lie in the band. */
+static void weighted_span(struct section_canvas *c, struct section_weight *wt, uint32_t v, uint32_t u0, uint32_t u1,
+			  const uint8_t rgb[3])
+{
+	const struct brightness_map *m = wt->m;
+	if (!wt->ready) {
+		brightness_weight_of(m, wt->v, wt->n, wt->dx, wt->dz, &wt->w);
+		wt->ready = true;
+	}
+	uint32_t a = u0 > m->band_lo ? u0 : m->band_lo, b = u1 < m->band_hi ? u1 : m->band_hi;
+	if (u0 < a)
+		section_span(c, v, u0, a - 1, rgb);
+	if (u1 > b)
+		section_span(c, v, b + 1, u1, rgb);
+	for (uint32_t u = a; u <= b; u++) {
+		uint8_t px[3];
+		for (int i = 0; i < 3; i++)
+			px[i] = brightness_apply(m, &wt->w, u, rgb[i]);
+		if (px[0] | px[1] | px[2])
+			section_pixel(c, u, v, px);
+	}
+}
+
 /* Minimum and maximum of finite values (fmin/fmax are library calls). */
 static inline double dmin(double a, double b)
 {
@@ -183,7 +217,8 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 /* The body of project_raster() and project_raster_mirrored(), with mirror
  * a constant in each: the unmirrored path tests nothing per row. */
 static inline __attribute__((always_inline)) void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
-								const uint8_t rgb[3], bool mirror)
+								const uint8_t rgb[3], struct section_weight *wt,
+								bool mirror)
 {
 	const struct geometry *g = &c->geom;
 	double ymin = INFINITY, ymax = -INFINITY;
@@ -212,8 +247,13 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 			edges_cross(&e, ylo, &lo, &hi);
 		if (lo <= hi) {
 			uint32_t u0 = geometry_column(g, lo), u1 = geometry_column(g, hi);
-			if (mirror)
-				section_span(c, v, g->width - 1 - u1, g->width - 1 - u0, rgb);
+			if (mirror) {
+				uint32_t t = g->width - 1 - u0;
+				u0 = g->width - 1 - u1;
+				u1 = t;
+			}
+			if (wt && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi)
+				weighted_span(c, wt, v, u0, u1, rgb);
 			else
 				section_span(c, v, u0, u1, rgb);
 		}
@@ -224,26 +264,26 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
  * rasterises its projection (mirrored: project_raster_mirrored()). */
 static inline __attribute__((always_inline)) void project_body(struct section_canvas *c, const struct section_wedge *w,
 							       const double (*v)[3], int n, const uint8_t rgb[3],
-							       bool mirror)
+							       struct section_weight *wt, bool mirror)
 {
 	double q[SECTION_MAX_VERTS][2];
 	for (int i = 0; i < n; i++) {
 		q[i][0] = v[i][0] * w->dx + v[i][2] * w->dz;
 		q[i][1] = v[i][1];
 	}
-	raster_convex(c, (const double(*)[2])q, n, rgb, mirror);
+	raster_convex(c, (const double(*)[2])q, n, rgb, wt, mirror);
 }
 
 static void project_raster(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-			   const uint8_t rgb[3])
+			   const uint8_t rgb[3], struct section_weight *wt)
 {
-	project_body(c, w, v, n, rgb, false);
+	project_body(c, w, v, n, rgb, wt, false);
 }
 
 static void project_raster_mirrored(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3],
-				    int n, const uint8_t rgb[3])
+				    int n, const uint8_t rgb[3], struct section_weight *wt)
 {
-	project_body(c, w, v, n, rgb, true);
+	project_body(c, w, v, n, rgb, wt, true);
 }
 
 /* One lobe: sign 1 keeps n1.p >= 0 and n2.p >= 0, sign -1 the opposite
@@ -252,7 +292,7 @@ static void project_raster_mirrored(struct section_canvas *c, const struct secti
  * section_lobe() and section_lobe_mirrored(), mirror a constant in each. */
 static inline __attribute__((always_inline)) void lobe_body(
 	struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n, const double *d1,
-	const double *d2, double sign, const uint8_t rgb[3], bool mirror)
+	const double *d2, double sign, const uint8_t rgb[3], struct section_weight *wt, bool mirror)
 {
 	int in1 = 0, in2 = 0;
 	for (int i = 0; i < n; i++) {
@@ -273,21 +313,33 @@ static inline __attribute__((always_inline)) void lobe_body(
 		piece = (const double(*)[3])b;
 	}
 	if (mirror)
-		project_raster_mirrored(c, w, piece, n, rgb);
+		project_raster_mirrored(c, w, piece, n, rgb, wt);
 	else
-		project_raster(c, w, piece, n, rgb);
+		project_raster(c, w, piece, n, rgb, wt);
 }
 
 static void section_lobe(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-			 const double *d1, const double *d2, double sign, const uint8_t rgb[3])
+			 const double *d1, const double *d2, double sign, const uint8_t rgb[3],
+			 struct section_weight *wt)
 {
-	lobe_body(c, w, v, n, d1, d2, sign, rgb, false);
+	lobe_body(c, w, v, n, d1, d2, sign, rgb, wt, false);
 }
 
 static void section_lobe_mirrored(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-				  const double *d1, const double *d2, double sign, const uint8_t rgb[3])
+				  const double *d1, const double *d2, double sign, const uint8_t rgb[3],
+				  struct section_weight *wt)
 {
-	lobe_body(c, w, v, n, d1, d2, sign, rgb, true);
+	lobe_body(c, w, v, n, d1, d2, sign, rgb, wt, true);
+}
+
+/* The weights' state for v in w's image, or NULL when the model is EXACT. */
+static inline struct section_weight *weight_start(const struct section_canvas *c, const struct section_wedge *w,
+						  const double (*v)[3], int n, struct section_weight *wt)
+{
+	if (!c->bright || !brightness_active(c->bright))
+		return NULL;
+	*wt = (struct section_weight){ .m = c->bright, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
+	return wt;
 }
 
 void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
@@ -298,8 +350,9 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w, const
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	section_lobe(c, w, v, n, d1, d2, 1.0, rgb);
-	section_lobe(c, w, v, n, d1, d2, -1.0, rgb);
+	struct section_weight state, *wt = weight_start(c, w, v, n, &state);
+	section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
+	section_lobe(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }
 
 void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
@@ -314,6 +367,7 @@ void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb);
-	section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb);
+	struct section_weight state, *wt = weight_start(c, w, v, n, &state);
+	section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
+	section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }

@@ -12,6 +12,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "brightness.h"
 #include "geometry.h"
 #include "halftone.h"
 #include "volume.h"
@@ -26,6 +27,10 @@ struct section_canvas {
 	uint32_t tiles_x, tiles_y;
 	uint8_t *rgb;   /* tiles_x * tiles_y * HALFTONE_TILE_BYTES */
 	uint32_t *rows; /* tiles_x * tiles_y row masks */
+	/* The brightness model primitives are weighted by (brightness.h);
+	 * NULL, or one that is not active: every touched voxel at full
+	 * colour (EXACT). Points are never weighted. */
+	const struct brightness_map *bright;
 };
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz

@@ -1,0 +1,168 @@
+#include "brightness.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+
+#include "volume.h"
+
+void brightness_map_finish(struct brightness_map *m)
+{
+	free(m->rate);
+	free(m->n);
+	free(m->phase);
+	m->rate = NULL;
+	m->n = NULL;
+	m->phase = NULL;
+}
+
+/* The pattern's offset at radius index i, row class y (0..15): a 2-D
+ * golden-ratio (R2) sequence in 16-bit fixed point, so neighbouring
+ * columns and rows start their patterns far apart (no radial spokes of
+ * images lit at once), and integer, so a GL shader can compute the same. */
+static uint16_t phase_of(uint32_t i, uint32_t y, uint32_t images)
+{
+	uint32_t f = (32768u + i * 49471u + y * 37345u) & 0xffffu;
+	return (uint16_t)((f * images) >> 16);
+}
+
+int brightness_map_init(struct brightness_map *m, const struct geometry *g)
+{
+	*m = (struct brightness_map){ .model = g->brightness, .width = g->width, .band_lo = 1, .band_hi = 0 };
+	m->images = geometry_images_per_volume(g);
+	m->rate = malloc(g->width * sizeof(*m->rate));
+	m->n = malloc(g->width * sizeof(*m->n));
+	uint32_t radii = g->width / 2 + 1;
+	m->phase = malloc(radii * 16 * sizeof(*m->phase));
+	if (!m->rate || !m->n || !m->phase) {
+		brightness_map_finish(m);
+		return -ENOMEM;
+	}
+	for (uint32_t i = 0; i < radii; i++)
+		for (uint32_t y = 0; y < 16; y++)
+			m->phase[i * 16 + y] = phase_of(i, y, m->images);
+	double d_angle = 2.0 * M_PI / g->images_per_rev, M = m->images;
+	/* UNIFORM's density: a crossing surface's at the rim. */
+	double density = geometry_r0_px(g) / (g->width / 2.0);
+	m->wall = g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM ? (float)density : 1.0f;
+	for (uint32_t u = 0; u < g->width; u++) {
+		double r = fabs(u + 0.5 - g->width / 2.0), n;
+		switch (g->brightness) {
+		case GEOMETRY_BRIGHTNESS_EVEN:
+			n = floor(M * r * d_angle + 0.5);
+			break;
+		case GEOMETRY_BRIGHTNESS_UNIFORM:
+			n = floor(M * density * r * d_angle + 0.5);
+			break;
+		default:
+			n = M;
+		}
+		n = n < 1 ? 1 : n > M ? M : n;
+		m->n[u] = (uint16_t)n;
+		m->rate[u] = (float)(n / M);
+		if (n < M || m->wall < 1.0f) {
+			if (m->band_lo > m->band_hi)
+				m->band_lo = u;
+			m->band_hi = u;
+		}
+	}
+	return 0;
+}
+
+uint8_t brightness_threshold(const struct brightness_map *m, uint32_t k, uint32_t u, uint32_t v)
+{
+	if (u < m->band_lo || u > m->band_hi)
+		return halftone_threshold(k, u, v);
+	/* Bresenham over images: x < n[u] in exactly n[u] of any M
+	 * consecutive images, evenly spaced; floor(255 x / M) rises with x
+	 * (strictly while M <= 255), so a crossing white primitive's weighted
+	 * value floor(255 n / M) is lit exactly there. */
+	uint32_t i = brightness_radius_index(m->width, u);
+	uint32_t x = (uint32_t)(((uint64_t)k * m->n[u] + m->phase[i * 16 + v % 16]) % m->images);
+	return (uint8_t)(255u * x / m->images);
+}
+
+void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], int n, double dx, double dz,
+			  struct brightness_weight *out)
+{
+	/* e = (-dz, 0, dx): the slice plane's normal. */
+	double cross = 0.0, len;
+	double t[3] = { v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2] };
+	bool segment = n == 2;
+	if (n == 3) {
+		double a[3] = { v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2] };
+		double nx = t[1] * a[2] - t[2] * a[1], ny = t[2] * a[0] - t[0] * a[2], nz = t[0] * a[1] - t[1] * a[0];
+		double n2 = nx * nx + ny * ny + nz * nz;
+		double l01 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], l02 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+		double b[3] = { v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2] };
+		double l12 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+		double longest = l01 > l02 ? (l01 > l12 ? l01 : l12) : (l02 > l12 ? l02 : l12);
+		if (n2 > 1e-12 * longest * longest) {
+			/* |n x e| / |n|: the normal's part in the plane. */
+			double ne = (-dz * nx + dx * nz);
+			double in_plane = n2 - ne * ne;
+			cross = sqrt(in_plane > 0.0 ? in_plane / n2 : 0.0);
+		} else { /* no area: its longest side */
+			segment = true;
+			if (l02 >= l01 && l02 >= l12)
+				for (int e = 0; e < 3; e++)
+					t[e] = a[e];
+			else if (l12 >= l01)
+				for (int e = 0; e < 3; e++)
+					t[e] = b[e];
+		}
+	}
+	if (segment) {
+		len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+		if (!(len > 0.0)) {
+			*out = (struct brightness_weight){ 1.0f, 1e30f };
+			return;
+		}
+		cross = fabs(-dz * t[0] + dx * t[2]) / len;
+	}
+	double wall = sqrt(fmax(0.0, 1.0 - cross * cross));
+	double kw = wall > m->wall ? m->wall / wall : 1.0;
+	out->kw = (float)kw;
+	out->inv_cross = cross > 1e-20 ? (float)fmin(1.0 / cross, 1e30) : 1e30f;
+}
+
+int brightness_tables_init(struct brightness_tables *t, const struct brightness_map *m)
+{
+	*t = (struct brightness_tables){ .images = m->images };
+	t->base = calloc(m->images, sizeof(*t->base));
+	if (!t->base)
+		return -ENOMEM;
+	for (uint32_t k = 0; k < m->images; k++)
+		halftone_table_init(&t->base[k], k);
+	if (!brightness_active(m))
+		return 0;
+	t->band_tx0 = m->band_lo / VOLUME_TILE;
+	t->band_tiles = m->band_hi / VOLUME_TILE - t->band_tx0 + 1;
+	t->band = calloc((size_t)m->images * t->band_tiles, sizeof(*t->band));
+	if (!t->band) {
+		brightness_tables_finish(t);
+		return -ENOMEM;
+	}
+	for (uint32_t k = 0; k < m->images; k++) {
+		for (uint32_t b = 0; b < t->band_tiles; b++) {
+			struct halftone_table *tab = &t->band[(size_t)k * t->band_tiles + b];
+			for (uint32_t y = 0; y < 16; y++) {
+				for (uint32_t x = 0; x < HALFTONE_ROW_BYTES; x++) {
+					uint32_t u = (t->band_tx0 + b) * VOLUME_TILE + x;
+					/* Past the image's edge the canvas is zero. */
+					tab->thr[y][halftone_pos(x)] =
+						u < m->width ? brightness_threshold(m, k, u, y) : 254;
+				}
+			}
+		}
+	}
+	return 0;
+}
+
+void brightness_tables_finish(struct brightness_tables *t)
+{
+	free(t->base);
+	free(t->band);
+	t->base = NULL;
+	t->band = NULL;
+}
