@@ -381,6 +381,19 @@ int main(void)
 	CHECK(cpu != NULL);
 	run(cpu, pool, 64u << 20, 100, 4, &t);
 	render_destroy(cpu);
+	/* The brightness models weight and thin what primitives light
+	 * (brightness.h): composing stays exact, turned canvases included. */
+	small.brightness = GEOMETRY_BRIGHTNESS_EVEN;
+	odd.brightness = GEOMETRY_BRIGHTNESS_UNIFORM;
+	const struct geometry *bright[] = { &small, &odd };
+	for (int i = 0; i < 2; i++) {
+		cpu = render_cpu_create(bright[i], 2);
+		CHECK(cpu != NULL);
+		run(cpu, pool, 64u << 20, 100, 9 + (uint64_t)i, &t);
+		CHECK(t.st.hits > 0 && t.st.turned > 0);
+		render_destroy(cpu);
+	}
+	small.brightness = odd.brightness = GEOMETRY_BRIGHTNESS_EXACT;
 	const char *gl[] = { "egl", "osmesa" };
 	for (int i = 0; i < 2; i++) {
 		struct render_gl_options o = { .backend = gl[i], .threads = 2, .no_fallback = true };
