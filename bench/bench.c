@@ -57,8 +57,10 @@ static const char *fmt_num(char *buf, size_t size, double v)
 	return buf;
 }
 
-static int variant_open(struct variant *v, const struct geometry *g)
+static int variant_open(struct variant *v, const struct geometry *geom)
 {
+	struct geometry model = *geom, *g = &model;
+	model.brightness = v->brightness;
 	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd };
 	struct render_gl_options gl = { .backend = v->gl, .naive = v->naive, .no_fallback = true };
 	v->r = v->gl[0] ? render_gl_create(g, &gl) : render_cpu_create_opts(g, &o);

@@ -5,6 +5,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "geometry.h"
+
 #ifndef BENCH_DATA_DIR
 #define BENCH_DATA_DIR "tests/data"
 #endif
@@ -18,7 +20,8 @@ static void usage(FILE *f)
 		"  --profile NAME       device profile (default perspecta)\n"
 		"  --variants LIST      renderer variants, comma separated (default cpu,%s):\n"
 		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512], egl[-naive],\n"
-		"                       osmesa[-naive]\n"
+		"                       osmesa[-naive]; +even or +uniform after any of them\n"
+		"                       renders in that brightness model (default exact)\n"
 		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
 		"  --warmup N           warm-up volumes before measuring (default 2)\n"
@@ -38,6 +41,16 @@ bool variant_parse(const char *spec, struct variant *v)
 	if (strlen(spec) >= sizeof(v->name))
 		return false;
 	snprintf(v->name, sizeof(v->name), "%s", spec);
+	/* A brightness model other than exact: "+even", "+uniform". */
+	char base[32];
+	snprintf(base, sizeof(base), "%s", spec);
+	char *plus = strchr(base, '+');
+	if (plus) {
+		*plus = '\0';
+		if (geometry_brightness_parse(plus + 1, &v->brightness) < 0)
+			return false;
+		spec = base;
+	}
 	static const char *const gl[] = { "egl", "osmesa" };
 	for (size_t i = 0; i < sizeof(gl) / sizeof(gl[0]); i++) {
 		size_t n = strlen(gl[i]);

@@ -18,10 +18,11 @@
  * while it runs, its renderer and output volume. */
 struct variant {
 	char name[32];
-	unsigned threads; /* 0: one per core */
-	char simd[16];    /* "auto", "scalar", ... */
-	char gl[8];       /* GL backend ("egl", "osmesa"), "" for the CPU */
-	bool naive;       /* the GL baseline pipeline */
+	unsigned threads;   /* 0: one per core */
+	char simd[16];      /* "auto", "scalar", ... */
+	char gl[8];         /* GL backend ("egl", "osmesa"), "" for the CPU */
+	bool naive;         /* the GL baseline pipeline */
+	uint8_t brightness; /* enum geometry_brightness: a "+even" or "+uniform" suffix */
 	struct renderer *r;
 	struct volume *out;
 };

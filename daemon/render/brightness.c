@@ -9,9 +9,11 @@
 void brightness_map_finish(struct brightness_map *m)
 {
 	free(m->rate);
+	free(m->line_rate);
 	free(m->n);
 	free(m->phase);
 	m->rate = NULL;
+	m->line_rate = NULL;
 	m->n = NULL;
 	m->phase = NULL;
 }
@@ -31,10 +33,11 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	*m = (struct brightness_map){ .model = g->brightness, .width = g->width, .band_lo = 1, .band_hi = 0 };
 	m->images = geometry_images_per_volume(g);
 	m->rate = malloc(g->width * sizeof(*m->rate));
+	m->line_rate = malloc(g->width * sizeof(*m->line_rate));
 	m->n = malloc(g->width * sizeof(*m->n));
 	uint32_t radii = g->width / 2 + 1;
 	m->phase = malloc(radii * 16 * sizeof(*m->phase));
-	if (!m->rate || !m->n || !m->phase) {
+	if (!m->rate || !m->line_rate || !m->n || !m->phase) {
 		brightness_map_finish(m);
 		return -ENOMEM;
 	}
@@ -46,20 +49,15 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	double density = geometry_r0_px(g) / (g->width / 2.0);
 	m->wall = g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM ? (float)density : 1.0f;
 	for (uint32_t u = 0; u < g->width; u++) {
-		double r = fabs(u + 0.5 - g->width / 2.0), n;
-		switch (g->brightness) {
-		case GEOMETRY_BRIGHTNESS_EVEN:
-			n = floor(M * r * d_angle + 0.5);
-			break;
-		case GEOMETRY_BRIGHTNESS_UNIFORM:
-			n = floor(M * density * r * d_angle + 0.5);
-			break;
-		default:
-			n = M;
-		}
-		n = n < 1 ? 1 : n > M ? M : n;
+		double r = fabs(u + 0.5 - g->width / 2.0);
+		double even = fmin(M, fmax(1.0, floor(M * r * d_angle + 0.5))), n = M;
+		if (g->brightness == GEOMETRY_BRIGHTNESS_EVEN)
+			n = even;
+		else if (g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM)
+			n = fmin(M, fmax(1.0, floor(M * density * r * d_angle + 0.5)));
 		m->n[u] = (uint16_t)n;
 		m->rate[u] = (float)(n / M);
+		m->line_rate[u] = g->brightness == GEOMETRY_BRIGHTNESS_EXACT ? 1.0f : (float)(even / M);
 		if (n < M || m->wall < 1.0f) {
 			if (m->band_lo > m->band_hi)
 				m->band_lo = u;
@@ -115,14 +113,14 @@ void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], 
 	if (segment) {
 		len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
 		if (!(len > 0.0)) {
-			*out = (struct brightness_weight){ 1.0f, 1e30f };
+			*out = (struct brightness_weight){ m->line_rate, 1.0f, 1e30f };
 			return;
 		}
 		cross = fabs(-dz * t[0] + dx * t[2]) / len;
 	}
 	double wall = sqrt(fmax(0.0, 1.0 - cross * cross));
-	double kw = wall > m->wall ? m->wall / wall : 1.0;
-	out->kw = (float)kw;
+	out->rate = segment ? m->line_rate : m->rate;
+	out->kw = !segment && wall > m->wall ? (float)(m->wall / wall) : 1.0f;
 	out->inv_cross = cross > 1e-20 ? (float)fmin(1.0 / cross, 1e30) : 1e30f;
 }
 

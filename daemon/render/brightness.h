@@ -30,7 +30,9 @@
  * beyond, and primitives lying in the slice plane, are untouched.
  * UNIFORM: every orientation and radius at the density a crossing surface
  * has at the rim, d = r0 / R per square pixel (R = W / 2): n[u] =
- * max(1, round(M d r_u D)), wall = d. */
+ * max(1, round(M d r_u D)), wall = d. A line has no area to even out:
+ * in UNIFORM, segments keep EVEN's weights (line_rate), so that thin lines
+ * are not broken into dashes. */
 #ifndef SPINDLE_BRIGHTNESS_H
 #define SPINDLE_BRIGHTNESS_H
 
@@ -49,6 +51,7 @@ struct brightness_map {
 	uint32_t band_hi; /* wall < 1); band_lo > band_hi: none (EXACT) */
 	float wall;       /* the weight of a primitive lying in the plane */
 	float *rate;      /* per column: n[u] / M */
+	float *line_rate; /* per column: segments' rate (EVEN's) */
 	uint16_t *n;      /* per column: images of M a crossing primitive lights */
 	uint16_t *phase;  /* per radius index i and row v % 16: the pattern's
 			    * offset, phase[i * 16 + v % 16] in 0..M-1 */
@@ -78,8 +81,9 @@ uint8_t brightness_threshold(const struct brightness_map *m, uint32_t k, uint32_
 
 /* A primitive's weights in one image: w(u) = min(kw, rate[u] * inv_cross). */
 struct brightness_weight {
-	float kw;        /* min(1, wall / p_wall) */
-	float inv_cross; /* 1 / p_cross (a huge value for 0) */
+	const float *rate; /* the map's rate or line_rate */
+	float kw;          /* min(1, wall / p_wall) */
+	float inv_cross;   /* 1 / p_cross (a huge value for 0) */
 };
 
 /* The weights of the segment (n = 2) or triangle (n = 3) v in the image
@@ -93,7 +97,7 @@ void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], 
 static inline uint8_t brightness_apply(const struct brightness_map *m, const struct brightness_weight *wt, uint32_t u,
 				       uint8_t c)
 {
-	float w = m->rate[u] * wt->inv_cross;
+	float w = wt->rate[u] * wt->inv_cross;
 	if (w > wt->kw)
 		w = wt->kw;
 	if (w >= 1.0f)
