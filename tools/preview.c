@@ -11,10 +11,6 @@
 /* Arc samples per voxel at most: enough to smear a rim voxel of a coarse
  * profile into a continuous arc without costing much on fine ones. */
 #define PREVIEW_MAX_ARC_SAMPLES 16
-/* Floor of the |s| weight: keeps points near the axis visible (a point
- * lights one voxel wherever it is) at the cost of a faint glow there for
- * horizontal surfaces, whose voxels crowd the axis. */
-#define PREVIEW_MIN_WEIGHT 0.1
 
 static const float background[3] = { 6.0f, 6.0f, 10.0f };
 static const float outline_rgb[3] = { 46.0f, 50.0f, 64.0f };
@@ -42,7 +38,6 @@ void preview_default_options(struct preview_options *opt)
 		.elevation_deg = 20.0,
 		.azimuth_deg = 90.0,
 		.outline = true,
-		.weight_by_radius = true,
 	};
 }
 
@@ -171,25 +166,27 @@ static int arc_table_init(struct arc_table *at, const struct volume *vol, const 
 struct voxel_painter {
 	const struct volume *vol;
 	const struct camera *cam;
-	const struct preview_options *opt;
 	struct arc_table arcs;
 	struct canvas *cv;
 	double eye_cam[3]; /* -eye in camera coordinates */
 	double y_cam[3];   /* (0, 1, 0) in camera coordinates */
 	double radius_px;  /* splat radius */
+	double d0_sq;      /* squared eye distance from the centre */
 };
 
+/* One voxel: the same light for every voxel, wherever it is (no weight for
+ * its radius: near the axis voxels crowd, and the picture shows the glow the
+ * display shows), spread evenly over the arc its image sweeps at its radius
+ * |s| and splatted over its pixel's extent, each share dimmed by the inverse
+ * square of its distance from the eye (preview.h). */
 static void paint_voxel(struct voxel_painter *vp, uint32_t k, uint32_t u, uint32_t v, unsigned bits)
 {
 	const struct geometry *g = &vp->vol->geom;
 	double s = ((u + 0.5) / g->width) * 2.0 - 1.0;
 	double y = g->half_height - (v + 0.5) / g->height * 2.0 * g->half_height;
-	float weight = (float)(vp->opt->weight_by_radius ? fmax(fabs(s), PREVIEW_MIN_WEIGHT) : 1.0);
+	double share = vp->d0_sq / vp->arcs.samples;
 	float rgb[3];
 
-	weight /= (float)vp->arcs.samples;
-	for (int c = 0; c < 3; c++)
-		rgb[c] = (bits >> c) & 1 ? weight : 0.0f;
 	const double *dir = &vp->arcs.dir[3 * (size_t)k * vp->arcs.samples];
 	for (int j = 0; j < vp->arcs.samples; j++, dir += 3) {
 		double cx = s * dir[0] + y * vp->y_cam[0] + vp->eye_cam[0];
@@ -197,6 +194,10 @@ static void paint_voxel(struct voxel_painter *vp, uint32_t k, uint32_t u, uint32
 		double cz = s * dir[2] + y * vp->y_cam[2] + vp->eye_cam[2];
 		if (cz <= 1e-6)
 			continue;
+		/* inverse square law, 1 at the display's centre */
+		float w = (float)(share / (cx * cx + cy * cy + cz * cz));
+		for (int c = 0; c < 3; c++)
+			rgb[c] = (bits >> c) & 1 ? w : 0.0f;
 		double px = vp->cam->cx + vp->cam->focal * cx / cz;
 		double py = vp->cam->cy - vp->cam->focal * cy / cz;
 		splat(vp->cv, px, py, vp->radius_px, rgb, vp->cv->light, 3);
@@ -243,7 +244,7 @@ static void paint_image(struct voxel_painter *vp, uint32_t k)
 static int paint_volume(struct canvas *cv, const struct volume *vol, const struct camera *cam,
 			const struct preview_options *opt)
 {
-	struct voxel_painter vp = { .vol = vol, .cam = cam, .opt = opt, .cv = cv };
+	struct voxel_painter vp = { .vol = vol, .cam = cam, .cv = cv };
 	const double origin[3] = { 0.0, 0.0, 0.0 }, up[3] = { 0.0, 1.0, 0.0 };
 	const struct geometry *g = &vol->geom;
 
@@ -257,6 +258,7 @@ static int paint_volume(struct canvas *cv, const struct volume *vol, const struc
 	/* Pixel pitch of columns and rows seen from the centre's distance. */
 	double pitch = cam->focal / opt->distance * fmax(2.0 / g->width, 2.0 * g->half_height / g->height);
 	vp.radius_px = fmax(1.0, pitch);
+	vp.d0_sq = opt->distance * opt->distance;
 	for (uint32_t k = 0; k < vol->image_count; k++)
 		paint_image(&vp, k);
 	free(vp.arcs.dir);
@@ -303,8 +305,11 @@ static int compare_float(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-/* The tone-map gain: the 99th percentile of lit pixels' brightness maps to
- * 1 - e^-2 (86%), so sparse and dense volumes both show well. */
+/* The tone-map gain, from the brightness of the lit pixels: the 99th
+ * percentile maps to 1 - e^-2 (86%), so sparse and dense volumes both show
+ * well, and the median to at least 1 - e^-1 (63%), so a small hot spot (a
+ * surface crossing the axis glows there, as on the display) cannot dim the
+ * rest: the spot saturates instead, still brighter than its surroundings. */
 static int exposure_gain(const struct canvas *cv, double *gain)
 {
 	size_t n = (size_t)cv->w * cv->h, lit = 0;
@@ -321,7 +326,7 @@ static int exposure_gain(const struct canvas *cv, double *gain)
 	*gain = 1.0;
 	if (lit > 0) {
 		qsort(vals, lit, sizeof(float), compare_float);
-		*gain = 2.0 / vals[(size_t)(0.99 * (lit - 1))];
+		*gain = fmax(2.0 / vals[(size_t)(0.99 * (lit - 1))], 1.0 / vals[(lit - 1) / 2]);
 	}
 	free(vals);
 	return 0;

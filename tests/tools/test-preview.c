@@ -1,9 +1,24 @@
-/* Preview of a synthetic volume: a white ring at y = 0 and a red ring at
- * y = 0.5 on the small profile. The PNG must decode, have the asked size, a
- * dark background, and light where the rings project. argv[1]: output PNG. */
+/* Preview of synthetic volumes on the small profile.
+ *
+ * Rings: a white ring at y = 0 and a red ring at y = 0.5. The PNG must
+ * decode, have the asked size, a dark background, and light where the rings
+ * project.
+ *
+ * Disks: every voxel carries the same light, spread over its world cell (a
+ * wedge r * D deep at radius r), with no weight for its radius. A horizontal
+ * disk lit as exact rendering lights it (one voxel per image per column)
+ * crowds its voxels near the axis, light per area r0 / r with r0 = 1 / D
+ * pixels, and must preview brighter near the axis than further out, as it
+ * glows on the display; a disk whose columns within r0 of the axis are lit
+ * in only a fraction r * D of the images (what even brightness aims at) has
+ * one voxel per pixel of area there and must preview about equally bright
+ * at the axis, near it and just inside r0. (Beyond r0 every image lights
+ * every column in both, and the light falls as r0 / r in both.) argv[1]: output PNG (the rings;
+ * the disks' pictures go next to it). */
 #include <errno.h>
 #include <math.h>
 #include <png.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "preview.h"
@@ -41,6 +56,103 @@ static uint8_t *read_png(const char *path, uint32_t *w, uint32_t *h)
 	*w = img.width;
 	*h = img.height;
 	return buf;
+}
+
+/* A horizontal disk of radius 0.9 at y = 0. even: columns within r0 of the
+ * axis lit in a fraction r * D of the images, spread evenly over them (each
+ * column with its own phase, so the lit images do not line up). */
+static struct volume *make_disk(bool even)
+{
+	struct geometry g;
+	CHECK(geometry_from_profile("small", &g) == 0);
+	struct testvol *tv = testvol_create(&g);
+	uint32_t v = geometry_row(&g, 0.0);
+	double step = 2.0 * M_PI / g.images_per_rev;
+	for (uint32_t u = 0; u < g.width; u++) {
+		double r_px = fabs(u + 0.5 - 0.5 * g.width);
+		if (r_px > 0.9 * 0.5 * g.width)
+			continue;
+		double f = even ? fmin(1.0, r_px * step) : 1.0, phase = fmod(u * 0.6180339887, 1.0);
+		for (uint32_t k = 0; k < tv->images; k++) {
+			if (floor((k + 1) * f + phase) != floor(k * f + phase))
+				testvol_set(tv, k, u, v, 7);
+		}
+	}
+	struct volume *vol = testvol_to_volume(tv);
+	testvol_destroy(tv);
+	return vol;
+}
+
+/* The light behind a picture value of channel 1 (green), up to the tone
+ * map's gain: v = bg + (255 - bg) (1 - e^(-gain L)) (preview.h), with
+ * bg = 6 without the outline; saturation reads as 254.5. */
+static double light_of(uint8_t v)
+{
+	double x = fmin((v - 6.0) / 249.0, 248.5 / 249.0);
+	return x > 0.0 ? -log(1.0 - x) : 0.0;
+}
+
+/* Mean light (light_of) over the 5x5 pixels about where p projects. */
+static double light_at(const uint8_t *rgb, const struct preview_options *opt, double x, double z)
+{
+	double p[3] = { x, 0.0, z }, px, py, sum = 0.0;
+	CHECK(preview_project(opt, 1.0, p, &px, &py) == 0);
+	for (int dy = -2; dy <= 2; dy++) {
+		for (int dx = -2; dx <= 2; dx++) {
+			int ix = (int)px + dx, iy = (int)py + dy;
+			CHECK(ix >= 0 && iy >= 0 && ix < (int)opt->width && iy < (int)opt->height);
+			sum += light_of(rgb[3 * ((size_t)iy * opt->width + ix) + 1]);
+		}
+	}
+	return sum / 25.0;
+}
+
+/* Light at the axis, near it (radius 0.1: 6.4 pixels of an image) and just
+ * inside r0 (radius 0.28: 17.9 pixels; r0 is 20.4), the latter two averaged
+ * over the points left and right of the axis as seen: at the same distance
+ * from the eye as the axis, nearly, so the inverse square law plays no
+ * part. */
+static void disk_light(const char *png, bool even, double *axis, double *near, double *far)
+{
+	struct volume *vol = make_disk(even);
+	struct preview_options opt;
+	preview_default_options(&opt);
+	opt.width = opt.height = SIZE;
+	opt.outline = false;
+	CHECK(preview_volume_to_png(vol, &opt, png) == 0);
+	uint32_t w, h;
+	uint8_t *rgb = read_png(png, &w, &h);
+	CHECK(w == SIZE && h == SIZE);
+	*axis = light_at(rgb, &opt, 0.0, 0.0);
+	*near = 0.5 * (light_at(rgb, &opt, -0.1, 0.0) + light_at(rgb, &opt, 0.1, 0.0));
+	*far = 0.5 * (light_at(rgb, &opt, -0.28, 0.0) + light_at(rgb, &opt, 0.28, 0.0));
+	printf("%s disk -> %s: light at the axis %.3f, at r 0.1 %.3f, at r 0.28 %.3f\n", even ? "even" : "exact", png,
+	       *axis, *near, *far);
+	free(rgb);
+	volume_destroy(vol);
+}
+
+static void check_disks(const char *rings_png)
+{
+	char png[4096];
+	const char *slash = strrchr(rings_png, '/');
+	int dir_len = slash ? (int)(slash - rings_png + 1) : 0;
+	double axis, near, far;
+
+	snprintf(png, sizeof(png), "%.*spreview-disk-exact.png", dir_len, rings_png);
+	disk_light(png, false, &axis, &near, &far);
+	/* 1/r: 2.8 times brighter at 0.1 than at 0.28 (a weight |s| would make
+	 * them equal; the tone map's saturation can take a little off), at
+	 * least as bright at the axis, and the rest not black */
+	CHECK(far > 0.3);
+	CHECK(near > 2.0 * far);
+	CHECK(axis > 2.0 * far);
+
+	snprintf(png, sizeof(png), "%.*spreview-disk-even.png", dir_len, rings_png);
+	disk_light(png, true, &axis, &near, &far);
+	CHECK(far > 0.3);
+	CHECK(fabs(near / far - 1.0) < 0.3);
+	CHECK(fabs(axis / far - 1.0) < 0.3);
 }
 
 /* Brightest value of channel c within 2 pixels of (x, y). */
@@ -94,6 +206,8 @@ int main(int argc, char **argv)
 	}
 	check_ring(rgb, &opt, 0.0, 1, -1);
 	check_ring(rgb, &opt, 0.5, 0, 1);
+
+	check_disks(argv[1]);
 
 	/* bad options are refused */
 	opt.distance = 1.0;
