@@ -1,0 +1,937 @@
+/* spindle-bench-brightness: light per unit area against the distance from
+ * the axis, through a running spindled (issue "Even brightness";
+ * bench/README.md, "Brightness").
+ *
+ * For each shape: show it alone as a white layer, commit and wait until it
+ * is shown, capture the next volume shown, remove it, and profile the
+ * capture (light_profile.h): lit voxels per px^2 of the shape's surface in
+ * radial bands [0,1), [1,2), [2,4), ... pixels, and relative to the band
+ * holding r0 = N / (2 pi). Prints a table per shape and a summary, or one
+ * JSON object (--json); --check MODE tells whether the profile is what the
+ * daemon's brightness model MODE must give.
+ *
+ *   spindle-bench-brightness [--socket PATH] [--shapes LIST] [--json] [--check exact|even|uniform]
+ *
+ * Exit: 0 done (and the check passed), 1 failed or the check failed, 2
+ * usage, 3 no daemon. */
+#include <errno.h>
+#include <getopt.h>
+#include <math.h>
+#include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
+
+#include <spindle/spindle.h>
+
+#include "light_profile.h"
+
+static const char prog[] = "spindle-bench-brightness";
+
+/* Limits of the checks (the issue's acceptance). */
+#define EVEN_LIMIT 1.25   /* brightest band or tube from 2 px to r0, over the r0 one */
+#define UNIFORM_LIMIT 1.5 /* brightest / dimmest band or tube from 2 px to the rim */
+#define EXACT_GLOW 3.0    /* the disk's 2-4 px band over its r0 band, at least */
+#define FROM_PX 2.0       /* bands and tubes from here out are judged */
+
+/* Longest edge of a triangle of the disk and the sphere, and the grid of
+ * the wall, in pixels; tube facets are at most TUBE_FACET_PX wide. */
+#define MESH_STEP_PX 4.0
+#define TUBE_FACET_PX 0.5
+/* Edges of the wall and tubes lie this far inside a row's boundary, so
+ * that they light whole rows and no more. */
+#define ROW_INSET_PX 0.05
+
+enum shape { SHAPE_DISK, SHAPE_WALL, SHAPE_TUBES, SHAPE_RING, SHAPE_SPHERE, SHAPE_COUNT };
+
+static const char *const shape_names[SHAPE_COUNT] = { "disk", "wall", "tubes", "ring", "sphere" };
+/* The default: the surfaces the checks are written for. `all` adds the
+ * extras: the ring (a line: its value is light per pixel of length, left
+ * out of the checks) and the sphere (a surface: checked like the others). */
+#define DEFAULT_SHAPES ((1u << SHAPE_DISK) | (1u << SHAPE_WALL) | (1u << SHAPE_TUBES))
+#define ALL_SHAPES ((1u << SHAPE_COUNT) - 1)
+
+enum check { CHECK_NONE = -1, CHECK_EXACT, CHECK_EVEN, CHECK_UNIFORM };
+
+/* ---- meshes ---- */
+
+struct mesh {
+	float *v; /* xyz */
+	size_t n, cap;
+	bool failed;
+};
+
+static void vertex(struct mesh *m, double x, double y, double z)
+{
+	if (m->n == m->cap) {
+		size_t cap = m->cap ? 2 * m->cap : 4096;
+		float *v = realloc(m->v, cap * 3 * sizeof(float));
+		if (!v) {
+			m->failed = true;
+			return;
+		}
+		m->v = v;
+		m->cap = cap;
+	}
+	m->v[3 * m->n] = (float)x;
+	m->v[3 * m->n + 1] = (float)y;
+	m->v[3 * m->n + 2] = (float)z;
+	m->n++;
+}
+
+/* Point i of a horizontal ring of m points, radius r, at height y. The same
+ * i always gives the same point, so that stitched rings share vertices. */
+static void ring_vertex(struct mesh *mesh, double r, double y, unsigned m, unsigned i)
+{
+	double a = 2.0 * M_PI * (i % m) / m;
+	vertex(mesh, r * cos(a), y, r * sin(a));
+}
+
+/* Triangles between two rings of ma and mb points (a ring of one point is
+ * a pole or the centre), walking both by angle. */
+static void stitch(struct mesh *mesh, double ra, double ya, unsigned ma, double rb, double yb, unsigned mb)
+{
+	unsigned i = 0, j = 0;
+	while (i < ma || j < mb) {
+		bool advance_a = j == mb || (i < ma && (uint64_t)(i + 1) * mb < (uint64_t)(j + 1) * ma);
+		if (advance_a ? ma > 1 : mb > 1) {
+			ring_vertex(mesh, ra, ya, ma, i);
+			ring_vertex(mesh, rb, yb, mb, j);
+			if (advance_a)
+				ring_vertex(mesh, ra, ya, ma, i + 1);
+			else
+				ring_vertex(mesh, rb, yb, mb, j + 1);
+		}
+		if (advance_a)
+			i++;
+		else
+			j++;
+	}
+}
+
+static unsigned ring_points(double r_px)
+{
+	unsigned m = (unsigned)ceil(2.0 * M_PI * r_px / MESH_STEP_PX);
+	return r_px > 0.0 ? (m < 8 ? 8 : m) : 1;
+}
+
+struct device {
+	uint32_t w, h, n;
+	bool mirrored;
+	double half_height;
+	double r0;    /* pixels */
+	double px;    /* volume units per horizontal pixel, 2 / W */
+	double row;   /* volume units per row, 2h / H */
+	double y_mid; /* the middle of row H/2 */
+	/* The wall's and the tubes' extent: rows v0 .. v1 - 1, whole. */
+	uint32_t v0, v1;
+	double y_top, y_bottom;
+};
+
+static double row_y(const struct device *d, double v)
+{
+	return d->half_height - v * d->row;
+}
+
+/* Horizontal disk of radius 1 at the middle of row H/2: rings MESH_STEP_PX
+ * apart, each with points MESH_STEP_PX apart. */
+static void disk_mesh(struct mesh *m, const struct device *d)
+{
+	double rim = d->w / 2.0;
+	unsigned rings = (unsigned)ceil(rim / MESH_STEP_PX);
+	for (unsigned i = 0; i < rings; i++) {
+		double a = i * MESH_STEP_PX, b = i + 1 == rings ? rim : (i + 1) * MESH_STEP_PX;
+		stitch(m, a * d->px, d->y_mid, ring_points(a), b * d->px, d->y_mid, ring_points(b));
+	}
+}
+
+/* Vertical rectangle through the axis at azimuth theta, s from -1 to 1,
+ * rows v0 .. v1 - 1: a grid of cells at most MESH_STEP_PX square. */
+static void wall_mesh(struct mesh *m, const struct device *d, double theta)
+{
+	unsigned ns = 2 * (unsigned)ceil(d->w / 2.0 / MESH_STEP_PX); /* even: s = 0 is a grid line */
+	unsigned nv = (unsigned)ceil((d->v1 - d->v0) / MESH_STEP_PX);
+	double c = cos(theta), sn = sin(theta);
+	for (unsigned i = 0; i < ns; i++)
+		for (unsigned j = 0; j < nv; j++) {
+			double s0 = -1.0 + 2.0 * i / ns, s1 = -1.0 + 2.0 * (i + 1) / ns;
+			double y0 = d->y_top + (d->y_bottom - d->y_top) * j / nv;
+			double y1 = d->y_top + (d->y_bottom - d->y_top) * (j + 1) / nv;
+			static const int quad[6][2] = { { 0, 0 }, { 1, 0 }, { 1, 1 }, { 0, 0 }, { 1, 1 }, { 0, 1 } };
+			for (int k = 0; k < 6; k++) {
+				double s = quad[k][0] ? s1 : s0, y = quad[k][1] ? y1 : y0;
+				vertex(m, s * c, y, s * sn);
+			}
+		}
+}
+
+/* Vertical cylinder of radius r_px pixels over rows v0 .. v1 - 1, facets at
+ * most TUBE_FACET_PX wide, each two triangles the tube's height. */
+static void tube_mesh(struct mesh *m, const struct device *d, double r_px)
+{
+	unsigned f = (unsigned)ceil(2.0 * M_PI * r_px / TUBE_FACET_PX);
+	if (f < 16)
+		f = 16;
+	double r = r_px * d->px;
+	for (unsigned i = 0; i < f; i++) {
+		ring_vertex(m, r, d->y_top, f, i);
+		ring_vertex(m, r, d->y_bottom, f, i);
+		ring_vertex(m, r, d->y_bottom, f, i + 1);
+		ring_vertex(m, r, d->y_top, f, i);
+		ring_vertex(m, r, d->y_bottom, f, i + 1);
+		ring_vertex(m, r, d->y_top, f, i + 1);
+	}
+}
+
+/* Sphere of radius r_px pixels centred on the axis: rings of latitude
+ * MESH_STEP_PX apart along the surface, stitched. */
+static void sphere_mesh(struct mesh *m, const struct device *d, double r_px)
+{
+	unsigned lat = (unsigned)ceil(M_PI * r_px / MESH_STEP_PX);
+	if (lat < 8)
+		lat = 8;
+	double r = r_px * d->px;
+	for (unsigned i = 0; i < lat; i++) {
+		double t0 = M_PI * i / lat, t1 = M_PI * (i + 1) / lat;
+		double ra = i == 0 ? 0.0 : r * sin(t0), rb = i + 1 == lat ? 0.0 : r * sin(t1);
+		stitch(m, ra, r * cos(t0), ring_points(ra / d->px), rb, r * cos(t1), ring_points(rb / d->px));
+	}
+}
+
+/* Horizontal circle of radius r_px at the middle of row H/2 as a closed
+ * line strip, segments about a pixel long. */
+static void ring_mesh(struct mesh *m, const struct device *d, double r_px)
+{
+	unsigned n = (unsigned)ceil(2.0 * M_PI * r_px);
+	if (n < 32)
+		n = 32;
+	for (unsigned i = 0; i <= n; i++)
+		ring_vertex(m, r_px * d->px, d->y_mid, n, i);
+}
+
+/* ---- measuring ---- */
+
+struct result {
+	enum shape shape;
+	double nominal_px, radius_px; /* tubes, ring, sphere: asked for and drawn */
+	struct light_shape ls;
+	struct light_profile prof;
+	double relative; /* tubes: value / the r0 tube's value (0: unknown) */
+};
+
+struct run {
+	struct spindle *sp;
+	struct spindle_layer *layer;
+	struct device dev;
+	struct result *results;
+	size_t count, cap;
+};
+
+static void report(struct spindle *sp, const char *what, int err)
+{
+	const char *why = sp ? spindle_get_error(sp) : NULL;
+	fprintf(stderr, "%s: %s: %s\n", prog, what, why ? why : strerror(err));
+}
+
+/* Shows the mesh alone (white), captures the next volume shown, removes
+ * it and profiles the capture as ls. 0 or -errno (reported). */
+static int measure(struct run *run, const struct mesh *m, enum spindle_mode mode, const struct light_shape *ls,
+		   struct light_profile *prof)
+{
+	struct spindle *sp = run->sp;
+	if (m->failed || m->n == 0) {
+		report(NULL, "building a shape", ENOMEM);
+		return -ENOMEM;
+	}
+	int fd = -1;
+	size_t size = 0;
+	void *data = MAP_FAILED;
+	struct spindle_buffer *buf = spindle_buffer_create(sp, m->v, m->n * 3 * sizeof(float));
+	struct spindle_list *list = buf ? spindle_list_create(sp) : NULL;
+	int r = list ? 0 : -errno;
+	if (r == 0)
+		r = spindle_list_set_color(list, 255, 255, 255, 255);
+	if (r == 0)
+		r = spindle_list_draw(list, mode, buf, 0, (uint32_t)m->n, 0);
+	if (r == 0)
+		r = spindle_layer_set_list(run->layer, list);
+	if (r == 0)
+		r = spindle_commit_and_wait(sp, NULL);
+	if (r < 0) {
+		report(sp, "showing a shape", -r);
+	} else {
+		r = spindle_capture(sp, &fd, &size);
+		if (r == -EACCES)
+			fprintf(stderr,
+				"%s: capture refused: only root, the daemon's user and members of its admin group "
+				"may capture\n",
+				prog);
+		else if (r < 0)
+			report(sp, "capture", -r);
+	}
+	if (r == 0) {
+		r = spindle_layer_set_list(run->layer, NULL);
+		if (r == 0)
+			r = spindle_commit(sp);
+		if (r < 0)
+			report(sp, "removing a shape", -r);
+	}
+	if (r == 0) {
+		data = size ? mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+		if (data == MAP_FAILED) {
+			r = -EINVAL;
+			report(NULL, "mapping the capture", size ? errno : EINVAL);
+		}
+	}
+	if (r == 0) {
+		r = light_profile_compute(data, size, ls, prof);
+		if (r < 0)
+			fprintf(stderr, "%s: the capture is no valid .svol file\n", prog);
+	}
+	if (data != MAP_FAILED)
+		munmap(data, size);
+	if (fd >= 0)
+		close(fd);
+	spindle_list_destroy(list);
+	spindle_buffer_destroy(buf);
+	return r;
+}
+
+static struct result *add_result(struct run *run)
+{
+	if (run->count == run->cap) {
+		size_t cap = run->cap ? 2 * run->cap : 16;
+		struct result *r = realloc(run->results, cap * sizeof(*r));
+		if (!r)
+			return NULL;
+		run->results = r;
+		run->cap = cap;
+	}
+	struct result *res = &run->results[run->count++];
+	memset(res, 0, sizeof(*res));
+	return res;
+}
+
+/* Radius at the centre of the pixel column that holds r_px: a tube there
+ * lights one column a row on each side of the axis, never two. */
+static double column_centre(double r_px)
+{
+	return floor(r_px) + 0.5;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+	double x = *(const double *)a, y = *(const double *)b;
+	return x < y ? -1 : x > y;
+}
+
+/* The tubes' radii: 2.5, 4, 6, 10, 16, r0, 2 r0, 4 r0, ... below the rim,
+ * sorted, each moved to its column's centre. */
+static size_t tube_radii(const struct device *d, double nominal[], size_t max)
+{
+	static const double fixed[] = { 2.5, 4, 6, 10, 16 };
+	size_t n = 0;
+	for (size_t i = 0; i < sizeof(fixed) / sizeof(fixed[0]) && n < max; i++)
+		if (column_centre(fixed[i]) < d->w / 2.0)
+			nominal[n++] = fixed[i];
+	for (double r = d->r0; column_centre(r) < d->w / 2.0 && n < max; r *= 2.0)
+		nominal[n++] = r;
+	qsort(nominal, n, sizeof(double), cmp_double);
+	size_t out = 0;
+	for (size_t i = 0; i < n; i++)
+		if (out == 0 || column_centre(nominal[i]) != column_centre(nominal[out - 1]))
+			nominal[out++] = nominal[i];
+	return out;
+}
+
+static int run_shape(struct run *run, enum shape shape)
+{
+	const struct device *d = &run->dev;
+	struct mesh m = { 0 };
+	int r = 0;
+	if (shape == SHAPE_TUBES) {
+		double nominal[32];
+		size_t n = tube_radii(d, nominal, 32);
+		for (size_t i = 0; i < n && r == 0; i++) {
+			struct result *res = add_result(run);
+			if (!res)
+				return -ENOMEM;
+			res->shape = shape;
+			res->nominal_px = nominal[i];
+			res->radius_px = column_centre(nominal[i]);
+			res->ls = (struct light_shape){ LIGHT_SHAPE_TUBE, res->radius_px * d->px,
+							d->y_top - d->y_bottom };
+			m.n = 0;
+			tube_mesh(&m, d, res->radius_px);
+			r = measure(run, &m, SPINDLE_TRIANGLES, &res->ls, &res->prof);
+		}
+		free(m.v);
+		return r;
+	}
+	struct result *res = add_result(run);
+	if (!res)
+		return -ENOMEM;
+	res->shape = shape;
+	enum spindle_mode mode = SPINDLE_TRIANGLES;
+	switch (shape) {
+	case SHAPE_DISK:
+		res->ls = (struct light_shape){ LIGHT_SHAPE_DISK, 1.0, 0.0 };
+		res->radius_px = d->w / 2.0;
+		disk_mesh(&m, d);
+		break;
+	case SHAPE_WALL: {
+		/* The centre of image j: it lies in that one slice. */
+		uint32_t j = d->n / 8 ? d->n / 8 : 1;
+		res->ls = (struct light_shape){ LIGHT_SHAPE_WALL, 1.0, d->y_top - d->y_bottom };
+		res->radius_px = d->w / 2.0;
+		res->nominal_px = j; /* the image */
+		wall_mesh(&m, d, 2.0 * M_PI * j / d->n);
+		break;
+	}
+	case SHAPE_RING:
+		res->nominal_px = 0.5 * d->w / 2.0;
+		res->radius_px = column_centre(res->nominal_px);
+		res->ls = (struct light_shape){ LIGHT_SHAPE_RING, res->radius_px * d->px, 0.0 };
+		ring_mesh(&m, d, res->radius_px);
+		mode = SPINDLE_LINE_STRIP;
+		break;
+	case SHAPE_SPHERE: {
+		double radius = 0.5 < 0.9 * d->half_height ? 0.5 : 0.9 * d->half_height;
+		res->nominal_px = radius * d->w / 2.0;
+		res->radius_px = column_centre(res->nominal_px);
+		res->ls = (struct light_shape){ LIGHT_SHAPE_SPHERE, res->radius_px * d->px, 0.0 };
+		sphere_mesh(&m, d, res->radius_px);
+		break;
+	}
+	default:
+		break;
+	}
+	r = measure(run, &m, mode, &res->ls, &res->prof);
+	free(m.v);
+	return r;
+}
+
+/* ---- the summary and the checks ---- */
+
+struct summary {
+	/* Per shape: the brightest band (tubes: tube) from FROM_PX to r0
+	 * over the r0 one; 0 when unknown. */
+	double peak[SHAPE_COUNT];
+	int peak_index[SHAPE_COUNT]; /* band, or index into results for tubes */
+	bool has_r0[SHAPE_COUNT];
+	/* Over every surface's band and tube from FROM_PX to the rim. */
+	double max, min, mean;
+	const struct result *max_of, *min_of;
+	int max_band, min_band; /* -1 for a tube */
+	unsigned values;
+};
+
+static bool is_surface(enum shape s)
+{
+	return s != SHAPE_RING;
+}
+
+static void consider(struct summary *s, const struct result *res, int band, double value, double *sum)
+{
+	if (s->values == 0 || value > s->max) {
+		s->max = value;
+		s->max_of = res;
+		s->max_band = band;
+	}
+	if (s->values == 0 || value < s->min) {
+		s->min = value;
+		s->min_of = res;
+		s->min_band = band;
+	}
+	*sum += value;
+	s->values++;
+}
+
+static void summarise(struct run *run, struct summary *s)
+{
+	memset(s, 0, sizeof(*s));
+	double r0 = run->dev.r0, sum = 0.0;
+	/* The r0 tube: the one whose radius's column holds r0. */
+	const struct result *r0_tube = NULL;
+	for (size_t i = 0; i < run->count; i++) {
+		const struct result *res = &run->results[i];
+		if (res->shape == SHAPE_TUBES && res->radius_px == column_centre(r0))
+			r0_tube = res;
+	}
+	for (size_t i = 0; i < run->count; i++) {
+		struct result *res = &run->results[i];
+		if (res->shape == SHAPE_TUBES) {
+			res->relative = r0_tube && r0_tube->prof.value > 0 ? res->prof.value / r0_tube->prof.value : 0;
+			s->has_r0[SHAPE_TUBES] = r0_tube && r0_tube->prof.value > 0;
+			if (res->radius_px >= FROM_PX && res->radius_px <= column_centre(r0) &&
+			    res->relative > s->peak[SHAPE_TUBES]) {
+				s->peak[SHAPE_TUBES] = res->relative;
+				s->peak_index[SHAPE_TUBES] = (int)i;
+			}
+			if (res->radius_px >= FROM_PX)
+				consider(s, res, -1, res->prof.value, &sum);
+			continue;
+		}
+		const struct light_profile *p = &res->prof;
+		s->has_r0[res->shape] = p->r0_band >= 0 && p->band[p->r0_band].value > 0;
+		for (unsigned b = 0; b < p->band_count; b++) {
+			const struct light_band *band = &p->band[b];
+			if (!(band->area > 0.0) || band->lo < FROM_PX)
+				continue;
+			if (band->lo <= r0 && band->relative > s->peak[res->shape]) {
+				s->peak[res->shape] = band->relative;
+				s->peak_index[res->shape] = (int)b;
+			}
+			if (is_surface(res->shape))
+				consider(s, res, (int)b, band->value, &sum);
+		}
+	}
+	s->mean = s->values ? sum / s->values : 0.0;
+}
+
+static void band_name(char *out, size_t size, const struct light_band *b)
+{
+	snprintf(out, size, "%g-%g", b->lo, b->hi);
+}
+
+static void where(char *out, size_t size, const struct result *res, int band)
+{
+	char b[32];
+	if (!res) {
+		snprintf(out, size, "none");
+	} else if (band < 0) {
+		snprintf(out, size, "tube %.1f px", res->radius_px);
+	} else {
+		band_name(b, sizeof(b), &res->prof.band[band]);
+		snprintf(out, size, "%s %s px", shape_names[res->shape], b);
+	}
+}
+
+/* Writes why the check failed into msg; returns true when it passed. */
+static bool check(const struct run *run, const struct summary *s, enum check c, unsigned shapes, char *msg, size_t size)
+{
+	msg[0] = '\0';
+	size_t len = 0;
+	bool ok = true;
+#define SAY(...)                                                                     \
+	do {                                                                         \
+		if (len < size)                                                      \
+			len += (size_t)snprintf(msg + len, size - len, __VA_ARGS__); \
+	} while (0)
+	if (c == CHECK_EXACT) {
+		const struct result *disk = NULL;
+		for (size_t i = 0; i < run->count; i++)
+			if (run->results[i].shape == SHAPE_DISK)
+				disk = &run->results[i];
+		const struct light_band *b = NULL;
+		for (unsigned i = 0; disk && i < disk->prof.band_count; i++)
+			if (disk->prof.band[i].lo == 2.0)
+				b = &disk->prof.band[i];
+		if (!b || !(b->relative >= EXACT_GLOW)) {
+			SAY("disk: band 2-4 px is %.2fx its r0 band, exact mode gives at least %.1fx",
+			    b ? b->relative : 0.0, EXACT_GLOW);
+			ok = false;
+		}
+	} else if (c == CHECK_EVEN) {
+		for (int sh = 0; sh < SHAPE_COUNT; sh++) {
+			if (!(shapes & (1u << sh)) || !is_surface((enum shape)sh))
+				continue;
+			if (!s->has_r0[sh]) {
+				SAY("%s%s: nothing lit at r0 to compare with", ok ? "" : "; ", shape_names[sh]);
+				ok = false;
+			} else if (s->peak[sh] > EVEN_LIMIT) {
+				char w[64];
+				if (sh == SHAPE_TUBES)
+					snprintf(w, sizeof(w), "tube %.1f px",
+						 run->results[s->peak_index[sh]].radius_px);
+				else
+					for (size_t i = 0; i < run->count; i++)
+						if (run->results[i].shape == (enum shape)sh)
+							where(w, sizeof(w), &run->results[i], s->peak_index[sh]);
+				SAY("%s%s is %.2fx the r0 %s (at most %.2fx inside r0)", ok ? "" : "; ", w, s->peak[sh],
+				    sh == SHAPE_TUBES ? "tube" : "band", EVEN_LIMIT);
+				ok = false;
+			}
+		}
+	} else if (c == CHECK_UNIFORM) {
+		double spread = s->min > 0.0 ? s->max / s->min : INFINITY;
+		if (s->values == 0 || spread > UNIFORM_LIMIT) {
+			char a[64], b[64];
+			where(a, sizeof(a), s->max_of, s->max_band);
+			where(b, sizeof(b), s->min_of, s->min_band);
+			SAY("spread %.2f (brightest %s: %.3g, dimmest %s: %.3g), at most %.2f", spread, a, s->max, b,
+			    s->min, UNIFORM_LIMIT);
+			ok = false;
+		}
+	}
+#undef SAY
+	return ok;
+}
+
+/* ---- output ---- */
+
+static void print_table(const struct run *run, enum shape shape)
+{
+	const struct device *d = &run->dev;
+	if (shape == SHAPE_TUBES || shape == SHAPE_RING) {
+		if (shape == SHAPE_TUBES)
+			printf("tubes: vertical cylinders about the axis, rows %u-%u (%.2f px high), each at the "
+			       "centre of "
+			       "its pixel column\n",
+			       d->v0, d->v1 - 1, (d->y_top - d->y_bottom) / d->row);
+		else
+			printf("ring: horizontal circle, a line strip at the middle of row %u (light per pixel of "
+			       "length)\n",
+			       d->h / 2);
+		printf("  %-18s %12s %12s %12s%s\n", "radius px", "lit voxels", "area px^2", "light/area",
+		       shape == SHAPE_TUBES ? " rel. r0 tube" : "");
+		for (size_t i = 0; i < run->count; i++) {
+			const struct result *res = &run->results[i];
+			if (res->shape != shape)
+				continue;
+			char name[40];
+			bool is_r0 = shape == SHAPE_TUBES && res->radius_px == column_centre(d->r0);
+			snprintf(name, sizeof(name), "%.1f (%.4g)%s", res->radius_px, res->nominal_px,
+				 is_r0 ? " r0" : "");
+			printf("  %-18s %12llu %12.1f %12.4f", name, (unsigned long long)res->prof.lit, res->prof.area,
+			       res->prof.value);
+			if (shape == SHAPE_TUBES)
+				printf(" %12.3f", res->relative);
+			printf("\n");
+		}
+		printf("\n");
+		return;
+	}
+	const struct result *res = NULL;
+	for (size_t i = 0; i < run->count; i++)
+		if (run->results[i].shape == shape)
+			res = &run->results[i];
+	if (!res)
+		return;
+	switch (shape) {
+	case SHAPE_DISK:
+		printf("disk: horizontal disk of radius 1 (%.0f px) at the middle of row %u\n", res->radius_px,
+		       d->h / 2);
+		break;
+	case SHAPE_WALL:
+		printf("wall: vertical rectangle through the axis at the centre of image %.0f, s from -1 to 1, rows "
+		       "%u-%u\n",
+		       res->nominal_px, d->v0, d->v1 - 1);
+		break;
+	case SHAPE_SPHERE:
+		printf("sphere: centred on the axis, radius %.1f px\n", res->radius_px);
+		break;
+	default:
+		break;
+	}
+	const struct light_profile *p = &res->prof;
+	printf("  %-18s %12s %12s %12s %12s\n", "band px", "lit voxels", "area px^2", "light/area", "rel. r0 band");
+	for (unsigned b = 0; b < p->band_count; b++) {
+		const struct light_band *band = &p->band[b];
+		char name[40];
+		band_name(name, sizeof(name), band);
+		if ((int)b == p->r0_band)
+			strcat(name, " r0");
+		if (band->area > 0.0)
+			printf("  %-18s %12llu %12.1f %12.4f %12.3f\n", name, (unsigned long long)band->lit, band->area,
+			       band->value, band->relative);
+		else
+			printf("  %-18s %12llu %12s %12s %12s\n", name, (unsigned long long)band->lit, "-", "-", "-");
+	}
+	printf("\n");
+}
+
+static void print_summary(const struct run *run, const struct summary *s, unsigned shapes)
+{
+	printf("summary (r0 = %.2f px; bands and tubes from %g px):\n", run->dev.r0, FROM_PX);
+	for (int sh = 0; sh < SHAPE_COUNT; sh++) {
+		if (!(shapes & (1u << sh)) || !is_surface((enum shape)sh))
+			continue;
+		char w[64] = "";
+		if (!s->has_r0[sh]) {
+			printf("  %-6s brightest from %g px to r0: unknown (nothing lit at r0)\n", shape_names[sh],
+			       FROM_PX);
+			continue;
+		}
+		if (sh == SHAPE_TUBES)
+			snprintf(w, sizeof(w), "tube %.1f px", run->results[s->peak_index[sh]].radius_px);
+		else
+			for (size_t i = 0; i < run->count; i++)
+				if (run->results[i].shape == (enum shape)sh)
+					where(w, sizeof(w), &run->results[i], s->peak_index[sh]);
+		printf("  %-6s brightest from %g px to r0: %.2fx the r0 %s (%s)\n", shape_names[sh], FROM_PX,
+		       s->peak[sh], sh == SHAPE_TUBES ? "tube" : "band", w);
+	}
+	char a[64], b[64];
+	where(a, sizeof(a), s->max_of, s->max_band);
+	where(b, sizeof(b), s->min_of, s->min_band);
+	printf("  spread over all shapes, %g px to the rim: %.2f (brightest %s: %.4f, dimmest %s: %.4f)\n", FROM_PX,
+	       s->min > 0.0 ? s->max / s->min : INFINITY, a, s->max, b, s->min);
+	printf("  mean light per area over those bands and tubes: %.4f voxels/px^2\n", s->mean);
+}
+
+static void json_number(double v)
+{
+	if (isfinite(v))
+		printf("%.6g", v);
+	else
+		printf("null");
+}
+
+static void print_json(const struct run *run, const struct summary *s, unsigned shapes, int c, bool passed,
+		       const char *msg)
+{
+	const struct device *d = &run->dev;
+	printf("{\"device\":{\"width\":%u,\"height\":%u,\"images_per_rev\":%u,\"mirrored\":%s,\"half_height\":", d->w,
+	       d->h, d->n, d->mirrored ? "true" : "false");
+	json_number(d->half_height);
+	printf(",\"r0_px\":");
+	json_number(d->r0);
+	printf("},\"shapes\":{");
+	bool first_shape = true;
+	for (int sh = 0; sh < SHAPE_COUNT; sh++) {
+		if (!(shapes & (1u << sh)))
+			continue;
+		printf("%s\"%s\":{", first_shape ? "" : ",", shape_names[sh]);
+		first_shape = false;
+		if (sh == SHAPE_TUBES || sh == SHAPE_RING) {
+			printf("\"%s\":[", sh == SHAPE_TUBES ? "tubes" : "rings");
+			bool first = true;
+			for (size_t i = 0; i < run->count; i++) {
+				const struct result *res = &run->results[i];
+				if (res->shape != (enum shape)sh)
+					continue;
+				printf("%s{\"nominal_px\":", first ? "" : ",");
+				first = false;
+				json_number(res->nominal_px);
+				printf(",\"radius_px\":");
+				json_number(res->radius_px);
+				printf(",\"lit\":%llu,\"area\":", (unsigned long long)res->prof.lit);
+				json_number(res->prof.area);
+				printf(",\"value\":");
+				json_number(res->prof.value);
+				printf(",\"relative\":");
+				json_number(res->relative);
+				printf("}");
+			}
+			printf("]");
+		} else {
+			const struct result *res = NULL;
+			for (size_t i = 0; i < run->count; i++)
+				if (run->results[i].shape == (enum shape)sh)
+					res = &run->results[i];
+			if (!res) {
+				printf("}");
+				continue;
+			}
+			printf("\"r0_band\":%d,\"lit\":%llu,\"area\":", res->prof.r0_band,
+			       (unsigned long long)res->prof.lit);
+			json_number(res->prof.area);
+			printf(",\"bands\":[");
+			for (unsigned b = 0; b < res->prof.band_count; b++) {
+				const struct light_band *band = &res->prof.band[b];
+				printf("%s{\"lo\":", b ? "," : "");
+				json_number(band->lo);
+				printf(",\"hi\":");
+				json_number(band->hi);
+				printf(",\"lit\":%llu,\"area\":", (unsigned long long)band->lit);
+				json_number(band->area);
+				printf(",\"value\":");
+				json_number(band->value);
+				printf(",\"relative\":");
+				json_number(band->relative);
+				printf("}");
+			}
+			printf("]");
+		}
+		if (is_surface((enum shape)sh)) {
+			printf(",\"peak_to_r0\":");
+			json_number(s->has_r0[sh] ? s->peak[sh] : NAN);
+		}
+		printf("}");
+	}
+	printf("},\"spread\":");
+	json_number(s->values && s->min > 0.0 ? s->max / s->min : NAN);
+	printf(",\"mean\":");
+	json_number(s->values ? s->mean : NAN);
+	if (c != CHECK_NONE) {
+		static const char *const names[] = { "exact", "even", "uniform" };
+		printf(",\"check\":{\"mode\":\"%s\",\"passed\":%s,\"message\":\"", names[c], passed ? "true" : "false");
+		for (const char *p = msg; *p; p++)
+			printf(*p == '"' || *p == '\\' ? "\\%c" : "%c", *p);
+		printf("\"}");
+	}
+	printf("}\n");
+}
+
+/* ---- main ---- */
+
+static void usage(FILE *f)
+{
+	fprintf(f,
+		"usage: %s [--socket PATH] [--shapes LIST] [--json] [--check exact|even|uniform]\n"
+		"  --shapes LIST   comma separated: disk, wall, tubes, ring, sphere, all\n"
+		"                  (default disk,wall,tubes)\n"
+		"  --json          one JSON object instead of the tables\n"
+		"  --check MODE    exit 1 unless the profile is what brightness MODE gives\n"
+		"Exit: 0 done, 1 failed or the check failed, 2 usage, 3 no daemon.\n",
+		prog);
+}
+
+static int parse_shapes(const char *list, unsigned *out)
+{
+	char *copy = strdup(list), *save = NULL;
+	if (!copy)
+		return -ENOMEM;
+	unsigned mask = 0;
+	int r = 0;
+	for (char *t = strtok_r(copy, ",", &save); t && r == 0; t = strtok_r(NULL, ",", &save)) {
+		if (!strcmp(t, "all")) {
+			mask |= ALL_SHAPES;
+			continue;
+		}
+		int i = 0;
+		while (i < SHAPE_COUNT && strcmp(t, shape_names[i]) != 0)
+			i++;
+		if (i == SHAPE_COUNT)
+			r = -EINVAL;
+		else
+			mask |= 1u << i;
+	}
+	free(copy);
+	*out = mask;
+	return r < 0 ? r : mask ? 0 : -EINVAL;
+}
+
+int main(int argc, char **argv)
+{
+	static const struct option longopts[] = {
+		{ "socket", required_argument, NULL, 's' }, { "shapes", required_argument, NULL, 'S' },
+		{ "json", no_argument, NULL, 'j' },         { "check", required_argument, NULL, 'c' },
+		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
+	};
+	const char *socket = NULL;
+	unsigned shapes = DEFAULT_SHAPES;
+	bool json = false;
+	int c = CHECK_NONE, opt;
+	while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
+		switch (opt) {
+		case 's':
+			socket = optarg;
+			break;
+		case 'S':
+			if (parse_shapes(optarg, &shapes) < 0) {
+				fprintf(stderr, "%s: --shapes: unknown shape in '%s'\n", prog, optarg);
+				return 2;
+			}
+			break;
+		case 'j':
+			json = true;
+			break;
+		case 'c':
+			if (!strcmp(optarg, "exact"))
+				c = CHECK_EXACT;
+			else if (!strcmp(optarg, "even"))
+				c = CHECK_EVEN;
+			else if (!strcmp(optarg, "uniform"))
+				c = CHECK_UNIFORM;
+			else {
+				fprintf(stderr, "%s: --check: one of exact, even, uniform\n", prog);
+				return 2;
+			}
+			break;
+		case 'h':
+			usage(stdout);
+			return 0;
+		default:
+			usage(stderr);
+			return 2;
+		}
+	}
+	if (optind < argc) {
+		usage(stderr);
+		return 2;
+	}
+	if (c == CHECK_EXACT && !(shapes & (1u << SHAPE_DISK))) {
+		fprintf(stderr, "%s: --check exact needs the disk among the shapes\n", prog);
+		return 2;
+	}
+	if (c == CHECK_UNIFORM && !(shapes & ALL_SHAPES & ~(1u << SHAPE_RING))) {
+		fprintf(stderr, "%s: --check uniform needs a surface among the shapes\n", prog);
+		return 2;
+	}
+
+	struct run run = { 0 };
+	run.sp = spindle_connect(socket);
+	if (!run.sp) {
+		const char *env = getenv("SPINDLE_SOCKET");
+		fprintf(stderr, "%s: cannot connect to spindled at %s: %s\n", prog,
+			socket        ? socket
+			: env && *env ? env
+				      : SPINDLE_DEFAULT_SOCKET,
+			errno == EPROTO ? "no common protocol version" : strerror(errno));
+		return 3;
+	}
+	const struct spindle_device_info *info = spindle_get_device_info(run.sp);
+	struct device *d = &run.dev;
+	d->w = info->width;
+	d->h = info->height;
+	d->n = info->images_per_rev;
+	d->mirrored = info->mirrored;
+	d->half_height = info->half_height;
+	d->r0 = d->n / (2.0 * M_PI);
+	d->px = 2.0 / d->w;
+	d->row = 2.0 * d->half_height / d->h;
+	d->y_mid = row_y(d, d->h / 2 + 0.5);
+	d->v0 = d->h / 4;
+	d->v1 = d->h - d->h / 4;
+	d->y_top = row_y(d, d->v0 + ROW_INSET_PX);
+	d->y_bottom = row_y(d, d->v1 - ROW_INSET_PX);
+
+	int status = 0;
+	run.layer = spindle_layer_create(run.sp);
+	if (!run.layer) {
+		report(run.sp, "creating a layer", errno);
+		status = 1;
+	}
+	for (int sh = 0; sh < SHAPE_COUNT && status == 0; sh++)
+		if (shapes & (1u << sh) && run_shape(&run, (enum shape)sh) < 0)
+			status = 1;
+	if (status == 0) {
+		struct summary s;
+		char msg[1024] = "";
+		summarise(&run, &s);
+		bool passed = c == CHECK_NONE || check(&run, &s, (enum check)c, shapes, msg, sizeof(msg));
+		if (json) {
+			print_json(&run, &s, shapes, c, passed, msg);
+		} else {
+			printf("%ux%u, N = %u%s, h = %g, r0 = %.2f px; light/area: lit voxels (any channel, every "
+			       "image of the capture) per px^2 of surface\n\n",
+			       d->w, d->h, d->n, d->mirrored ? " mirrored" : "", d->half_height, d->r0);
+			for (int sh = 0; sh < SHAPE_COUNT; sh++)
+				if (shapes & (1u << sh))
+					print_table(&run, (enum shape)sh);
+			print_summary(&run, &s, shapes);
+			if (c != CHECK_NONE)
+				printf("check %s: %s\n",
+				       c == CHECK_EXACT  ? "exact"
+				       : c == CHECK_EVEN ? "even"
+							 : "uniform",
+				       passed ? "passed" : "FAILED");
+		}
+		if (!passed) {
+			fprintf(stderr, "%s: check %s failed: %s\n", prog,
+				c == CHECK_EXACT  ? "exact"
+				: c == CHECK_EVEN ? "even"
+						  : "uniform",
+				msg);
+			status = 1;
+		}
+	}
+	spindle_layer_destroy(run.layer);
+	spindle_disconnect(run.sp);
+	free(run.results);
+	return status;
+}
