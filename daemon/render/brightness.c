@@ -18,13 +18,20 @@ void brightness_map_finish(struct brightness_map *m)
 	m->phase = NULL;
 }
 
-/* The pattern's offset at radius index i, row class y (0..15): a 2-D
- * golden-ratio (R2) sequence in 16-bit fixed point, so neighbouring
- * columns and rows start their patterns far apart (no radial spokes of
- * images lit at once), and integer, so a GL shader can compute the same. */
+/* The pattern's offset at radius index i, row class y (0..15), in 0..M-1.
+ * Any offset keeps each column's pattern over images evenly spaced. These
+ * start neighbouring columns far apart (a golden-ratio step per column: no
+ * radial spokes of images lit at once), and give a column's 16 row classes
+ * offsets a sixteenth of M apart, in bit-reversed order, so that within
+ * one image every column lights its share of the rows, spread out: a
+ * surface lying in one image (a wall, in the uniform model) keeps its
+ * density in every image. (A 2-D golden-ratio sequence over (i, y) left
+ * fewer holes in the uniform model but missed its density by a fifth in
+ * some images.) Integer arithmetic, for the GL renderers' table too. */
 static uint16_t phase_of(uint32_t i, uint32_t y, uint32_t images)
 {
-	uint32_t f = (32768u + i * 49471u + y * 37345u) & 0xffffu;
+	uint32_t rev = ((y & 1u) << 3) | ((y & 2u) << 1) | ((y & 4u) >> 1) | ((y & 8u) >> 3);
+	uint32_t f = (i * 40503u + rev * 4096u) & 0xffffu; /* 40503 / 65536: the golden ratio's part */
 	return (uint16_t)((f * images) >> 16);
 }
 
@@ -53,10 +60,15 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 		double even = fmin(M, fmax(1.0, floor(M * r * d_angle + 0.5))), n = M;
 		if (g->brightness == GEOMETRY_BRIGHTNESS_EVEN)
 			n = even;
-		else if (g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM)
-			n = fmin(M, fmax(1.0, floor(M * density * r * d_angle + 0.5)));
+		double rate = n / M;
+		if (g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM) {
+			/* The weight unrounded: at a few images per volume
+			 * rounding n would miss the density by up to a half. */
+			rate = fmin(1.0, density * r * d_angle);
+			n = fmin(M, fmax(1.0, floor(M * rate + 0.5)));
+		}
 		m->n[u] = (uint16_t)n;
-		m->rate[u] = (float)(n / M);
+		m->rate[u] = (float)rate;
 		m->line_rate[u] = g->brightness == GEOMETRY_BRIGHTNESS_EXACT ? 1.0f : (float)(even / M);
 		if (n < M || m->wall < 1.0f) {
 			if (m->band_lo > m->band_hi)

@@ -29,8 +29,8 @@
  * about once per half turn whatever the orientation; columns at r0 and
  * beyond, and primitives lying in the slice plane, are untouched.
  * UNIFORM: every orientation and radius at the density a crossing surface
- * has at the rim, d = r0 / R per square pixel (R = W / 2): n[u] =
- * max(1, round(M d r_u D)), wall = d. A line has no area to even out:
+ * has at the rim, d = r0 / R per square pixel (R = W / 2): rate[u] =
+ * d r_u D unrounded, n[u] = max(1, round(M d r_u D)), wall = d. A line has no area to even out:
  * in UNIFORM, segments keep EVEN's weights (line_rate), so that thin lines
  * are not broken into dashes. */
 #ifndef SPINDLE_BRIGHTNESS_H
@@ -50,7 +50,7 @@ struct brightness_map {
 	uint32_t band_lo; /* columns band_lo..band_hi are thinned (rate < 1 or */
 	uint32_t band_hi; /* wall < 1); band_lo > band_hi: none (EXACT) */
 	float wall;       /* the weight of a primitive lying in the plane */
-	float *rate;      /* per column: n[u] / M */
+	float *rate;      /* per column: n[u] / M (UNIFORM: d r_u D) */
 	float *line_rate; /* per column: segments' rate (EVEN's) */
 	uint16_t *n;      /* per column: images of M a crossing primitive lights */
 	uint16_t *phase;  /* per radius index i and row v % 16: the pattern's
