@@ -52,14 +52,17 @@ static void log_refusal(struct server *srv, enum admission_verdict v, uid_t uid)
 	srv->refusal_log.suppressed = 0;
 }
 
-/* What is connected, as a new peer of uid sees it. */
+/* What is connected, as a new peer of uid sees it: a client that is gone
+ * holds no slot, even before reap() frees it (it runs after the events
+ * already pending, so a burst of connections would find it counted). */
 static void admission_load(struct server *srv, uid_t uid, struct admission_load *out)
 {
-	*out = (struct admission_load){ .clients = srv->client_count };
+	*out = (struct admission_load){ 0 };
 	struct client *c;
 	link_for_each(c, &srv->clients, link) {
 		if (c->dead)
 			continue;
+		out->clients++;
 		out->incomplete += !c->version && !c->admin;
 		out->same_user += c->uid == uid && !c->admin;
 	}
