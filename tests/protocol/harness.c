@@ -93,6 +93,10 @@ static void spawn(struct daemon *d, const char *renderer, const char *config)
 			dup2(log, 2);
 		unsetenv("LISTEN_FDS");
 		unsetenv("LISTEN_PID");
+		/* brightness=exact: the suite's expectations are
+		 * docs/design.md's per-image rules, the EXACT model. The
+		 * default (EVEN) is checked by render-brightness and
+		 * tools-brightness. */
 		const char *argv[] = {
 			exe,
 			"--device",
@@ -103,9 +107,6 @@ static void spawn(struct daemon *d, const char *renderer, const char *config)
 			d->socket,
 			"--config",
 			conf,
-			/* The suite's expectations are docs/design.md's
-			 * per-image rules: the EXACT model. The default (EVEN)
-			 * is checked by render-brightness and tools-brightness. */
 			"--set",
 			"brightness=exact",
 			"--verbose",
