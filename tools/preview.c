@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #define PREVIEW_MAX_SIZE 16384
 /* Arc samples per voxel at most: enough to smear a rim voxel of a coarse
@@ -38,6 +39,7 @@ void preview_default_options(struct preview_options *opt)
 		.elevation_deg = 20.0,
 		.azimuth_deg = 90.0,
 		.outline = true,
+		.progress_after = 1.0,
 	};
 }
 
@@ -241,6 +243,49 @@ static void paint_image(struct voxel_painter *vp, uint32_t k)
 	}
 }
 
+/* Progress lines for a long preview (preview_options.progress). */
+struct progress {
+	FILE *f;
+	const char *name;
+	double start, next; /* seconds, CLOCK_MONOTONIC */
+	bool said;
+};
+
+static double seconds_now(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return ts.tv_sec + ts.tv_nsec / 1e9;
+}
+
+static void progress_start(struct progress *p, const struct preview_options *opt)
+{
+	*p = (struct progress){ .f = opt->progress, .name = opt->progress_name ? opt->progress_name : "preview" };
+	if (p->f)
+		p->next = (p->start = seconds_now()) + opt->progress_after;
+}
+
+static void progress_note(struct progress *p, uint32_t done, uint32_t total)
+{
+	if (!p->f)
+		return;
+	double now = seconds_now();
+	if (now < p->next)
+		return;
+	fprintf(p->f, "%s: drawing, image %u of %u, %.0f s so far\n", p->name, done, total, now - p->start);
+	fflush(p->f);
+	p->said = true;
+	p->next = now + 2.0;
+}
+
+static void progress_done(const struct progress *p)
+{
+	if (p->f && p->said) {
+		fprintf(p->f, "%s: drawn in %.1f s\n", p->name, seconds_now() - p->start);
+		fflush(p->f);
+	}
+}
+
 static int paint_volume(struct canvas *cv, const struct volume *vol, const struct camera *cam,
 			const struct preview_options *opt)
 {
@@ -259,8 +304,13 @@ static int paint_volume(struct canvas *cv, const struct volume *vol, const struc
 	double pitch = cam->focal / opt->distance * fmax(2.0 / g->width, 2.0 * g->half_height / g->height);
 	vp.radius_px = fmax(1.0, pitch);
 	vp.d0_sq = opt->distance * opt->distance;
-	for (uint32_t k = 0; k < vol->image_count; k++)
+	struct progress pr;
+	progress_start(&pr, opt);
+	for (uint32_t k = 0; k < vol->image_count; k++) {
 		paint_image(&vp, k);
+		progress_note(&pr, k + 1, vol->image_count);
+	}
+	progress_done(&pr);
 	free(vp.arcs.dir);
 	return 0;
 }
@@ -433,9 +483,16 @@ int preview_volume_to_png(const struct volume *vol, const struct preview_options
 	uint8_t *rgb = malloc((size_t)opt->width * opt->height * 3 + 1);
 	if (!rgb)
 		return -ENOMEM;
+	double start = seconds_now();
 	int ret = preview_render(vol, opt, rgb);
 	if (ret == 0)
 		ret = preview_write_png(path, rgb, opt->width, opt->height);
 	free(rgb);
+	double took = seconds_now() - start;
+	if (ret == 0 && opt->progress && took >= opt->progress_after) {
+		fprintf(opt->progress, "%s: written, %.1f s in all\n",
+			opt->progress_name ? opt->progress_name : "preview", took);
+		fflush(opt->progress);
+	}
 	return ret;
 }

@@ -26,6 +26,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "volume.h"
 
@@ -35,6 +36,12 @@ struct preview_options {
 	double elevation_deg;   /* eye above the horizon (20) */
 	double azimuth_deg;     /* eye azimuth from +x towards +z (90: on +z) */
 	bool outline;           /* faint outline of the display cylinder (true) */
+	/* NULL (the default), or where to say how far a preview that takes
+	 * over a second has got: "NAME: drawing, image K of M, T s so far"
+	 * after 1 s and then every 2 s, and how long it took. */
+	FILE *progress;
+	const char *progress_name; /* NAME above ("preview" when NULL) */
+	double progress_after;     /* the first line after this many seconds (1) */
 };
 
 /* Fills in the defaults above. */

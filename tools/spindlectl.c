@@ -571,6 +571,8 @@ static int cmd_preview(const struct ctl_args *a)
 	preview_default_options(&opt);
 	if (a->has_size)
 		opt.width = opt.height = a->size;
+	opt.progress = stderr; /* a large picture takes seconds */
+	opt.progress_name = a->operand[1];
 	int ret = preview_volume_to_png(vol, &opt, a->operand[1]);
 	volume_destroy(vol);
 	if (ret < 0) {

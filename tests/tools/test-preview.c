@@ -19,6 +19,8 @@
 #include <math.h>
 #include <png.h>
 #include <stdbool.h>
+#include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "preview.h"
@@ -183,6 +185,33 @@ static void check_ring(const uint8_t *rgb, const struct preview_options *opt, do
 	}
 }
 
+/* Progress lines: none for a quick picture by default; with the first
+ * line due at once, the drawing's lines, then how long it took in all. */
+static void check_progress(const struct volume *vol, const char *png)
+{
+	struct preview_options opt;
+	preview_default_options(&opt);
+	opt.width = opt.height = SIZE;
+	char *text = NULL;
+	size_t len = 0;
+	FILE *f = open_memstream(&text, &len);
+	CHECK(f != NULL);
+	opt.progress = f;
+	opt.progress_name = "x.png";
+	CHECK(preview_volume_to_png(vol, &opt, png) == 0);
+	fflush(f);
+	if (len)
+		fprintf(stderr, "a quick preview said: %s", text);
+	CHECK(len == 0);
+	opt.progress_after = 0.0;
+	CHECK(preview_volume_to_png(vol, &opt, png) == 0);
+	fclose(f);
+	fprintf(stderr, "%s", text);
+	CHECK(strstr(text, "x.png: drawing, image 1 of ") && strstr(text, "x.png: drawn in ") &&
+	      strstr(text, "x.png: written, "));
+	free(text);
+}
+
 int main(int argc, char **argv)
 {
 	CHECK(argc == 2);
@@ -208,6 +237,7 @@ int main(int argc, char **argv)
 	check_ring(rgb, &opt, 0.5, 0, 1);
 
 	check_disks(argv[1]);
+	check_progress(vol, argv[1]);
 
 	/* bad options are refused */
 	opt.distance = 1.0;
