@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "brightness.h"
 #include "halftone.h"
 #include "log.h"
 #include "render_gl_priv.h"
@@ -67,8 +68,14 @@ void gl_pack_batch(struct render_gl *r, struct gl_batch *out)
 	gl->BindImageTexture(0, r->atlas, 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA8);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, out->tiles);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, out->ids);
+	/* Binding 2 holds the tile marks for the draws and the list pass; the
+	 * pack pass reads the brightness pattern's tables there. */
+	if (r->bright_buf)
+		gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r->bright_buf);
 	gl->BindBuffer(GL_DISPATCH_INDIRECT_BUFFER, r->tile_list);
 	gl->DispatchComputeIndirect(0);
+	if (r->bright_buf)
+		gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r->touched);
 	gl->MemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
 			  GL_SHADER_STORAGE_BARRIER_BIT);
 	out->fence = gl->FenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
@@ -151,8 +158,35 @@ int gl_pack_collect(struct render_gl *r, struct gl_batch *out)
 	return err;
 }
 
+/* halftone_rgba_image() against brightness_threshold(): the ordered dither
+ * outside m's band, its Bresenham pattern inside. */
+static int halftone_rgba_bright(struct volume *vol, const struct brightness_map *m, uint32_t k, const uint8_t *rgba)
+{
+	const struct geometry *g = &vol->geom;
+	uint8_t tile[VOLUME_TILE_BYTES];
+	for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
+		uint32_t u0 = t % vol->tiles_x * VOLUME_TILE, v0 = t / vol->tiles_x * VOLUME_TILE;
+		memset(tile, 0, sizeof(tile));
+		for (uint32_t y = 0; y < VOLUME_TILE && v0 + y < g->height; y++) {
+			for (uint32_t x = 0; x < VOLUME_TILE && u0 + x < g->width; x++) {
+				const uint8_t *px = rgba + ((size_t)(v0 + y) * g->width + u0 + x) * 4;
+				uint8_t thr = brightness_threshold(m, k, u0 + x, v0 + y);
+				for (int c = 0; c < 3; c++)
+					if (px[c] > thr)
+						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |=
+							(uint8_t)(0x80u >> (x % 8));
+			}
+		}
+		int e = volume_image_append(vol, k, t, tile);
+		if (e < 0)
+			return e;
+	}
+	return 0;
+}
+
 /* The naive pipeline's back end: the whole RGBA image read back,
- * halftoned and packed on the CPU. */
+ * halftoned (against the brightness model's thresholds where it thins) and
+ * packed on the CPU. */
 int gl_pack_naive(struct render_gl *r, uint32_t k)
 {
 	const struct gl_api *gl = r->gl;
@@ -161,7 +195,8 @@ int gl_pack_naive(struct render_gl *r, uint32_t k)
 	gl->ReadPixels(0, 0, (GLsizei)g->width, (GLsizei)g->height, GL_RGBA, GL_UNSIGNED_BYTE, r->rgba);
 	uint64_t t1 = (uint64_t)now_ns();
 	r->wait_ns += t1 - t0;
-	int e = halftone_rgba_image(r->vol, k, r->rgba);
+	int e = r->bright_on ? halftone_rgba_bright(r->vol, &r->bright, k, r->rgba)
+			     : halftone_rgba_image(r->vol, k, r->rgba);
 	if (e < 0)
 		return e;
 	r->copy_ns += (uint64_t)now_ns() - t1;

@@ -8,7 +8,14 @@
  *   i >> log2 width);
  * - slice coordinates of a point p for image k: s = p . d_k, y, and
  *   t = p . n_k with n_k = (-sin theta_k, 0, cos theta_k);
- * - image k's bow tie is |t| <= |s| tau, tau = tan(pi / N). */
+ * - image k's bow tie is |t| <= |s| tau, tau = tan(pi / N);
+ * - where the geometry's brightness model thins anything (brightness.h),
+ *   render_gl.c compiles the segment and triangle programs and the pack pass
+ *   with BRIGHT defined (the vertex shaders with gl_bright_vs_prelude too),
+ *   right after the #version line: the vertex shaders work out the
+ *   primitive's weights in the image, the fragment shaders weight its colour
+ *   per column, and the pack pass thresholds the band's columns with the
+ *   Bresenham pattern. Without it the programs are the exact model's. */
 #ifndef SPINDLE_GL_SHADERS_H
 #define SPINDLE_GL_SHADERS_H
 
@@ -52,6 +59,53 @@
 	"		    (de / u_eye.y) * t - u_eye.y, w);\n"                                                  \
 	"}\n"
 
+/* BRIGHT, the vertex shaders' prelude: brightness_weight_of()
+ * (brightness.c) of the segment a b or the triangle a b c, in slice
+ * coordinates (s, y, t), where the slice plane's normal is the t axis:
+ * (kw, inv_cross, 1 where it weighs as a line: a segment, or a triangle of
+ * no area, whose rate is line_rate). The edges are scaled to at most 1
+ * first, so that float neither overflows nor underflows on them. u_wall.x:
+ * the map's wall weight. */
+static const char gl_bright_vs_prelude[] =
+	"#define BRIGHT 1\n"
+	"precision highp float;\n"
+	"uniform vec4 u_wall;\n"
+	"vec3 weight(vec3 a, vec3 b, vec3 c, bool tri) {\n"
+	"	vec3 d = b - a, e = tri ? c - a : vec3(0.0), f = tri ? c - b : vec3(0.0);\n"
+	"	vec3 m = max(abs(d), max(abs(e), abs(f)));\n"
+	"	float big = max(m.x, max(m.y, m.z));\n"
+	"	if (!(big > 0.0))\n"
+	"		return vec3(1.0, 1e30, 1.0);\n"
+	"	d /= big;\n"
+	"	e /= big;\n"
+	"	f /= big;\n"
+	"	float cr = 0.0;\n"
+	"	bool seg = !tri;\n"
+	"	if (tri) {\n"
+	"		vec3 n = cross(d, e);\n"
+	"		float n2 = dot(n, n), l01 = dot(d, d), l02 = dot(e, e), l12 = dot(f, f);\n"
+	"		float l = max(l01, max(l02, l12));\n"
+	"		if (n2 > 1e-12 * l * l) {\n"
+	"			cr = sqrt(dot(n.xy, n.xy) / n2); /* the normal's part in the plane */\n"
+	"		} else { /* no area: its longest side */\n"
+	"			seg = true;\n"
+	"			d = l02 >= l01 && l02 >= l12 ? e : l12 >= l01 ? f : d;\n"
+	"		}\n"
+	"	}\n"
+	"	if (seg) {\n"
+	"		float len = length(d);\n"
+	"		if (!(len > 0.0))\n"
+	"			return vec3(1.0, 1e30, 1.0);\n"
+	"		cr = abs(d.z) / len;\n"
+	"	}\n"
+	"	float wall = sqrt(max(0.0, 1.0 - cr * cr));\n"
+	"	return vec3(!seg && wall > u_wall.x ? u_wall.x / wall : 1.0, cr > 1e-20 ? min(1.0 / cr, 1e30) : 1e30,\n"
+	"		    seg ? 1.0 : 0.0);\n"
+	"}\n";
+
+/* BRIGHT, the fragment shaders' and the pack pass's prelude. */
+static const char gl_bright_prelude[] = "#define BRIGHT 1\n";
+
 /* Fragment shaders mark the row of the 32x32 tile their pixel lies in (bit
  * y % 32 of the tile's word), so that only touched rows of touched tiles
  * are packed (and cleared again). u_tile: tiles across, tiles per image,
@@ -65,6 +119,26 @@
 	"	atomicOr(touched[u_tile.z * u_tile.y + (p.y >> 5) * u_tile.x + (p.x >> 5)], 1u << (p.y & 31u));\n" \
 	"}\n"
 
+/* BRIGHT: a segment's or triangle's colour c at the fragment's column u,
+ * as brightness_apply() weights it: w = min(kw, rate[u] * inv_cross) inside
+ * the band (u_band.x .. u_band.y), (kw, inv_cross, line) = v_w from the
+ * vertex shader; rate[u] is row 0 of u_bright, or for a line row 1
+ * (line_rate; brightness.h, render_gl.c). */
+#define GL_SHADER_WEIGH                                                                                   \
+	"#ifdef BRIGHT\n"                                                                                 \
+	"uniform uvec4 u_band;\n"                                                                         \
+	"uniform highp usampler2D u_bright;\n"                                                            \
+	"flat in vec3 v_w;\n"                                                                             \
+	"uvec3 weigh(uvec3 c) {\n"                                                                        \
+	"	uint u = uint(gl_FragCoord.x);\n"                                                               \
+	"	if (u < u_band.x || u > u_band.y)\n"                                                            \
+	"		return c;\n"                                                                                   \
+	"	float rate = uintBitsToFloat(texelFetch(u_bright, ivec2(int(u), v_w.z > 0.5 ? 1 : 0), 0).r);\n" \
+	"	float w = min(v_w.x, rate * v_w.y);\n"                                                          \
+	"	return w >= 1.0 ? c : uvec3(vec3(c) * w + 1e-3);\n"                                             \
+	"}\n"                                                                                             \
+	"#endif\n"
+
 /* Faces: each triangle drawn whole with the slice's projection; the
  * fragment shader keeps what lies in the bow tie, widened near the axis to
  * the hyperbola t^2 <= (s tau)^2 + b^2 so the thin wedges leave no dead
@@ -72,22 +146,34 @@
 static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"out vec2 v_st;\n"
 	"flat out uint v_rgb;\n"
+	"#ifdef BRIGHT\n"
+	"flat out vec3 v_w;\n"
+	"#endif\n"
 	"void main() {\n"
 	"	uint p = uint(gl_VertexID) / 3u, j = uint(gl_VertexID) % 3u;\n"
 	"	uvec4 t0 = texel(3u * p), t1 = texel(3u * p + 1u);\n"
 	"	v_rgb = t0.w >> 8;\n"
 	"	v_st = vec2(0.0);\n"
+	"#ifdef BRIGHT\n"
+	"	v_w = vec3(1.0, 1.0, 0.0);\n"
+	"#endif\n"
 	"	gl_Position = OFF;\n"
 	"	if ((t0.w & 255u) != 3u || !in_image(t1.w))\n"
 	"		return;\n"
+	"#ifdef BRIGHT\n"
+	"	vec3 a = syt(t0), b = syt(t1), c = syt(texel(3u * p + 2u));\n"
+	"	v_w = weight(a, b, c, true);\n"
+	"	vec3 q = j == 0u ? a : j == 1u ? b : c;\n"
+	"#else\n"
 	"	vec3 q = syt(j == 0u ? t0 : j == 1u ? t1 : texel(3u * p + 2u));\n"
+	"#endif\n"
 	"	v_st = q.xz;\n"
 	"	gl_Position = project(q, u_eye.zw);\n"
 	"}\n";
 
 static const char gl_face_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n" GL_SHADER_MARK "uniform vec4 u_slice;\n"
+	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH "uniform vec4 u_slice;\n"
 	"in vec2 v_st;\n"
 	"flat in uint v_rgb;\n"
 	"out vec4 o_colour;\n"
@@ -95,8 +181,14 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
 	"	float s = v_st.x * u_slice.z, t = v_st.y;\n"
 	"	if (t * t > s * s + u_slice.w * u_slice.w)\n"
 	"		discard;\n"
+	"	uvec3 c = uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u;\n"
+	"#ifdef BRIGHT\n"
+	"	c = weigh(c);\n"
+	"	if (c == uvec3(0u))\n"
+	"		discard;\n"
+	"#endif\n"
 	"	mark();\n"
-	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
+	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"
 	"}\n";
 
 /* Sections, drawn as GL_LINES and again as GL_POINTS (so a section shorter
@@ -111,6 +203,9 @@ static const char gl_face_fs[] = GL_SHADER_VERSION
  * the slice plane. */
 static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"flat out uint v_rgb;\n"
+	"#ifdef BRIGHT\n"
+	"flat out vec3 v_w;\n"
+	"#endif\n"
 	"void main() {\n"
 	"	/* u_frame.w: 0 draws slots 0-3 (4 vertices a primitive), 1 the edge\n"
 	"	 * slots 4-15 (12 vertices a primitive). */\n"
@@ -121,10 +216,16 @@ static const char gl_section_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 	"	v_rgb = t0.w >> 8;\n"
 	"	gl_PointSize = 1.0;\n"
 	"	gl_Position = OFF;\n"
+	"#ifdef BRIGHT\n"
+	"	v_w = vec3(1.0, 1.0, 0.0);\n"
+	"#endif\n"
 	"	if ((tri ? j == 2u || j == 3u : j >= 4u) || !in_image(t1.w))\n"
 	"		return;\n"
 	"	vec3 a = syt(t0), b = syt(t1);\n"
 	"	vec3 c = tri ? syt(texel(3u * p + 2u)) : a;\n"
+	"#ifdef BRIGHT\n"
+	"	v_w = weight(a, b, c, tri);\n"
+	"#endif\n"
 	"	if (tri && j < 2u) {\n"
 	"		/* The plane is closed: an edge touching it adds its point,\n"
 	"		 * an edge lying in it both ends (a mesh edge exactly on the\n"
@@ -205,13 +306,21 @@ static const char gl_point_vs[] = GL_SHADER_VERSION
 	"	v_rgb = a_point.y & 0xffffffu;\n"
 	"}\n";
 
+/* Sections and points; with BRIGHT (the section program only: points are
+ * never weighted) the colour is weighted as the face pass weights it. */
 static const char gl_flat_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n" GL_SHADER_MARK "flat in uint v_rgb;\n"
+	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH "flat in uint v_rgb;\n"
 	"out vec4 o_colour;\n"
 	"void main() {\n"
+	"	uvec3 c = uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u;\n"
+	"#ifdef BRIGHT\n"
+	"	c = weigh(c);\n"
+	"	if (c == uvec3(0u))\n"
+	"		discard;\n"
+	"#endif\n"
 	"	mark();\n"
-	"	o_colour = vec4(vec3(uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u) / 255.0, 1.0);\n"
+	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"
 	"}\n";
 
 /* The touched tiles of a batch as a list of (tile, row mask), whose header
@@ -240,7 +349,13 @@ static const char gl_list_cs[] = GL_SHADER_VERSION
  * a tile with any bit set takes the next slot of the output (atomic
  * counter) and records its number (slot in batch * tiles per image + t).
  * The thresholds are halftone_threshold()'s (halftone.c), bayer16 and the
- * phase 97 k included: keep the two the same.
+ * phase 97 k included: keep the two the same. With BRIGHT, columns
+ * u_band.x .. u_band.y take brightness_threshold()'s Bresenham pattern
+ * instead: x = (k n[u] + phase[i 16 + v % 16]) % M, threshold 255 x / M,
+ * i the column's radius index, so c is lit iff c M > 255 x (u_band.z = M).
+ * n[u] and then phase[] are the storage buffer Bright (bound to binding 2
+ * while the pass runs); a work group of the band first gathers its 32
+ * columns' k n[u] % M in shared memory, a column an invocation.
  * u_pack: first volume image of the batch, W, H, tiles per image. */
 static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
@@ -252,6 +367,11 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"layout(std430, binding = 0) writeonly buffer Tiles { uint tiles[]; };\n"
 	"layout(std430, binding = 1) buffer Ids { uint count; uint ids[]; };\n"
 	"layout(std430, binding = 3) readonly buffer List { uint groups_x, groups_y, groups_z; uvec2 list[]; };\n"
+	"#ifdef BRIGHT\n"
+	"uniform uvec4 u_band;\n"
+	"layout(std430, binding = 2) readonly buffer Bright { uint bright[]; }; /* n[W], phase[] */\n"
+	"shared uint kn[32]; /* k n[u] % M of the tile's columns */\n"
+	"#endif\n"
 	"shared uint any_bits;\n"
 	"shared uint slot;\n"
 	"uint bayer16(uint x, uint y) {\n"
@@ -270,6 +390,13 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"	uint v = ty * 32u + r;\n"
 	"	if (r == 0u)\n"
 	"		any_bits = 0u;\n"
+	"#ifdef BRIGHT\n"
+	"	uint u0 = tx * 32u, n = min(32u, u_pack.y - u0), M = u_band.z;\n"
+	"	uint hw = u_pack.y / 2u, lw = (u_pack.y - 1u) / 2u;\n"
+	"	bool band = u0 + n > u_band.x && u0 <= u_band.y;\n"
+	"	if (band && r < n)\n"
+	"		kn[r] = k * bright[u0 + r] % M;\n"
+	"#endif\n"
 	"	memoryBarrierShared();\n"
 	"	barrier();\n"
 	"	uvec3 bits = uvec3(0u);\n"
@@ -278,7 +405,28 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"		for (uint i = 0u; i < 16u; i++)\n"
 	"			thr[i] = (bayer16(i, (v + (phase >> 4)) & 15u) * 255u) >> 8;\n"
 	"		int row = int(b * u_pack.z + v);\n"
+	"#ifdef BRIGHT\n"
+	"		if (band) {\n"
+	"			for (uint x = 0u; x < n; x++) {\n"
+	"				uint u = u0 + x;\n"
+	"				ivec2 at = ivec2(int(u), row);\n"
+	"				uvec3 c = uvec3(texelFetch(u_colour, at, 0).rgb * 255.0 + 0.5);\n"
+	"				imageStore(u_atlas, at, vec4(0.0));\n"
+	"				uint th = thr[(u + phase) & 15u], bit = 1u << (x ^ 7u);\n"
+	"				if (u >= u_band.x && u <= u_band.y) { /* c > 255 x / M */\n"
+	"					uint i = 2u * u >= u_pack.y ? u - hw : lw - u; /* radius index */\n"
+	"					uint xv = kn[x] + bright[u_pack.y + i * 16u + (v & 15u)];\n"
+	"					c *= M;\n"
+	"					th = 255u * (xv >= M ? xv - M : xv);\n"
+	"				}\n"
+	"				bits.r |= c.r > th ? bit : 0u;\n"
+	"				bits.g |= c.g > th ? bit : 0u;\n"
+	"				bits.b |= c.b > th ? bit : 0u;\n"
+	"			}\n"
+	"		} else\n"
+	"#else\n"
 	"		uint n = min(32u, u_pack.y - tx * 32u);\n"
+	"#endif\n"
 	"		for (uint x = 0u; x < n; x++) {\n"
 	"			ivec2 at = ivec2(int(tx * 32u + x), row);\n"
 	"			uvec3 c = uvec3(texelFetch(u_colour, at, 0).rgb * 255.0 + 0.5);\n"

@@ -16,7 +16,13 @@
  * touched tiles of the batch on the GPU and collects the non-empty ones
  * while the GPU draws the next batch. This file: set-up, upload, drawing,
  * the render and its failures. A scene with a turned draw (scene.h) is
- * rendered whole by the CPU renderer. */
+ * rendered whole by the CPU renderer. In the even and uniform brightness
+ * models (geometry.brightness, brightness.h) the segment and triangle
+ * programs and the pack pass are built with BRIGHT (gl_shaders.h): each
+ * primitive's weights are worked out per image in the vertex shaders, its
+ * colour weighted per column in the fragment shaders, and the thinned band
+ * halftoned with the CPU renderer's Bresenham pattern; points are not
+ * weighted, and the face pass has no axis bias (GL_BRIGHT_AXIS_BIAS_PX). */
 #include "render_gl.h"
 
 #include <errno.h>
@@ -39,38 +45,78 @@
 
 static const char *const uniform_names[UNI_COUNT] = { "u_image", "u_slice", "u_eye", "u_frame", "u_prims", "u_tile" };
 
-static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs, const char *what)
+/* Compiles src, with prelude (if not NULL) inserted right after its
+ * #version line: the BRIGHT forms of gl_shaders.h. */
+static GLuint compile(struct render_gl *r, GLenum type, const char *src, const char *prelude, const char *what)
 {
 	bool bad = r->fault == GL_FAULT_SHADER;
-	GLuint sh[2] = { gl_shader_compile(r->gl, GL_VERTEX_SHADER, vs, what, bad),
-			 gl_shader_compile(r->gl, GL_FRAGMENT_SHADER, fs, what, bad) };
+	size_t head = sizeof(GL_SHADER_VERSION) - 1;
+	if (!prelude || strncmp(src, GL_SHADER_VERSION, head) != 0)
+		return gl_shader_compile(r->gl, type, src, what, bad);
+	size_t len = strlen(src), plen = strlen(prelude);
+	char *text = malloc(len + plen + 1);
+	if (!text)
+		return 0;
+	memcpy(text, src, head);
+	memcpy(text + head, prelude, plen);
+	memcpy(text + head + plen, src + head, len - head + 1);
+	GLuint sh = gl_shader_compile(r->gl, type, text, what, bad);
+	free(text);
+	return sh;
+}
+
+/* The uniforms of the brightness model, which stay with the program: the
+ * wall weight, the band and M, the tables' texture unit. */
+static void set_bright_uniforms(struct render_gl *r, GLuint program)
+{
+	const struct gl_api *gl = r->gl;
+	const struct brightness_map *m = &r->bright;
+	gl->UseProgram(program);
+	gl->Uniform4f(gl->GetUniformLocation(program, "u_wall"), m->wall, 0.0f, 0.0f, 0.0f);
+	gl->Uniform4ui(gl->GetUniformLocation(program, "u_band"), m->band_lo, m->band_hi, m->images, 0);
+	gl->Uniform1i(gl->GetUniformLocation(program, "u_bright"), GL_BRIGHT_UNIT);
+	gl->UseProgram(0);
+}
+
+static int draw_program(struct render_gl *r, struct gl_program *p, const char *vs, const char *fs, bool bright,
+			const char *what)
+{
+	GLuint sh[2] = { compile(r, GL_VERTEX_SHADER, vs, bright ? gl_bright_vs_prelude : NULL, what),
+			 compile(r, GL_FRAGMENT_SHADER, fs, bright ? gl_bright_prelude : NULL, what) };
 	p->id = gl_program_link(r->gl, sh, 2, what);
 	if (!p->id)
 		return -EINVAL;
 	for (int i = 0; i < UNI_COUNT; i++)
 		p->uni[i] = r->gl->GetUniformLocation(p->id, uniform_names[i]);
+	if (bright)
+		set_bright_uniforms(r, p->id);
 	return 0;
 }
 
+/* The programs; with the brightness model on, the segment and triangle
+ * programs and the pack pass in their BRIGHT form (points are never
+ * weighted). */
 static int build_programs(struct render_gl *r)
 {
-	int e = draw_program(r, &r->face, gl_face_vs, gl_face_fs, "face");
+	bool bright = r->bright_on;
+	int e = draw_program(r, &r->face, gl_face_vs, gl_face_fs, bright, "face");
 	if (e == 0)
-		e = draw_program(r, &r->section, gl_section_vs, gl_flat_fs, "section");
+		e = draw_program(r, &r->section, gl_section_vs, gl_flat_fs, bright, "section");
 	if (e == 0)
-		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, "point");
+		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, false, "point");
 	if (e < 0)
 		return e;
-	bool bad = r->fault == GL_FAULT_SHADER;
-	GLuint cs = gl_shader_compile(r->gl, GL_COMPUTE_SHADER, gl_pack_cs, "pack", bad);
+	GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, bright ? gl_bright_prelude : NULL, "pack");
 	r->pack = gl_program_link(r->gl, &cs, 1, "pack");
-	cs = gl_shader_compile(r->gl, GL_COMPUTE_SHADER, gl_list_cs, "list", bad);
+	cs = compile(r, GL_COMPUTE_SHADER, gl_list_cs, NULL, "list");
 	r->list = gl_program_link(r->gl, &cs, 1, "list");
 	if (!r->pack || !r->list)
 		return -EINVAL;
 	r->pack_uni = r->gl->GetUniformLocation(r->pack, "u_pack");
 	r->pack_colour = r->gl->GetUniformLocation(r->pack, "u_colour");
 	r->list_count = r->gl->GetUniformLocation(r->list, "u_count");
+	if (bright)
+		set_bright_uniforms(r, r->pack);
 	return 0;
 }
 
@@ -130,6 +176,35 @@ static int check_limits(struct render_gl *r)
 	return 0;
 }
 
+/* The brightness map as the shaders read it: for the fragment shaders a
+ * texture of GL_BRIGHT_ROWS rows of W texels, rate[u] and line_rate[u] as
+ * float bits; for the pack pass a storage buffer of n[u] (W words) and then
+ * phase[i * 16 + y] ((W / 2 + 1) * 16 words). */
+static int create_bright_tables(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	const struct brightness_map *m = &r->bright;
+	uint32_t w = m->width, phases = (w / 2 + 1) * 16;
+	uint32_t *t = calloc((size_t)w * GL_BRIGHT_ROWS + w + phases, sizeof(*t));
+	if (!t)
+		return -ENOMEM;
+	uint32_t *buf = t + (size_t)w * GL_BRIGHT_ROWS;
+	for (uint32_t u = 0; u < w; u++) {
+		memcpy(&t[u], &m->rate[u], sizeof(t[u]));
+		memcpy(&t[w + u], &m->line_rate[u], sizeof(t[u]));
+		buf[u] = m->n[u];
+	}
+	for (uint32_t i = 0; i < phases; i++)
+		buf[w + i] = m->phase[i];
+	r->bright_tex = make_texture(gl, GL_R32UI, w, GL_BRIGHT_ROWS);
+	gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, GL_BRIGHT_ROWS, GL_RED_INTEGER, GL_UNSIGNED_INT, t);
+	gl->GenBuffers(1, &r->bright_buf);
+	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bright_buf);
+	gl->BufferData(GL_SHADER_STORAGE_BUFFER, (GLsizeiptr)((w + phases) * sizeof(*buf)), buf, GL_STATIC_DRAW);
+	free(t);
+	return 0;
+}
+
 static int create_objects(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
@@ -160,6 +235,11 @@ static int create_objects(struct render_gl *r)
 	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
 	if (!r->slot_of || (r->opts.naive && !r->rgba))
 		return -ENOMEM;
+	if (r->bright_on) {
+		e = create_bright_tables(r);
+		if (e < 0)
+			return e;
+	}
 
 	gl->ClearColor(0, 0, 0, 0);
 	if (r->ctx.backend == GL_BACKEND_OSMESA)
@@ -193,6 +273,8 @@ static void destroy_gl(struct render_gl *r)
 		gl->DeleteFramebuffers(1, &r->fbo);
 		gl->DeleteTextures(1, &r->atlas);
 		gl->DeleteTextures(1, &r->prim_tex);
+		gl->DeleteTextures(1, &r->bright_tex);
+		gl->DeleteBuffers(1, &r->bright_buf);
 		gl->DeleteBuffers(1, &r->point_buf);
 		gl->DeleteVertexArrays(1, &r->vao);
 		gl->DeleteProgram(r->face.id);
@@ -300,6 +382,10 @@ static void image_uniforms(const struct render_gl *r, uint32_t k, uint32_t slot,
 	double theta = geometry_image_angle(g, k);
 	double tau = tan(M_PI / g->images_per_rev);
 	double bias = GL_AXIS_BIAS_PX * 2.0 / g->width;
+	/* The face pass's bias near the axis (u_slice.w): none in the
+	 * brightness models (GL_BRIGHT_AXIS_BIAS_PX); the slab and the eye
+	 * stay where the exact model has them. */
+	double face_bias = r->bright_on ? GL_BRIGHT_AXIS_BIAS_PX * 2.0 / g->width : bias;
 	double slab = tau + bias;
 	/* The eye far enough that perspective moves no point of the slab by
 	 * more than a quarter pixel. */
@@ -310,7 +396,7 @@ static void image_uniforms(const struct render_gl *r, uint32_t k, uint32_t slot,
 	*u = (struct image_uniforms){
 		.image = { k, r->images, r->opts.naive ? 1u : 0u, r->tex_shift },
 		.tile = { r->vol->tiles_x, r->tiles_per_image, slot, g->height },
-		.slice = { (float)cos(theta), (float)sin(theta), (float)tau, (float)bias },
+		.slice = { (float)cos(theta), (float)sin(theta), (float)tau, (float)face_bias },
 		.eye = { (float)eye, (float)slab, (float)(2 * GL_JITTER_PX * jx * 2.0 / g->width),
 			 (float)(2 * GL_JITTER_PX * jy * 2.0 / g->height) },
 		.frame = { (float)(1.0 / g->half_height), 2.0f / (float)g->width, 2.0f / (float)g->height,
@@ -393,6 +479,11 @@ static int begin_batches(struct render_gl *r)
 	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 2, r->touched);
 	gl->BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, r->tile_list);
+	if (r->bright_tex) {
+		gl->ActiveTexture(GL_TEXTURE0 + GL_BRIGHT_UNIT);
+		gl->BindTexture(GL_TEXTURE_2D, r->bright_tex);
+		gl->ActiveTexture(GL_TEXTURE0);
+	}
 	if (r->atlas_dirty || r->opts.naive) {
 		size_t bytes = (size_t)r->batch * r->tiles_per_image * 4;
 		uint32_t *zero = calloc(1, bytes);
@@ -549,6 +640,7 @@ static void render_gl_destroy(struct renderer *base)
 	destroy_gl(r);
 	render_destroy(r->cpu);
 	bin_finish(&r->bins);
+	brightness_map_finish(&r->bright);
 	pool_destroy(r->pool);
 	free(r->slot_of);
 	free(r->rgba);
@@ -644,6 +736,9 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 	r->fault = gl_fault_from_env();
 	r->images = geometry_images_per_volume(geom);
 	int err = bin_init(&r->bins, geom);
+	if (err == 0)
+		err = brightness_map_init(&r->bright, geom);
+	r->bright_on = err == 0 && brightness_active(&r->bright);
 	r->tiles_per_image =
 		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);

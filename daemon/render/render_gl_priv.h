@@ -8,6 +8,7 @@
 #include <stdint.h>
 
 #include "bin.h"
+#include "brightness.h"
 #include "gl_context.h"
 #include "renderer.h"
 
@@ -34,11 +35,27 @@ _Static_assert(sizeof(struct bin_point) == 2 * 4, "the point attribute is two wo
 /* Half thickness of the slab the fragment shader accepts on the axis, in
  * pixels: the b of t^2 <= (s tau)^2 + b^2. */
 #define GL_AXIS_BIAS_PX 0.25
+/* The same where the brightness model thins (render_gl.bright_on): none.
+ * Sections and edges keep the axis connected without it, and the bias lit
+ * a surface at a small angle to the slice plane out to about b / tan a
+ * from the axis in several neighbouring images (docs/rendering.md), light
+ * the CPU renderer does not give and the models do not weight away (a
+ * wall through the axis: 2 to 6 times the CPU's light 1 to 8 px from the
+ * axis at the small profile). */
+#define GL_BRIGHT_AXIS_BIAS_PX 0.0
 /* Jitter of the sample grid, at most this many pixels either way. */
 #define GL_JITTER_PX 0.25
 #define GL_FENCE_TIMEOUT_NS 5000000000ull
 
 enum { UNI_IMAGE, UNI_SLICE, UNI_EYE, UNI_FRAME, UNI_PRIMS, UNI_TILE, UNI_COUNT };
+
+/* Texture unit of the brightness rates (u_bright, gl_shaders.h) for the
+ * fragment shaders: units 0 and 1 hold the primitives and, in the pack
+ * pass, the atlas. */
+#define GL_BRIGHT_UNIT 2
+/* Rows of the brightness tables' texture: rate[u] and line_rate[u] (float
+ * bits). */
+#define GL_BRIGHT_ROWS 2
 
 struct gl_program {
 	GLuint id;
@@ -67,6 +84,12 @@ struct render_gl {
 	struct gl_program face, section, point;
 	GLuint pack, list;
 	GLint pack_uni, pack_colour, list_count;
+	/* The brightness model (geometry.brightness); bright_on: it thins
+	 * something, and the programs were built with BRIGHT (gl_shaders.h). */
+	struct brightness_map bright;
+	bool bright_on;
+	GLuint bright_tex; /* its rates (GL_BRIGHT_ROWS), R32UI, for the fragment shaders */
+	GLuint bright_buf; /* n[u], phase[]: shader storage for the pack pass */
 	GLuint vao, point_buf, prim_tex, atlas, fbo;
 	GLuint touched, tile_list; /* tile marks of a batch; touched tiles as a list */
 	bool atlas_dirty;          /* a render stopped half-way: clear first */

@@ -405,6 +405,15 @@ int main(void)
 		run(r, pool, 64u << 20, 60, 5 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0);
 		render_destroy(r);
+		/* In the even model too: GL weights and thresholds depend on
+		 * the primitive and the image only, so composing stays exact. */
+		struct geometry even = small;
+		even.brightness = GEOMETRY_BRIGHTNESS_EVEN;
+		r = render_gl_create(&even, &o);
+		CHECK(r != NULL);
+		run(r, pool, 64u << 20, 60, 11 + (uint64_t)i, &t);
+		CHECK(t.st.hits > 0);
+		render_destroy(r);
 		/* Scenes over max_prims go to the CPU fallback, single objects
 		 * stay on GL: parts of two engines are never composed. */
 		o.no_fallback = false;

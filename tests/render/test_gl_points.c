@@ -9,7 +9,11 @@
  *   within one voxel of the CPU renderer per channel (test_gl.c's coverage
  *   >= 99.5%, stray <= 5%).
  * The GL renderer is reused from scene to scene, as the daemon does; the
- * points are also drawn by the naive pipeline. */
+ * points are also drawn by the naive pipeline. All of it again at small in
+ * the even and uniform brightness models (brightness.h): points are never
+ * weighted, and the pack pass thresholds them as the CPU renderer does
+ * (the Bresenham pattern in the thinned band), so they stay bit for bit
+ * the CPU renderer's. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +26,9 @@
 
 #define MIN_COVERAGE 0.995
 #define MAX_STRAY 0.05
+/* In the uniform model, as in test_gl.c: under thinning that strong a
+ * voxel the CPU adds beside GL's sometimes has a dark neighbourhood. */
+#define MIN_COVERAGE_UNIFORM 0.98
 
 /* A CPU and a GL renderer of one geometry. */
 struct pair {
@@ -98,10 +105,11 @@ static void check_agreement(const struct pair *p, const struct scene_draw *draws
 	struct coverage c;
 	CHECK(coverage_compare(ref, test, &c) == 0);
 	double cov = coverage_score(&c), stray = coverage_stray(&c);
+	double min_cov = p->cpu->geom.brightness == GEOMETRY_BRIGHTNESS_UNIFORM ? MIN_COVERAGE_UNIFORM : MIN_COVERAGE;
 	printf("  %s %-28s coverage %7.3f%%  stray %6.3f%%\n", p->name, what, 100 * cov, 100 * stray);
 	for (int ch = 0; ch < 3; ch++)
 		CHECK_MSG(c.ref_lit[ch] > 0, "%s %s: the reference lights nothing in c%d", p->name, what, ch);
-	CHECK_MSG(cov >= MIN_COVERAGE && stray <= MAX_STRAY, "%s %s: coverage %.3f%%, stray %.3f%%", p->name, what,
+	CHECK_MSG(cov >= min_cov && stray <= MAX_STRAY, "%s %s: coverage %.3f%%, stray %.3f%%", p->name, what,
 		  100 * cov, 100 * stray);
 	CHECK_MSG(rtest_padding_clear(test), "%s %s: padding bits set", p->name, what);
 	volume_destroy(ref);
@@ -207,6 +215,13 @@ int main(void)
 			continue;
 		check_backend("small", &small, backends[i]);
 		check_backend("odd", &odd, backends[i]);
+		for (uint8_t m = GEOMETRY_BRIGHTNESS_EVEN; m <= GEOMETRY_BRIGHTNESS_UNIFORM; m++) {
+			struct geometry g = small;
+			char name[32];
+			g.brightness = m;
+			snprintf(name, sizeof(name), "small %s", geometry_brightness_name(m));
+			check_backend(name, &g, backends[i]);
+		}
 	}
 	return check_done();
 }
