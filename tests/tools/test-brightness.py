@@ -27,10 +27,6 @@ spindled, bench, work = sys.argv[1:4]
 USER = pwd.getpwuid(os.getuid()).pw_name
 GL_TOLERANCE = 0.10
 MEANINGFUL = 200  # lit voxels (CPU) a band or tube needs to be compared
-# The GL face pass's quarter-pixel hyperbolic bias lights a surface close to
-# a slice's plane up to 3 columns from the axis (docs/rendering.md, "GL
-# against the CPU"): the wall's bands inside 4 px are not compared.
-GL_WALL_FROM_PX = 4
 
 failures = []
 
@@ -156,8 +152,6 @@ def compare(gl, cpu, name):
         pairs = []
         if 'bands' in c:
             for cb, gb in zip(c['bands'], g['bands']):
-                if shape == 'wall' and cb['lo'] < GL_WALL_FROM_PX:
-                    continue
                 pairs.append((f'{shape} {cb["lo"]:g}-{cb["hi"]:g} px', cb, gb))
         for key in ('tubes', 'rings'):
             for ct, gt in zip(c.get(key, []), g.get(key, [])):
