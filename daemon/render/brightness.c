@@ -76,6 +76,10 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 			m->band_hi = u;
 		}
 	}
+	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
+	if (brightness_active(m))
+		m->band_s =
+			fmax(fabs(2.0 * m->band_lo / g->width - 1.0), fabs(2.0 * (m->band_hi + 1) / g->width - 1.0));
 	return 0;
 }
 

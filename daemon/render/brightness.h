@@ -49,6 +49,7 @@ struct brightness_map {
 	uint32_t images;  /* M: images per volume, the pattern's period */
 	uint32_t band_lo; /* columns band_lo..band_hi are thinned (rate < 1 or */
 	uint32_t band_hi; /* wall < 1); band_lo > band_hi: none (EXACT) */
+	double band_s;    /* |s| of the band's outer column edges (s = p . d_k) */
 	float wall;       /* the weight of a primitive lying in the plane */
 	float *rate;      /* per column: n[u] / M (UNIFORM: d r_u D) */
 	float *line_rate; /* per column: segments' rate (EVEN's) */

@@ -17,7 +17,8 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
 	c->rgb = calloc(tiles, HALFTONE_TILE_BYTES);
 	c->rows = calloc(tiles, sizeof(*c->rows));
-	if (!c->rgb || !c->rows) {
+	c->weighted = malloc((size_t)g->width * 4);
+	if (!c->rgb || !c->rows || !c->weighted) {
 		section_canvas_finish(c);
 		return -ENOMEM;
 	}
@@ -28,8 +29,10 @@ void section_canvas_finish(struct section_canvas *c)
 {
 	free(c->rgb);
 	free(c->rows);
+	free(c->weighted);
 	c->rgb = NULL;
 	c->rows = NULL;
+	c->weighted = NULL;
 }
 
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
@@ -99,7 +102,7 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 }
 
 /* A primitive's brightness weights in one image, worked out the first time
- * a span of it reaches the thinned band (most primitives never do). */
+ * a piece of it reaches the thinned band (most primitives never do). */
 struct section_weight {
 	const struct brightness_map *m;
 	const double (*v)[3];
@@ -109,26 +112,54 @@ struct section_weight {
 	struct brightness_weight w;
 };
 
-/* Columns u0..u1 of row v, weighted where they lie in the band. */
-static void weighted_span(struct section_canvas *c, struct section_weight *wt, uint32_t v, uint32_t u0, uint32_t u1,
+/* The weighted colour of columns a..b (inside the band) of one polygon,
+ * into c->weighted (4 bytes a column from a): brightness_apply()'s rule,
+ * the weight worked out once per column for every row of the polygon. */
+static void weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
 			  const uint8_t rgb[3])
 {
-	const struct brightness_map *m = wt->m;
 	if (!wt->ready) {
-		brightness_weight_of(m, wt->v, wt->n, wt->dx, wt->dz, &wt->w);
+		brightness_weight_of(wt->m, wt->v, wt->n, wt->dx, wt->dz, &wt->w);
 		wt->ready = true;
 	}
-	uint32_t a = u0 > m->band_lo ? u0 : m->band_lo, b = u1 < m->band_hi ? u1 : m->band_hi;
-	if (u0 < a)
-		section_span(c, v, u0, a - 1, rgb);
-	if (u1 > b)
-		section_span(c, v, b + 1, u1, rgb);
-	for (uint32_t u = a; u <= b; u++) {
-		uint8_t px[3];
+	const float *rate = wt->w.rate, kw = wt->w.kw, inv = wt->w.inv_cross;
+	uint8_t *out = c->weighted;
+	for (uint32_t u = a; u <= b; u++, out += 4) {
+		float w = rate[u] * inv;
+		if (w > kw)
+			w = kw;
 		for (int i = 0; i < 3; i++)
-			px[i] = brightness_apply(m, &wt->w, u, rgb[i]);
-		if (px[0] | px[1] | px[2])
-			section_pixel(c, u, v, px);
+			out[i] = w >= 1.0f ? rgb[i] : (uint8_t)((float)rgb[i] * w + 1e-3f);
+		out[3] = out[0] | out[1] | out[2];
+	}
+}
+
+/* Columns u0..u1 of row v: those in the band [a, b] (c->weighted from a:
+ * weigh_columns()) with their weighted colour, the rest as section_span()
+ * does, tile row by tile row. */
+static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, uint32_t v, uint32_t u0, uint32_t u1,
+			  const uint8_t rgb[3])
+{
+	uint32_t lo = u0 > a ? u0 : a, hi = u1 < b ? u1 : b;
+	if (u0 < lo)
+		section_span(c, v, u0, lo - 1, rgb);
+	if (u1 > hi)
+		section_span(c, v, hi + 1, u1, rgb);
+	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
+	const uint8_t *val = c->weighted + (size_t)(lo - a) * 4;
+	for (uint32_t u = lo; u <= hi;) {
+		uint32_t t = row + u / VOLUME_TILE, end = (u | 31) < hi ? (u | 31) : hi;
+		uint8_t *base = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES;
+		uint8_t lit = 0;
+		for (; u <= end; u++, val += 4) {
+			uint8_t *px = base + halftone_pos(u % VOLUME_TILE);
+			lit |= val[3];
+			for (int i = 0; i < 3; i++)
+				if (px[i * HALFTONE_PLANE_BYTES] < val[i])
+					px[i * HALFTONE_PLANE_BYTES] = val[i];
+		}
+		if (lit)
+			c->rows[t] |= 1u << y;
 	}
 }
 
@@ -216,9 +247,9 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 
 /* The body of project_raster() and project_raster_mirrored(), with mirror
  * a constant in each: the unmirrored path tests nothing per row. */
-static inline __attribute__((always_inline)) void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
-								const uint8_t rgb[3], struct section_weight *wt,
-								bool mirror)
+static inline __attribute__((always_inline)) void raster_rows(struct section_canvas *c, const double (*q)[2], int n,
+							      const uint8_t rgb[3], uint32_t wa, uint32_t wb,
+							      bool mirror, bool weighted)
 {
 	const struct geometry *g = &c->geom;
 	double ymin = INFINITY, ymax = -INFINITY;
@@ -252,12 +283,41 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 				u0 = g->width - 1 - u1;
 				u1 = t;
 			}
-			if (wt && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi)
-				weighted_span(c, wt, v, u0, u1, rgb);
+			if (weighted && u1 >= wa && u0 <= wb)
+				weighted_span(c, wa, wb, v, u0, u1, rgb);
 			else
 				section_span(c, v, u0, u1, rgb);
 		}
 	}
+}
+
+/* raster_rows(), with the weights' checks only for a polygon whose
+ * columns reach the thinned band (most never do: the same loop as the
+ * exact model's). */
+static inline __attribute__((always_inline)) void raster_convex(struct section_canvas *c, const double (*q)[2], int n,
+								const uint8_t rgb[3], struct section_weight *wt,
+								bool mirror)
+{
+	double lo = INFINITY, hi = -INFINITY;
+	if (wt)
+		vertices_in_slab(q, n, -INFINITY, INFINITY, 0, &lo, &hi);
+	/* The band's s range is symmetric about the axis (mirroring keeps it). */
+	if (wt && hi >= -wt->m->band_s && lo <= wt->m->band_s) {
+		uint32_t u0 = geometry_column(&c->geom, lo), u1 = geometry_column(&c->geom, hi);
+		if (mirror) {
+			uint32_t t = c->geom.width - 1 - u0;
+			u0 = c->geom.width - 1 - u1;
+			u1 = t;
+		}
+		if (lo <= hi && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi) {
+			uint32_t a = u0 > wt->m->band_lo ? u0 : wt->m->band_lo;
+			uint32_t b = u1 < wt->m->band_hi ? u1 : wt->m->band_hi;
+			weigh_columns(c, wt, a, b, rgb);
+			raster_rows(c, q, n, rgb, a, b, mirror, true);
+			return;
+		}
+	}
+	raster_rows(c, q, n, rgb, 0, 0, mirror, false);
 }
 
 /* Sections the convex polygon v (already inside the lobe's wedge) and
