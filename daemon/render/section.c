@@ -17,7 +17,8 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
 	c->rgb = calloc(tiles, HALFTONE_TILE_BYTES);
 	c->rows = calloc(tiles, sizeof(*c->rows));
-	c->weighted = malloc((size_t)g->width * 4);
+	c->weighted_plane = c->tiles_x * VOLUME_TILE;
+	c->weighted = malloc((size_t)c->weighted_plane * 3);
 	if (!c->rgb || !c->rows || !c->weighted) {
 		section_canvas_finish(c);
 		return -ENOMEM;
@@ -113,9 +114,11 @@ struct section_weight {
 };
 
 /* The weighted colour of columns a..b (inside the band) of one polygon,
- * into c->weighted (4 bytes a column from a): brightness_apply()'s rule,
- * the weight worked out once per column for every row of the polygon. */
-static void weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
+ * into c->weighted in the canvas's own order (plane i at i * weighted_plane,
+ * column u at byte (u & ~31) + halftone_pos(u & 31)): brightness_apply()'s
+ * rule, the weight worked out once per column for every row of the
+ * polygon. Returns whether any value is not zero. */
+static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
 			  const uint8_t rgb[3])
 {
 	if (!wt->ready) {
@@ -123,43 +126,62 @@ static void weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 		wt->ready = true;
 	}
 	const float *rate = wt->w.rate, kw = wt->w.kw, inv = wt->w.inv_cross;
-	uint8_t *out = c->weighted;
-	for (uint32_t u = a; u <= b; u++, out += 4) {
+	uint8_t any = 0;
+	for (uint32_t u = a; u <= b; u++) {
 		float w = rate[u] * inv;
 		if (w > kw)
 			w = kw;
-		for (int i = 0; i < 3; i++)
-			out[i] = w >= 1.0f ? rgb[i] : (uint8_t)((float)rgb[i] * w + 1e-3f);
-		out[3] = out[0] | out[1] | out[2];
+		uint8_t *out = c->weighted + (u & ~31u) + halftone_pos(u & 31u);
+		for (int i = 0; i < 3; i++) {
+			uint8_t value = w >= 1.0f ? rgb[i] : (uint8_t)((float)rgb[i] * w + 1e-3f);
+			out[(size_t)i * c->weighted_plane] = value;
+			any |= value;
+		}
 	}
+	return any != 0;
 }
 
-/* Columns u0..u1 of row v: those in the band [a, b] (c->weighted from a:
- * weigh_columns()) with their weighted colour, the rest as section_span()
- * does, tile row by tile row. */
-static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, uint32_t v, uint32_t u0, uint32_t u1,
-			  const uint8_t rgb[3])
+/* Per-channel MAX of canvas row bytes [ja, jb] with src's. */
+static inline void max_from(uint8_t *row, const uint8_t *src, uint32_t ja, uint32_t jb)
+{
+	for (uint32_t j = ja; j <= jb; j++)
+		row[j] = row[j] < src[j] ? src[j] : row[j];
+}
+
+/* Columns u0..u1 of row v: those in [a, b] with their weighted colour
+ * (weigh_columns(); lit: whether any is not zero), the rest as
+ * section_span() does; byte ranges as section_span() takes them. */
+static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool lit, uint32_t v, uint32_t u0,
+			  uint32_t u1, const uint8_t rgb[3])
 {
 	uint32_t lo = u0 > a ? u0 : a, hi = u1 < b ? u1 : b;
 	if (u0 < lo)
 		section_span(c, v, u0, lo - 1, rgb);
 	if (u1 > hi)
 		section_span(c, v, hi + 1, u1, rgb);
+	if (!lit)
+		return;
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
-	const uint8_t *val = c->weighted + (size_t)(lo - a) * 4;
 	for (uint32_t u = lo; u <= hi;) {
-		uint32_t t = row + u / VOLUME_TILE, end = (u | 31) < hi ? (u | 31) : hi;
+		uint32_t t = row + u / VOLUME_TILE;
+		uint32_t pa = u % VOLUME_TILE, pb = (u | 31) < hi ? 31 : hi % VOLUME_TILE;
 		uint8_t *base = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES;
-		uint8_t lit = 0;
-		for (; u <= end; u++, val += 4) {
-			uint8_t *px = base + halftone_pos(u % VOLUME_TILE);
-			lit |= val[3];
-			for (int i = 0; i < 3; i++)
-				if (px[i * HALFTONE_PLANE_BYTES] < val[i])
-					px[i * HALFTONE_PLANE_BYTES] = val[i];
+		const uint8_t *src = c->weighted + (u & ~31u);
+		uint32_t ga = pa & ~7u, gb = pb & ~7u;
+		for (int i = 0; i < 3; i++) {
+			uint8_t *r = base + i * HALFTONE_PLANE_BYTES;
+			const uint8_t *sr = src + (size_t)i * c->weighted_plane;
+			if (ga == gb) {
+				max_from(r, sr, ga + 7 - (pb & 7), ga + 7 - (pa & 7));
+			} else {
+				max_from(r, sr, ga, ga + 7 - (pa & 7));
+				if (gb > ga + 8)
+					max_from(r, sr, ga + 8, gb - 1);
+				max_from(r, sr, gb + 7 - (pb & 7), gb + 7);
+			}
 		}
-		if (lit)
-			c->rows[t] |= 1u << y;
+		c->rows[t] |= 1u << y;
+		u += pb - pa + 1;
 	}
 }
 
@@ -248,7 +270,7 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 /* The body of project_raster() and project_raster_mirrored(), with mirror
  * a constant in each: the unmirrored path tests nothing per row. */
 static inline __attribute__((always_inline)) void raster_rows(struct section_canvas *c, const double (*q)[2], int n,
-							      const uint8_t rgb[3], uint32_t wa, uint32_t wb,
+							      const uint8_t rgb[3], uint32_t wa, uint32_t wb, bool wlit,
 							      bool mirror, bool weighted)
 {
 	const struct geometry *g = &c->geom;
@@ -284,7 +306,7 @@ static inline __attribute__((always_inline)) void raster_rows(struct section_can
 				u1 = t;
 			}
 			if (weighted && u1 >= wa && u0 <= wb)
-				weighted_span(c, wa, wb, v, u0, u1, rgb);
+				weighted_span(c, wa, wb, wlit, v, u0, u1, rgb);
 			else
 				section_span(c, v, u0, u1, rgb);
 		}
@@ -312,12 +334,12 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 		if (lo <= hi && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi) {
 			uint32_t a = u0 > wt->m->band_lo ? u0 : wt->m->band_lo;
 			uint32_t b = u1 < wt->m->band_hi ? u1 : wt->m->band_hi;
-			weigh_columns(c, wt, a, b, rgb);
-			raster_rows(c, q, n, rgb, a, b, mirror, true);
+			bool lit = weigh_columns(c, wt, a, b, rgb);
+			raster_rows(c, q, n, rgb, a, b, lit, mirror, true);
 			return;
 		}
 	}
-	raster_rows(c, q, n, rgb, 0, 0, mirror, false);
+	raster_rows(c, q, n, rgb, 0, 0, false, mirror, false);
 }
 
 /* Sections the convex polygon v (already inside the lobe's wedge) and

@@ -31,7 +31,8 @@ struct section_canvas {
 	 * NULL, or one that is not active: every touched voxel at full
 	 * colour (EXACT). Points are never weighted. */
 	const struct brightness_map *bright;
-	uint8_t *weighted; /* W * 4 bytes: a polygon's weighted colour per column */
+	uint8_t *weighted;       /* 3 planes of weighted_plane bytes: a polygon's */
+	uint32_t weighted_plane; /* weighted colour per column, in canvas order */
 };
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz
