@@ -11,7 +11,7 @@
 
 int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 {
-	c->geom = *g;
+	*c = (struct section_canvas){ .geom = *g }; /* bright NULL: exact until set */
 	c->tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
 	c->tiles_y = (g->height + VOLUME_TILE - 1) / VOLUME_TILE;
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
