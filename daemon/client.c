@@ -167,6 +167,22 @@ void client_capture_done(struct waiter *w, int fd, uint64_t size)
 	object_destroy(&cb->base);
 }
 
+void client_watch_send(struct watch_entry *w, int fd, uint64_t size, uint64_t seq, uint64_t skipped)
+{
+	struct watcher *wa = link_entry(w, struct watcher, entry);
+	struct client *c = wa->base.client;
+	if (c->dead)
+		return;
+	if (fd >= 0) {
+		client_sent(c, proto_ev_watcher_volume(c->conn, wa->base.id, fd, size, seq, skipped));
+	} else {
+		client_sent(c,
+			    proto_ev_watcher_failed(c->conn, wa->base.id, PROTO_WATCHER_FAILURE_ERROR, strerror(-fd)));
+		object_destroy(&wa->base);
+	}
+	c->answered = true;
+}
+
 void client_flush_answered(struct client *c)
 {
 	if (!c->answered)
@@ -264,6 +280,13 @@ static int display_get_status(void *target)
 		c->env->listener->composition(c->env->data, &comp);
 		client_sent(c, proto_ev_display_composition(c->conn, 1, &comp));
 	}
+	if (c->version >= 5) {
+		struct proto_display_watchers_args wa;
+		c->env->listener->watchers(c->env->data, &wa);
+		client_sent(c, proto_ev_display_watchers(c->conn, 1, wa.watchers, wa.max_watchers, wa.max_rate_hz,
+							 wa.volumes_sent, wa.volumes_skipped, wa.bytes_sent, wa.refused,
+							 wa.denied));
+	}
 	struct proto_display_status_args st;
 	c->env->listener->status(c->env->data, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, &st));
@@ -287,6 +310,54 @@ static int display_capture(void *target, const struct proto_display_capture_args
 	return 0;
 }
 
+static int display_watch(void *target, const struct proto_display_watch_args *a)
+{
+	struct client *c = target;
+	if (a->max_rate_hz > 1000)
+		return client_fail(c, 1, PROTO_ERR_VALUE, "watch: max_rate_hz %u is over 1000", a->max_rate_hz);
+	struct watcher *wa = calloc(1, sizeof(*wa));
+	if (!wa)
+		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+	link_init(&wa->entry.link);
+	if (object_register(c, &wa->base, a->id, PROTO_IFACE_WATCHER) < 0) {
+		free(wa);
+		return -EPROTO;
+	}
+	uint32_t code = 0;
+	const char *why = NULL;
+	if (!c->admin) {
+		watch_count_denied(c->env->watch);
+		code = PROTO_WATCHER_FAILURE_DENIED;
+		why = "watching is restricted to root, the daemon's user and the admin group";
+	} else if (watch_add(c->env->watch, &wa->entry, a->max_rate_hz) < 0) {
+		code = PROTO_WATCHER_FAILURE_LIMIT;
+		why = "the daemon has max-watchers watchers";
+	}
+	if (code) {
+		client_sent(c, proto_ev_watcher_failed(c->conn, a->id, code, why));
+		object_destroy(&wa->base);
+	}
+	return 0;
+}
+
+static int watcher_release(void *target)
+{
+	struct watcher *wa = target;
+	watch_release(wa->base.client->env->watch, &wa->entry);
+	return 0;
+}
+
+static int watcher_destroy(void *target)
+{
+	object_destroy(target);
+	return 0;
+}
+
+const struct proto_watcher_requests watcher_requests = {
+	.destroy = watcher_destroy,
+	.release = watcher_release,
+};
+
 static const struct proto_display_requests display_requests = {
 	.hello = display_hello,
 	.sync = display_sync,
@@ -298,6 +369,7 @@ static const struct proto_display_requests display_requests = {
 	.commit = display_commit,
 	.get_status = display_get_status,
 	.capture = display_capture,
+	.watch = display_watch,
 };
 
 /* ---- dispatch ---- */
@@ -325,6 +397,9 @@ static int dispatch_message(struct client *c, struct proto_message *m)
 			break;
 		case PROTO_IFACE_LAYER:
 			r = proto_layer_dispatch_request(&layer_requests, obj, m, c->version, &err);
+			break;
+		case PROTO_IFACE_WATCHER:
+			r = proto_watcher_dispatch_request(&watcher_requests, obj, m, c->version, &err);
 			break;
 		default:
 			return client_fail(c, m->object, PROTO_ERR_METHOD, "%s objects take no requests",

@@ -14,6 +14,7 @@
 #include "layer.h"
 #include "link.h"
 #include "spindle-protocol.h"
+#include "watch.h"
 
 struct config;
 struct geometry;
@@ -40,6 +41,8 @@ struct client_listener {
 	void (*service)(void *data, struct proto_display_service_args *out);
 	/* What the object cache did, for display.get_status (version 4). */
 	void (*composition)(void *data, struct proto_display_composition_args *out);
+	/* What the watchers did, for display.get_status (version 5). */
+	void (*watchers)(void *data, struct proto_display_watchers_args *out);
 };
 
 /* The daemon-wide budget counts this much for a vertex a list holds
@@ -65,6 +68,7 @@ struct client_env {
 	gid_t admin_gid;       /* admin-group's gid, or (gid_t)-1 */
 	struct stage *stage;   /* where committed layers go */
 	struct frames *frames; /* where committed frames and captures wait */
+	struct watch *watch;   /* watchers of the volumes shown */
 	struct client_totals *totals;
 	const struct client_listener *listener;
 	void *data;
@@ -132,6 +136,12 @@ struct callback {
 	struct waiter wait;
 };
 
+/* A watcher (display.watch). */
+struct watcher {
+	struct object base;
+	struct watch_entry entry;
+};
+
 struct client {
 	const struct client_env *env;
 	struct link link; /* the server's list of clients */
@@ -177,6 +187,9 @@ void client_flush(struct client *c);
  * event is queued; client_flush_answered() sends it. */
 void client_frame_done(struct waiter *w, uint64_t seq, int64_t time_ns);
 void client_capture_done(struct waiter *w, int fd, uint64_t size);
+/* A watcher is sent a volume (watch.h), or failed (fd < 0: the object is
+ * destroyed). Queued like the answers above. */
+void client_watch_send(struct watch_entry *w, int fd, uint64_t size, uint64_t seq, uint64_t skipped);
 /* Flushes c if answers were queued since its last flush. */
 void client_flush_answered(struct client *c);
 
@@ -184,6 +197,7 @@ void client_flush_answered(struct client *c);
 extern const struct proto_buffer_requests buffer_requests;
 extern const struct proto_list_requests list_requests;
 extern const struct proto_layer_requests layer_requests;
+extern const struct proto_watcher_requests watcher_requests;
 
 int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd);
 int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size);

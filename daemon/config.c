@@ -25,6 +25,8 @@ void config_defaults(struct config *cfg)
 		.max_incomplete_clients = 16,
 		.handshake_timeout_ms = 5000,
 		.max_client_fds = PROTO_MAX_QUEUED_FDS,
+		.max_watchers = 4,
+		.max_watch_rate = 15,
 		.max_objects = 4096,
 		.max_buffer_bytes = 1ull << 30,
 		.max_vertices = 32u << 20,
@@ -216,6 +218,10 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u32(&cfg->handshake_timeout_ms, value, 10, 600000);
 	if (!strcmp(key, "max-client-fds"))
 		return set_u32(&cfg->max_client_fds, value, PROTO_MAX_MESSAGE_FDS, PROTO_MAX_QUEUED_FDS);
+	if (!strcmp(key, "max-watchers"))
+		return set_u32(&cfg->max_watchers, value, 0, 1024);
+	if (!strcmp(key, "max-watch-rate"))
+		return set_u32(&cfg->max_watch_rate, value, 1, 1000);
 	if (!strcmp(key, "max-objects"))
 		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
 	if (!strcmp(key, "max-buffer-bytes"))

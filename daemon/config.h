@@ -47,6 +47,8 @@ struct config {
 	uint64_t max_vertices;                 /* per client */
 	uint64_t max_primitives;               /* per client, per volume */
 	uint64_t max_scene_primitives;         /* all clients, per volume: priority decides */
+	uint32_t max_watchers;                 /* all clients: watchers (display.watch) */
+	uint32_t max_watch_rate;               /* Hz: at most this many volumes a second per watcher */
 	bool cache;                            /* the object cache and compositor (cache.h) */
 	bool half_turn_swaps;                  /* swap at half-turn starts where the projector can */
 	uint8_t brightness;                    /* enum geometry_brightness (geometry.h) */

@@ -743,6 +743,12 @@ void object_destroy(struct object *obj)
 		free(cb);
 		break;
 	}
+	case PROTO_IFACE_WATCHER: {
+		struct watcher *wa = (struct watcher *)obj;
+		watch_remove(c->env->watch, &wa->entry);
+		free(wa);
+		break;
+	}
 	case PROTO_IFACE_DISPLAY:
 		break;
 	}

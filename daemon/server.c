@@ -179,6 +179,22 @@ static void client_service(void *data, struct proto_display_service_args *out)
 	};
 }
 
+static void client_watchers(void *data, struct proto_display_watchers_args *out)
+{
+	struct server *srv = data;
+	const struct watch_stats *st = &srv->watch.stats;
+	*out = (struct proto_display_watchers_args){
+		.watchers = srv->watch.count,
+		.max_watchers = srv->cfg.max_watchers,
+		.max_rate_hz = srv->cfg.max_watch_rate,
+		.volumes_sent = st->sent,
+		.volumes_skipped = st->skipped,
+		.bytes_sent = st->bytes,
+		.refused = st->refused,
+		.denied = st->denied,
+	};
+}
+
 static void client_composition(void *data, struct proto_display_composition_args *out)
 {
 	server_get_composition(data, out);
@@ -195,6 +211,7 @@ static const struct client_listener client_listener = {
 	.status = client_status,
 	.limits = client_limits,
 	.composition = client_composition,
+	.watchers = client_watchers,
 	.service = client_service,
 };
 
@@ -251,20 +268,69 @@ static const struct frames_listener frames_listener = {
 	.answered = answered,
 };
 
-/* Waiting captures get the volume on display: as the projector holds it
- * when it can tell, else as the daemon sent it, else (nothing shown yet)
- * the empty volume. */
-static void serve_captures(struct server *srv)
+/* The volume on display: as the projector holds it when it can tell, else
+ * as the daemon sent it, else (nothing shown yet) the empty volume (NULL
+ * when out of memory). */
+static const struct volume *shown_volume(struct server *srv)
 {
-	if (!frames_capture_waiting(&srv->frames))
-		return;
-	const struct volume *v = devices_shown(srv->dev);
+	const struct volume *v = srv->dev ? devices_shown(srv->dev) : NULL;
 	if (!v && srv->pipe)
 		v = pipeline_shown(srv->pipe);
 	if (!v && !srv->empty && !(srv->empty = volume_create(&srv->geom)))
 		log_error("capture: out of memory for the empty volume");
-	frames_serve_captures(&srv->frames, v ? v : srv->empty);
+	return v ? v : srv->empty;
 }
+
+/* Waiting captures get the volume on display. */
+static void serve_captures(struct server *srv)
+{
+	if (!frames_capture_waiting(&srv->frames))
+		return;
+	frames_serve_captures(&srv->frames, shown_volume(srv));
+}
+
+/* Watchers due get the volume on display; the timer wakes the loop for
+ * the next one that waits for its rate. A single test without watchers. */
+static void serve_watchers(struct server *srv)
+{
+	if (!watch_any(&srv->watch) || !srv->pipe)
+		return;
+	watch_serve(&srv->watch, shown_volume(srv), now_ns());
+	int64_t due = watch_next_due(&srv->watch);
+	if (!srv->watch_timer)
+		return;
+	if (due > 0) {
+		sd_event_source_set_time(srv->watch_timer, (uint64_t)due / 1000 + 1);
+		sd_event_source_set_enabled(srv->watch_timer, SD_EVENT_ONESHOT);
+	} else {
+		sd_event_source_set_enabled(srv->watch_timer, SD_EVENT_OFF);
+	}
+}
+
+static int on_watch_timer(sd_event_source *s, uint64_t usec, void *data)
+{
+	serve_watchers(data);
+	return 0;
+}
+
+static void watch_send(void *data, struct watch_entry *w, int fd, uint64_t size, uint64_t seq, uint64_t skipped)
+{
+	client_watch_send(w, fd, size, seq, skipped);
+}
+
+static void watch_wake(void *data)
+{
+	serve_watchers(data);
+}
+
+static void answered(void *data);
+
+static const struct watch_listener watch_listener = {
+	.version = WATCH_LISTENER_VERSION,
+	.send = watch_send,
+	.answered = answered,
+	.wake = watch_wake,
+};
 
 /* ---- the pipeline ---- */
 
@@ -280,6 +346,7 @@ static void volume_shown(void *data, uint64_t seq, int64_t time_ns)
 	struct server *srv = data;
 	if (frames_shown(&srv->frames, seq, time_ns, devices_lit(srv->dev)))
 		serve_captures(srv);
+	serve_watchers(srv);
 }
 
 static const struct pipeline_listener pipeline_listener = {
@@ -296,6 +363,7 @@ static void projector_lit(void *data, int64_t time_ns)
 	srv->revolution_ns = time_ns;
 	if (frames_lit(&srv->frames, time_ns))
 		serve_captures(srv);
+	serve_watchers(srv);
 }
 
 static void revolution(void *data, int64_t time_ns)
@@ -304,6 +372,7 @@ static void revolution(void *data, int64_t time_ns)
 	srv->revolution_ns = time_ns;
 	if (srv->pipe) /* none while setting up */
 		frames_revolution(&srv->frames, time_ns, pipeline_swap_pending(srv->pipe));
+	serve_watchers(srv);
 }
 
 static void half_turn(void *data, int64_t time_ns)
@@ -491,8 +560,10 @@ static int on_state_timer(sd_event_source *s, uint64_t usec, void *data)
 	expire_handshakes(data);
 	/* A dark display (not turning, or no timing yet) has no revolution
 	 * to wait for: captures get what it holds at once. */
-	if (srv->dev && !devices_lit(srv->dev))
+	if (srv->dev && !devices_lit(srv->dev)) {
 		serve_captures(srv);
+		serve_watchers(srv);
+	}
 	push_state(data);
 	sd_event_source_set_time(s, usec + STATE_INTERVAL_US);
 	return 0;
@@ -634,6 +705,8 @@ void server_finish(struct server *srv)
 	}
 	pipeline_destroy(srv->pipe);
 	volume_destroy(srv->empty);
+	watch_fini(&srv->watch);
+	sd_event_source_disable_unref(srv->watch_timer);
 	srv->pipe = NULL;          /* the devices may still report while they close */
 	devices_destroy(srv->dev); /* blanks the projector */
 	watchdog_destroy(srv->watchdog);
@@ -655,6 +728,7 @@ static void set_client_env(struct server *srv)
 		.admin_gid = admin_gid(srv->cfg.admin_group),
 		.stage = &srv->stage,
 		.frames = &srv->frames,
+		.watch = &srv->watch,
 		.totals = &srv->totals,
 		.listener = &client_listener,
 		.data = srv,
@@ -667,6 +741,7 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 	link_init(&srv->clients);
 	stage_init(&srv->stage, &stage_listener, srv);
 	frames_init(&srv->frames, &frames_listener, srv);
+	watch_init(&srv->watch, cfg->max_watchers, cfg->max_watch_rate, &watch_listener, srv);
 	int r = geometry_from_profile(cfg->profile, &srv->geom);
 	if (r < 0) {
 		log_error("unknown profile '%s'", cfg->profile);
@@ -689,6 +764,9 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 	}
 	set_client_env(srv);
 	if ((r = setup_state_timer(srv)) < 0)
+		return r;
+	if ((r = sd_event_add_time(srv->event, &srv->watch_timer, CLOCK_MONOTONIC, 0, 1000, on_watch_timer, srv)) < 0 ||
+	    (r = sd_event_source_set_enabled(srv->watch_timer, SD_EVENT_OFF)) < 0)
 		return r;
 	if (!listen)
 		return 0;

@@ -16,6 +16,7 @@
 #include "listen_socket.h"
 #include "spindle-protocol.h"
 #include "stage.h"
+#include "watch.h"
 
 struct sd_event;
 struct sd_event_source;
@@ -37,8 +38,10 @@ struct server {
 	uint32_t client_count;
 	struct devices *dev;
 	struct pipeline *pipe;
-	struct stage stage;   /* the committed scene */
-	struct frames frames; /* frame callbacks and captures waiting */
+	struct stage stage;                  /* the committed scene */
+	struct frames frames;                /* frame callbacks and captures waiting */
+	struct watch watch;                  /* watchers of the volumes shown */
+	struct sd_event_source *watch_timer; /* a watcher waiting for its rate */
 	struct client_env client_env;
 	struct client_totals totals; /* against memory-budget and max-mappings */
 	struct watchdog *watchdog;   /* fed while nothing below is stuck */

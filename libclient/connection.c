@@ -165,6 +165,23 @@ static int on_status(void *target, const struct proto_display_status_args *a)
 	return 0;
 }
 
+/* Comes before status; spindle_get_watch_stats() reads it. */
+static int on_watchers(void *target, const struct proto_display_watchers_args *a)
+{
+	struct spindle *sp = target;
+	sp->watch_stats = (struct spindle_watch_stats){
+		.watchers = a->watchers,
+		.max_watchers = a->max_watchers,
+		.max_rate_hz = a->max_rate_hz,
+		.volumes_sent = a->volumes_sent,
+		.volumes_skipped = a->volumes_skipped,
+		.bytes_sent = a->bytes_sent,
+		.refused = a->refused,
+		.denied = a->denied,
+	};
+	return 0;
+}
+
 /* Comes before status, which takes it along. */
 static int on_service(void *target, const struct proto_display_service_args *a)
 {
@@ -262,6 +279,7 @@ static const struct proto_display_events display_events = {
 	.limits = on_limits,
 	.composition = on_composition,
 	.service = on_service,
+	.watchers = on_watchers,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)
@@ -319,6 +337,8 @@ static int dispatch_one(struct spindle *sp, struct proto_message *m)
 			       ? lib_set_error(sp, EPROTO, "bad event from the daemon: %s", err.text)
 			       : 0;
 	struct lib_callback *cb = *callback_slot(sp, m->object);
+	if (!cb && (r = lib_watch_dispatch(sp, m, &err)) != -ENOENT)
+		return r == -EPROTO ? lib_set_error(sp, EPROTO, "bad event from the daemon: %s", err.text) : 0;
 	if (!cb)
 		return lib_set_error(sp, EPROTO, "event for unknown object %u", m->object);
 	if (cb->kind == LIB_CALLBACK_CAPTURE)
@@ -486,6 +506,7 @@ struct spindle *spindle_connect_version(const char *path, uint32_t max_version)
 	sp->next_id = 2;
 	sp->offered = max_version;
 	link_init(&sp->objects);
+	link_init(&sp->watchers);
 	sp->conn = proto_conn_create(fd, MAX_OUT);
 	if (!sp->conn) {
 		free(sp);
@@ -508,6 +529,7 @@ void spindle_disconnect(struct spindle *sp)
 		return;
 	while (!link_empty(&sp->objects))
 		lib_object_free(link_entry(sp->objects.next, struct lib_object, link));
+	lib_watchers_free(sp);
 	while (sp->callbacks)
 		lib_callback_remove(sp, sp->callbacks);
 	proto_conn_destroy(sp->conn);

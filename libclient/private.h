@@ -50,6 +50,7 @@ struct spindle {
 	struct spindle_composition composition; /* from the composition event before status (version 4) */
 	struct spindle_service service;         /* from the service event before status (version 4) */
 	bool composition_known;
+	struct spindle_watch_stats watch_stats; /* from the watchers event before status (version 5) */
 	uint64_t status_serial;
 	struct spindle_state state; /* version 2: the last state event */
 	uint64_t refusals;          /* refused events received */
@@ -59,6 +60,7 @@ struct spindle {
 	uint32_t error_code; /* the daemon's fatal error code */
 	struct lib_callback *callbacks;
 	struct link objects;
+	struct link watchers; /* struct spindle_watcher (watch.c) */
 	spindle_log_func log;
 	void *log_data;
 	char error[300];
@@ -82,5 +84,10 @@ void lib_callback_remove(struct spindle *sp, struct lib_callback *cb);
 int lib_wait_callback(struct spindle *sp, struct lib_callback *cb);
 
 void lib_object_free(struct lib_object *obj);
+
+/* Watchers (watch.c): an event for one of them dispatched (the result of
+ * its dispatch), or -ENOENT when m is for no watcher; all freed. */
+int lib_watch_dispatch(struct spindle *sp, struct proto_message *m, struct proto_error *err);
+void lib_watchers_free(struct spindle *sp);
 
 #endif

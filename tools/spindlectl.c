@@ -193,13 +193,20 @@ static int cmd_status(const struct ctl_args *a)
 	if (!sp)
 		return CTL_CONNECT;
 	int ret = spindle_get_status(sp, &st);
+	struct spindle_watch_stats ws;
+	bool watch_known = false;
+	if (ret == 0 && spindle_get_version(sp) >= 5) { /* protocol 5 */
+		ret = spindle_get_watch_stats(sp, &ws);
+		watch_known = ret == 0;
+	}
 	if (ret < 0) {
 		report_failure(sp, "status", ret);
 		spindle_disconnect(sp);
 		return CTL_FAILED;
 	}
 	if (a->json) {
-		status_print_json(stdout, socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st);
+		status_print_json(stdout, socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st,
+				  watch_known ? &ws : NULL);
 		spindle_disconnect(sp);
 		return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
 	}
@@ -213,6 +220,12 @@ static int cmd_status(const struct ctl_args *a)
 		print_service(&st.service);
 		print_composition(&st.composition);
 	}
+	if (watch_known)
+		printf("watchers: %u of %u (at most %u/s each), %llu volumes sent (%llu bytes), %llu skipped, %llu "
+		       "refused, %llu denied\n",
+		       ws.watchers, ws.max_watchers, ws.max_rate_hz, (unsigned long long)ws.volumes_sent,
+		       (unsigned long long)ws.bytes_sent, (unsigned long long)ws.volumes_skipped,
+		       (unsigned long long)ws.refused, (unsigned long long)ws.denied);
 	spindle_disconnect(sp);
 	return fflush(stdout) == 0 ? 0 : 1;
 }

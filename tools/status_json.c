@@ -116,8 +116,19 @@ static void put_composition(FILE *f, const struct spindle_composition *c)
 	fputc('}', f);
 }
 
+static void put_watchers(FILE *f, const struct spindle_watch_stats *w)
+{
+	fprintf(f, ", \"watchers\": {\"watchers\": %u, \"max_watchers\": %u, \"max_rate_hz\": %u", w->watchers,
+		w->max_watchers, w->max_rate_hz);
+	fprintf(f, ", \"volumes_sent\": %llu, \"volumes_skipped\": %llu, \"bytes_sent\": %llu",
+		(unsigned long long)w->volumes_sent, (unsigned long long)w->volumes_skipped,
+		(unsigned long long)w->bytes_sent);
+	fprintf(f, ", \"refused\": %llu, \"denied\": %llu}", (unsigned long long)w->refused,
+		(unsigned long long)w->denied);
+}
+
 void status_print_json(FILE *f, const char *socket, uint32_t protocol, const struct spindle_device_info *dev,
-		       const struct spindle_status *st)
+		       const struct spindle_status *st, const struct spindle_watch_stats *ws)
 {
 	fputs("{\"socket\": ", f);
 	put_string(f, socket);
@@ -130,5 +141,7 @@ void status_print_json(FILE *f, const char *socket, uint32_t protocol, const str
 		put_service(f, &st->service);
 		put_composition(f, &st->composition);
 	}
+	if (ws)
+		put_watchers(f, ws); /* protocol 5 */
 	fputs("}\n", f);
 }

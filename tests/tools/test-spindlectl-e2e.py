@@ -114,7 +114,8 @@ def main():
             fail('no volume shown')
         js = json.loads(ctl_run(sock, 'status', '--json'))  # one JSON object, the same figures
         if (js['device']['width'], js['device']['mirrored'], js['display']['clients'], js['protocol']) != \
-                (128, True, 2, 4) or js['display']['volumes_shown'] < 1 or 'composition' not in js:
+                (128, True, 2, 5) or js['display']['volumes_shown'] < 1 or 'composition' not in js or \
+                js.get('watchers', {}).get('max_watchers') != 4:
             fail(f'status --json: {js!r}')
 
         svol = os.path.join(work, 'e2e-bunny.svol')

@@ -327,6 +327,53 @@ int spindle_get_status(struct spindle *sp, struct spindle_status *out);
  * -EACCES otherwise. 0 or -errno. */
 int spindle_capture(struct spindle *sp, int *fd, size_t *size);
 
+/* ---- watchers (protocol 5) ---- */
+
+/* A watcher: the volumes shown, live, as the daemon shows them, each one
+ * sent sparse (the watch volume layout, docs/formats.md; common/wvol.h
+ * decodes it) at most max_rate_hz a second and at most the daemon's
+ * max-watch-rate, and only after the previous one was released: volumes
+ * shown meanwhile are skipped, never queued. Restricted like capture. */
+struct spindle_watcher;
+
+struct spindle_watch_volume {
+	const void *data; /* the watch volume, mapped read-only: size bytes */
+	size_t size;
+	int fd;           /* its sealed memfd; data and fd are the library's,
+			   * valid until spindle_watch_release() */
+	uint64_t seq;     /* the volume's sequence number */
+	uint64_t skipped; /* volumes shown since the last one that it skipped */
+};
+
+/* Called from spindle_dispatch() with each volume (then call
+ * spindle_watch_release(), now or later, for the next), or with NULL when
+ * the daemon ended the watcher (spindle_watch_get_error() tells why). */
+typedef void (*spindle_watch_func)(void *data, struct spindle_watcher *w, const struct spindle_watch_volume *vol);
+
+/* Asks for a watcher (max_rate_hz 0 to 1000; 0: the daemon's rate). NULL +
+ * errno: EPROTONOSUPPORT from a daemon older than protocol 5. A watcher the
+ * daemon refuses is ended later, from spindle_dispatch(). */
+struct spindle_watcher *spindle_watch_create(struct spindle *sp, uint32_t max_rate_hz, spindle_watch_func func,
+					     void *data);
+/* Done with the volume received last: its data and fd go, and the daemon
+ * may send the next. 0 or -errno. */
+int spindle_watch_release(struct spindle_watcher *w);
+/* 0 while the watcher lives; once the daemon ended it, -EACCES (not
+ * allowed to watch), -EUSERS (max-watchers reached) or -EIO. */
+int spindle_watch_get_error(const struct spindle_watcher *w);
+/* Ends the watcher (and releases its volume). Accepts NULL. */
+void spindle_watch_destroy(struct spindle_watcher *w);
+
+/* What the daemon's watchers did (display.watchers). */
+struct spindle_watch_stats {
+	uint32_t watchers, max_watchers, max_rate_hz;
+	uint64_t volumes_sent, volumes_skipped, bytes_sent, refused, denied;
+};
+
+/* Blocking: the daemon's watcher counters (one display.get_status round).
+ * 0 or -errno; -EPROTONOSUPPORT from a daemon older than protocol 5. */
+int spindle_get_watch_stats(struct spindle *sp, struct spindle_watch_stats *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,141 @@
+#include "wvol.h"
+
+#include <errno.h>
+#include <string.h>
+
+static void put32(uint8_t *p, uint32_t v)
+{
+	for (int i = 0; i < 4; i++)
+		p[i] = (uint8_t)(v >> (8 * i));
+}
+
+static void put64(uint8_t *p, uint64_t v)
+{
+	for (int i = 0; i < 8; i++)
+		p[i] = (uint8_t)(v >> (8 * i));
+}
+
+static uint32_t get32(const uint8_t *p)
+{
+	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
+}
+
+static uint64_t get64(const uint8_t *p)
+{
+	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
+}
+
+static uint32_t padded_mask(uint32_t mask_bytes)
+{
+	return (mask_bytes + 3) & ~3u;
+}
+
+uint64_t wvol_size(const struct volume *vol)
+{
+	uint64_t per_image = 4 + padded_mask(vol->mask_bytes);
+	return WVOL_HEADER_SIZE + vol->image_count * per_image + volume_tile_count(vol) * VOLUME_TILE_BYTES;
+}
+
+void wvol_encode(const struct volume *vol, uint8_t *out)
+{
+	uint32_t hh;
+	memset(out, 0, WVOL_HEADER_SIZE);
+	memcpy(out, "SPWV", 4);
+	out[4] = WVOL_VERSION;
+	out[6] = WVOL_HEADER_SIZE;
+	put32(out + 8, vol->geom.width);
+	put32(out + 12, vol->geom.height);
+	put32(out + 16, vol->image_count);
+	put32(out + 20, vol->geom.images_per_rev);
+	out[24] = 3;
+	out[25] = vol->geom.mirrored ? WVOL_FLAG_MIRRORED : 0;
+	memcpy(&hh, &vol->geom.half_height, 4);
+	put32(out + 28, hh);
+	put64(out + 32, vol->seq);
+	put64(out + 40, vol->shown_ns);
+	put32(out + 48, vol->tiles_x);
+	put32(out + 52, vol->tiles_y);
+	put32(out + 56, vol->mask_bytes);
+	put32(out + 60, (uint32_t)volume_tile_count(vol));
+	uint8_t *p = out + WVOL_HEADER_SIZE;
+	uint32_t mask = padded_mask(vol->mask_bytes);
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		const struct volume_image *img = &vol->images[k];
+		put32(p, img->tile_count);
+		memset(p + 4, 0, mask);
+		memcpy(p + 4, img->mask, vol->mask_bytes);
+		p += 4 + mask;
+		size_t n = (size_t)img->tile_count * VOLUME_TILE_BYTES;
+		if (n)
+			memcpy(p, img->tiles, n);
+		p += n;
+	}
+}
+
+int wvol_is(const uint8_t *buf, size_t size)
+{
+	return size >= WVOL_HEADER_SIZE && memcmp(buf, "SPWV", 4) == 0;
+}
+
+struct volume *wvol_decode(const uint8_t *buf, size_t size)
+{
+	if (!wvol_is(buf, size) || buf[4] != WVOL_VERSION || buf[5] || buf[6] != WVOL_HEADER_SIZE || buf[7] ||
+	    buf[24] != 3) {
+		errno = EINVAL;
+		return NULL;
+	}
+	struct geometry g = {
+		.width = get32(buf + 8),
+		.height = get32(buf + 12),
+		.images_per_rev = get32(buf + 20),
+		.mirrored = buf[25] & WVOL_FLAG_MIRRORED,
+		.rpm = 60.0f, /* not stored */
+	};
+	uint32_t hh = get32(buf + 28);
+	memcpy(&g.half_height, &hh, 4);
+	if (geometry_validate(&g) < 0 || get32(buf + 16) != geometry_images_per_volume(&g)) {
+		errno = EINVAL;
+		return NULL;
+	}
+	struct volume *vol = volume_create(&g);
+	if (!vol)
+		return NULL;
+	if (get32(buf + 48) != vol->tiles_x || get32(buf + 52) != vol->tiles_y || get32(buf + 56) != vol->mask_bytes)
+		goto invalid;
+	vol->seq = get64(buf + 32);
+	vol->shown_ns = get64(buf + 40);
+	uint32_t per_image = volume_tiles_per_image(vol), mask = padded_mask(vol->mask_bytes);
+	const uint8_t *p = buf + WVOL_HEADER_SIZE, *end = buf + size;
+	uint64_t total = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		if ((size_t)(end - p) < 4 + (size_t)mask)
+			goto invalid;
+		uint32_t count = get32(p), bits = 0;
+		const uint8_t *m = p + 4;
+		for (uint32_t i = 0; i < vol->mask_bytes; i++)
+			bits += volume_mask_bits(m[i]);
+		if (bits != count || (size_t)(end - p - 4 - mask) / VOLUME_TILE_BYTES < count)
+			goto invalid;
+		p += 4 + mask;
+		if (count && volume_image_reserve(vol, k, count) < 0) {
+			volume_destroy(vol);
+			errno = ENOMEM;
+			return NULL;
+		}
+		for (uint32_t t = 0; t < vol->mask_bytes * 8 && count; t++) {
+			if (!((m[t / 8] >> (t % 8)) & 1))
+				continue;
+			if (t >= per_image || volume_image_append(vol, k, t, p) < 0)
+				goto invalid;
+			p += VOLUME_TILE_BYTES;
+		}
+		total += count;
+	}
+	if (p != end || total != get32(buf + 60))
+		goto invalid;
+	return vol;
+invalid:
+	volume_destroy(vol);
+	errno = EINVAL;
+	return NULL;
+}
