@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "volume.h"
 
@@ -99,8 +100,8 @@ uint8_t brightness_threshold(const struct brightness_map *m, uint32_t k, uint32_
 void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], int n, double dx, double dz,
 			  struct brightness_weight *out)
 {
-	/* e = (-dz, 0, dx): the slice plane's normal. */
-	double cross = 0.0, len;
+	/* e = (-dz, 0, dx): the slice plane's normal. cross2 = p_cross^2. */
+	double cross2 = 0.0;
 	double t[3] = { v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2] };
 	bool segment = n == 2;
 	if (n == 3) {
@@ -108,36 +109,39 @@ void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], 
 		double nx = t[1] * a[2] - t[2] * a[1], ny = t[2] * a[0] - t[0] * a[2], nz = t[0] * a[1] - t[1] * a[0];
 		double n2 = nx * nx + ny * ny + nz * nz;
 		double l01 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], l02 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-		double b[3] = { v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2] };
-		double l12 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-		double longest = l01 > l02 ? (l01 > l12 ? l01 : l12) : (l02 > l12 ? l02 : l12);
-		if (n2 > 1e-12 * longest * longest) {
-			/* |n x e| / |n|: the normal's part in the plane. */
-			double ne = (-dz * nx + dx * nz);
-			double in_plane = n2 - ne * ne;
-			cross = sqrt(in_plane > 0.0 ? in_plane / n2 : 0.0);
+		/* |n|^2 = l01 l02 sin^2 of the angle at v0: no area when that
+		 * is tiny against the sides' lengths. */
+		if (n2 > 1e-12 * l01 * l02) {
+			/* |n x e|^2 / |n|^2: the normal's part in the plane. */
+			double ne = -dz * nx + dx * nz;
+			cross2 = (n2 - ne * ne) / n2;
 		} else { /* no area: its longest side */
+			double b[3] = { v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2] };
+			double l12 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
 			segment = true;
 			if (l02 >= l01 && l02 >= l12)
-				for (int e = 0; e < 3; e++)
-					t[e] = a[e];
+				memcpy(t, a, sizeof(t));
 			else if (l12 >= l01)
-				for (int e = 0; e < 3; e++)
-					t[e] = b[e];
+				memcpy(t, b, sizeof(t));
 		}
 	}
 	if (segment) {
-		len = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
-		if (!(len > 0.0)) {
+		double len2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], te = -dz * t[0] + dx * t[2];
+		if (!(len2 > 0.0)) {
 			*out = (struct brightness_weight){ m->line_rate, 1.0f, 1e30f };
 			return;
 		}
-		cross = fabs(-dz * t[0] + dx * t[2]) / len;
+		cross2 = te * te / len2;
 	}
-	double wall = sqrt(fmax(0.0, 1.0 - cross * cross));
+	cross2 = cross2 > 0.0 ? cross2 : 0.0;
 	out->rate = segment ? m->line_rate : m->rate;
-	out->kw = !segment && wall > m->wall ? (float)(m->wall / wall) : 1.0f;
-	out->inv_cross = cross > 1e-20 ? (float)fmin(1.0 / cross, 1e30) : 1e30f;
+	out->kw = 1.0f;
+	if (!segment && m->wall < 1.0f) { /* the uniform model's wall term */
+		double wall = sqrt(fmax(0.0, 1.0 - cross2));
+		if (wall > m->wall)
+			out->kw = (float)(m->wall / wall);
+	}
+	out->inv_cross = cross2 > 1e-40 ? (float)fmin(1.0 / sqrt(cross2), 1e30) : 1e30f;
 }
 
 int brightness_tables_init(struct brightness_tables *t, const struct brightness_map *m)

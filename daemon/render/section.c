@@ -162,6 +162,18 @@ static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool
 	if (!lit)
 		return;
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
+	if (lo == hi) { /* one pixel: most primitives of a dense mesh */
+		uint32_t t = row + lo / VOLUME_TILE, at = halftone_pos(lo % VOLUME_TILE);
+		uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES + at;
+		const uint8_t *sr = c->weighted + (lo & ~31u) + at;
+		for (int i = 0; i < 3; i++) {
+			uint8_t value = sr[(size_t)i * c->weighted_plane];
+			if (px[i * HALFTONE_PLANE_BYTES] < value)
+				px[i * HALFTONE_PLANE_BYTES] = value;
+		}
+		c->rows[t] |= 1u << y;
+		return;
+	}
 	for (uint32_t u = lo; u <= hi;) {
 		uint32_t t = row + u / VOLUME_TILE;
 		uint32_t pa = u % VOLUME_TILE, pb = (u | 31) < hi ? 31 : hi % VOLUME_TILE;
@@ -414,11 +426,21 @@ static void section_lobe_mirrored(struct section_canvas *c, const struct section
 	lobe_body(c, w, v, n, d1, d2, sign, rgb, wt, true);
 }
 
-/* The weights' state for v in w's image, or NULL when the model is EXACT. */
+/* The weights' state for v in w's image, or NULL when the model is EXACT
+ * or v lies wholly outside the band in this image (its pieces' s ranges lie
+ * within its vertices'). */
 static inline struct section_weight *weight_start(const struct section_canvas *c, const struct section_wedge *w,
 						  const double (*v)[3], int n, struct section_weight *wt)
 {
 	if (!c->bright || !brightness_active(c->bright))
+		return NULL;
+	double lo = INFINITY, hi = -INFINITY;
+	for (int i = 0; i < n; i++) {
+		double s = v[i][0] * w->dx + v[i][2] * w->dz;
+		lo = dmin(lo, s);
+		hi = dmax(hi, s);
+	}
+	if (hi < -c->bright->band_s || lo > c->bright->band_s)
 		return NULL;
 	*wt = (struct section_weight){ .m = c->bright, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
 	return wt;
