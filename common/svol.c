@@ -4,27 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void put32(uint8_t *p, uint32_t v)
-{
-	for (int i = 0; i < 4; i++)
-		p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static void put64(uint8_t *p, uint64_t v)
-{
-	for (int i = 0; i < 8; i++)
-		p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static uint32_t get32(const uint8_t *p)
-{
-	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-static uint64_t get64(const uint8_t *p)
-{
-	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
-}
+#include "le.h"
 
 void svol_header_encode(const struct svol_header *h, uint8_t out[SVOL_HEADER_SIZE])
 {
@@ -33,16 +13,16 @@ void svol_header_encode(const struct svol_header *h, uint8_t out[SVOL_HEADER_SIZ
 	memcpy(out, "SVOL", 4);
 	out[4] = SVOL_VERSION;
 	out[6] = SVOL_HEADER_SIZE;
-	put32(out + 8, h->width);
-	put32(out + 12, h->height);
-	put32(out + 16, h->image_count);
-	put32(out + 20, h->images_per_rev);
+	le_put32(out + 8, h->width);
+	le_put32(out + 12, h->height);
+	le_put32(out + 16, h->image_count);
+	le_put32(out + 20, h->images_per_rev);
 	out[24] = 3;
 	out[25] = h->flags;
 	memcpy(&hh, &h->half_height, 4);
-	put32(out + 28, hh);
-	put64(out + 32, h->seq);
-	put64(out + 40, h->shown_ns);
+	le_put32(out + 28, hh);
+	le_put64(out + 32, h->seq);
+	le_put64(out + 40, h->shown_ns);
 }
 
 int svol_header_decode(const uint8_t in[SVOL_HEADER_SIZE], struct svol_header *h)
@@ -50,16 +30,16 @@ int svol_header_decode(const uint8_t in[SVOL_HEADER_SIZE], struct svol_header *h
 	if (memcmp(in, "SVOL", 4) != 0 || in[4] != SVOL_VERSION || in[5] != 0 || in[6] != SVOL_HEADER_SIZE ||
 	    in[7] != 0 || in[24] != 3)
 		return -EINVAL;
-	uint32_t hh = get32(in + 28);
-	h->width = get32(in + 8);
-	h->height = get32(in + 12);
-	h->image_count = get32(in + 16);
-	h->images_per_rev = get32(in + 20);
+	uint32_t hh = le_get32(in + 28);
+	h->width = le_get32(in + 8);
+	h->height = le_get32(in + 12);
+	h->image_count = le_get32(in + 16);
+	h->images_per_rev = le_get32(in + 20);
 	h->planes = in[24];
 	h->flags = in[25];
 	memcpy(&h->half_height, &hh, 4);
-	h->seq = get64(in + 32);
-	h->shown_ns = get64(in + 40);
+	h->seq = le_get64(in + 32);
+	h->shown_ns = le_get64(in + 40);
 	uint32_t expect = (h->flags & SVOL_FLAG_MIRRORED) ? h->images_per_rev / 2 : h->images_per_rev;
 	if (h->image_count != expect)
 		return -EINVAL;

@@ -3,27 +3,7 @@
 #include <errno.h>
 #include <string.h>
 
-static void put32(uint8_t *p, uint32_t v)
-{
-	for (int i = 0; i < 4; i++)
-		p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static void put64(uint8_t *p, uint64_t v)
-{
-	for (int i = 0; i < 8; i++)
-		p[i] = (uint8_t)(v >> (8 * i));
-}
-
-static uint32_t get32(const uint8_t *p)
-{
-	return (uint32_t)p[0] | (uint32_t)p[1] << 8 | (uint32_t)p[2] << 16 | (uint32_t)p[3] << 24;
-}
-
-static uint64_t get64(const uint8_t *p)
-{
-	return (uint64_t)get32(p) | (uint64_t)get32(p + 4) << 32;
-}
+#include "le.h"
 
 static uint32_t padded_mask(uint32_t mask_bytes)
 {
@@ -43,25 +23,25 @@ void wvol_encode(const struct volume *vol, uint8_t *out)
 	memcpy(out, "SPWV", 4);
 	out[4] = WVOL_VERSION;
 	out[6] = WVOL_HEADER_SIZE;
-	put32(out + 8, vol->geom.width);
-	put32(out + 12, vol->geom.height);
-	put32(out + 16, vol->image_count);
-	put32(out + 20, vol->geom.images_per_rev);
+	le_put32(out + 8, vol->geom.width);
+	le_put32(out + 12, vol->geom.height);
+	le_put32(out + 16, vol->image_count);
+	le_put32(out + 20, vol->geom.images_per_rev);
 	out[24] = 3;
 	out[25] = vol->geom.mirrored ? WVOL_FLAG_MIRRORED : 0;
 	memcpy(&hh, &vol->geom.half_height, 4);
-	put32(out + 28, hh);
-	put64(out + 32, vol->seq);
-	put64(out + 40, vol->shown_ns);
-	put32(out + 48, vol->tiles_x);
-	put32(out + 52, vol->tiles_y);
-	put32(out + 56, vol->mask_bytes);
-	put32(out + 60, (uint32_t)volume_tile_count(vol));
+	le_put32(out + 28, hh);
+	le_put64(out + 32, vol->seq);
+	le_put64(out + 40, vol->shown_ns);
+	le_put32(out + 48, vol->tiles_x);
+	le_put32(out + 52, vol->tiles_y);
+	le_put32(out + 56, vol->mask_bytes);
+	le_put32(out + 60, (uint32_t)volume_tile_count(vol));
 	uint8_t *p = out + WVOL_HEADER_SIZE;
 	uint32_t mask = padded_mask(vol->mask_bytes);
 	for (uint32_t k = 0; k < vol->image_count; k++) {
 		const struct volume_image *img = &vol->images[k];
-		put32(p, img->tile_count);
+		le_put32(p, img->tile_count);
 		memset(p + 4, 0, mask);
 		memcpy(p + 4, img->mask, vol->mask_bytes);
 		p += 4 + mask;
@@ -85,32 +65,33 @@ struct volume *wvol_decode(const uint8_t *buf, size_t size)
 		return NULL;
 	}
 	struct geometry g = {
-		.width = get32(buf + 8),
-		.height = get32(buf + 12),
-		.images_per_rev = get32(buf + 20),
+		.width = le_get32(buf + 8),
+		.height = le_get32(buf + 12),
+		.images_per_rev = le_get32(buf + 20),
 		.mirrored = buf[25] & WVOL_FLAG_MIRRORED,
 		.rpm = 60.0f, /* not stored */
 	};
-	uint32_t hh = get32(buf + 28);
+	uint32_t hh = le_get32(buf + 28);
 	memcpy(&g.half_height, &hh, 4);
-	if (geometry_validate(&g) < 0 || get32(buf + 16) != geometry_images_per_volume(&g)) {
+	if (geometry_validate(&g) < 0 || le_get32(buf + 16) != geometry_images_per_volume(&g)) {
 		errno = EINVAL;
 		return NULL;
 	}
 	struct volume *vol = volume_create(&g);
 	if (!vol)
 		return NULL;
-	if (get32(buf + 48) != vol->tiles_x || get32(buf + 52) != vol->tiles_y || get32(buf + 56) != vol->mask_bytes)
+	if (le_get32(buf + 48) != vol->tiles_x || le_get32(buf + 52) != vol->tiles_y ||
+	    le_get32(buf + 56) != vol->mask_bytes)
 		goto invalid;
-	vol->seq = get64(buf + 32);
-	vol->shown_ns = get64(buf + 40);
+	vol->seq = le_get64(buf + 32);
+	vol->shown_ns = le_get64(buf + 40);
 	uint32_t per_image = volume_tiles_per_image(vol), mask = padded_mask(vol->mask_bytes);
 	const uint8_t *p = buf + WVOL_HEADER_SIZE, *end = buf + size;
 	uint64_t total = 0;
 	for (uint32_t k = 0; k < vol->image_count; k++) {
 		if ((size_t)(end - p) < 4 + (size_t)mask)
 			goto invalid;
-		uint32_t count = get32(p), bits = 0;
+		uint32_t count = le_get32(p), bits = 0;
 		const uint8_t *m = p + 4;
 		for (uint32_t i = 0; i < vol->mask_bytes; i++)
 			bits += volume_mask_bits(m[i]);
@@ -131,7 +112,7 @@ struct volume *wvol_decode(const uint8_t *buf, size_t size)
 		}
 		total += count;
 	}
-	if (p != end || total != get32(buf + 60))
+	if (p != end || total != le_get32(buf + 60))
 		goto invalid;
 	return vol;
 invalid:

@@ -158,30 +158,10 @@ int gl_pack_collect(struct render_gl *r, struct gl_batch *out)
 	return err;
 }
 
-/* halftone_rgba_image() against brightness_threshold(): the ordered dither
- * outside m's band, its Bresenham pattern inside. */
-static int halftone_rgba_bright(struct volume *vol, const struct brightness_map *m, uint32_t k, const uint8_t *rgba)
+/* brightness_threshold() as halftone_rgba_with() takes it. */
+static uint8_t bright_threshold(const void *ctx, uint32_t k, uint32_t u, uint32_t v)
 {
-	const struct geometry *g = &vol->geom;
-	uint8_t tile[VOLUME_TILE_BYTES];
-	for (uint32_t t = 0; t < volume_tiles_per_image(vol); t++) {
-		uint32_t u0 = t % vol->tiles_x * VOLUME_TILE, v0 = t / vol->tiles_x * VOLUME_TILE;
-		memset(tile, 0, sizeof(tile));
-		for (uint32_t y = 0; y < VOLUME_TILE && v0 + y < g->height; y++) {
-			for (uint32_t x = 0; x < VOLUME_TILE && u0 + x < g->width; x++) {
-				const uint8_t *px = rgba + ((size_t)(v0 + y) * g->width + u0 + x) * 4;
-				uint8_t thr = brightness_threshold(m, k, u0 + x, v0 + y);
-				for (int c = 0; c < 3; c++)
-					if (px[c] > thr)
-						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |=
-							(uint8_t)(0x80u >> (x % 8));
-			}
-		}
-		int e = volume_image_append(vol, k, t, tile);
-		if (e < 0)
-			return e;
-	}
-	return 0;
+	return brightness_threshold(ctx, k, u, v);
 }
 
 /* The naive pipeline's back end: the whole RGBA image read back,
@@ -195,7 +175,7 @@ int gl_pack_naive(struct render_gl *r, uint32_t k)
 	gl->ReadPixels(0, 0, (GLsizei)g->width, (GLsizei)g->height, GL_RGBA, GL_UNSIGNED_BYTE, r->rgba);
 	uint64_t t1 = (uint64_t)now_ns();
 	r->wait_ns += t1 - t0;
-	int e = r->bright_on ? halftone_rgba_bright(r->vol, &r->bright, k, r->rgba)
+	int e = r->bright_on ? halftone_rgba_with(r->vol, k, r->rgba, bright_threshold, &r->bright)
 			     : halftone_rgba_image(r->vol, k, r->rgba);
 	if (e < 0)
 		return e;

@@ -172,7 +172,8 @@ halftone_fn halftone_pick(const char *name)
 	return NULL;
 }
 
-int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
+int halftone_rgba_with(struct volume *vol, uint32_t k, const uint8_t *rgba, halftone_threshold_fn threshold,
+		       const void *ctx)
 {
 	const struct geometry *g = &vol->geom;
 	uint8_t tile[VOLUME_TILE_BYTES];
@@ -182,7 +183,7 @@ int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
 		for (uint32_t y = 0; y < VOLUME_TILE && v0 + y < g->height; y++) {
 			for (uint32_t x = 0; x < VOLUME_TILE && u0 + x < g->width; x++) {
 				const uint8_t *px = rgba + ((size_t)(v0 + y) * g->width + u0 + x) * 4;
-				uint8_t thr = halftone_threshold(k, u0 + x, v0 + y);
+				uint8_t thr = threshold(ctx, k, u0 + x, v0 + y);
 				for (int c = 0; c < 3; c++)
 					if (px[c] > thr)
 						tile[c * VOLUME_TILE_PLANE_BYTES + y * 4 + x / 8] |=
@@ -194,4 +195,15 @@ int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
 			return e;
 	}
 	return 0;
+}
+
+static uint8_t ordered_threshold(const void *ctx, uint32_t k, uint32_t u, uint32_t v)
+{
+	(void)ctx;
+	return halftone_threshold(k, u, v);
+}
+
+int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
+{
+	return halftone_rgba_with(vol, k, rgba, ordered_threshold, NULL);
 }

@@ -62,4 +62,10 @@ halftone_fn halftone_pick(const char *name);
 struct volume;
 int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba);
 
+/* The same against another threshold (a brightness model's, brightness.h):
+ * threshold(ctx, k, u, v). */
+typedef uint8_t (*halftone_threshold_fn)(const void *ctx, uint32_t k, uint32_t u, uint32_t v);
+int halftone_rgba_with(struct volume *vol, uint32_t k, const uint8_t *rgba, halftone_threshold_fn threshold,
+		       const void *ctx);
+
 #endif
