@@ -18,12 +18,12 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "le.h"
 #include "log.h"
 #include "proj_usb_priv.h"
 #include "projector.h"
 #include "projwire.h"
 #include "usb_transport.h"
-#include "wire_le.h"
 
 #define KEEPALIVE_NS 500000000LL /* the device darkens after 2 s of silence */
 #define STATUS_DARK_NS 1000000000LL

@@ -7,7 +7,7 @@
 #include <string.h>
 #include <zlib.h>
 
-#include "wire_le.h"
+#include "le.h"
 
 static const struct {
 	uint32_t code;

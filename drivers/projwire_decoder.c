@@ -15,8 +15,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "le.h"
 #include "projwire.h"
-#include "wire_le.h"
 
 enum dec_state {
 	DEC_HEADER, /* collecting a record header */

@@ -10,12 +10,12 @@
 #include <string.h>
 
 #include "check.h"
+#include "le.h"
 #include "log.h"
 #include "proj_sim_dev.h"
 #include "projector.h"
 #include "sim_rotor.h"
 #include "volume_util.h"
-#include "wire_le.h"
 
 static const struct geometry geom = {
 	.width = 96,

@@ -5,9 +5,9 @@
 #include <string.h>
 
 #include "check.h"
+#include "le.h"
 #include "projwire.h"
 #include "volume_util.h"
-#include "wire_le.h"
 
 #define BUFFERS 3
 
