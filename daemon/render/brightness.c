@@ -78,9 +78,11 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 		}
 	}
 	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
-	if (brightness_active(m))
+	if (brightness_active(m)) {
 		m->band_s =
 			fmax(fabs(2.0 * m->band_lo / g->width - 1.0), fabs(2.0 * (m->band_hi + 1) / g->width - 1.0));
+		m->band_d = 2.0 * sin(M_PI / g->images_per_rev) * m->band_s * (1.0 + 1e-9) + 1e-12;
+	}
 	return 0;
 }
 

@@ -50,6 +50,9 @@ struct brightness_map {
 	uint32_t band_lo; /* columns band_lo..band_hi are thinned (rate < 1 or */
 	uint32_t band_hi; /* wall < 1); band_lo > band_hi: none (EXACT) */
 	double band_s;    /* |s| of the band's outer column edges (s = p . d_k) */
+	double band_d;    /* 2 sin(pi / N) band_s (and a hair): the same against
+			   * the sum of a point's distances to a wedge's two
+			   * planes, which is 2 sin(pi / N) s (section.c) */
 	float wall;       /* the weight of a primitive lying in the plane */
 	float *rate;      /* per column: n[u] / M (UNIFORM: d r_u D) */
 	float *line_rate; /* per column: segments' rate (EVEN's) */

@@ -428,19 +428,20 @@ static void section_lobe_mirrored(struct section_canvas *c, const struct section
 
 /* The weights' state for v in w's image, or NULL when the model is EXACT
  * or v lies wholly outside the band in this image (its pieces' s ranges lie
- * within its vertices'). */
+ * within its vertices'; d1[i] + d2[i], the distances to the wedge's planes,
+ * is 2 sin(D / 2) s of vertex i: brightness_map.band_d). */
 static inline struct section_weight *weight_start(const struct section_canvas *c, const struct section_wedge *w,
-						  const double (*v)[3], int n, struct section_weight *wt)
+						  const double (*v)[3], int n, const double *d1, const double *d2,
+						  struct section_weight *wt)
 {
 	if (!c->bright || !brightness_active(c->bright))
 		return NULL;
 	double lo = INFINITY, hi = -INFINITY;
 	for (int i = 0; i < n; i++) {
-		double s = v[i][0] * w->dx + v[i][2] * w->dz;
-		lo = dmin(lo, s);
-		hi = dmax(hi, s);
+		lo = dmin(lo, d1[i] + d2[i]);
+		hi = dmax(hi, d1[i] + d2[i]);
 	}
-	if (hi < -c->bright->band_s || lo > c->bright->band_s)
+	if (hi < -c->bright->band_d || lo > c->bright->band_d)
 		return NULL;
 	*wt = (struct section_weight){ .m = c->bright, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
 	return wt;
@@ -454,7 +455,7 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w, const
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	struct section_weight state, *wt = weight_start(c, w, v, n, &state);
+	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
 	section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
 	section_lobe(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }
@@ -471,7 +472,7 @@ void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	struct section_weight state, *wt = weight_start(c, w, v, n, &state);
+	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
 	section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
 	section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }
