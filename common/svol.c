@@ -51,9 +51,9 @@ uint64_t svol_file_size(const struct svol_header *h)
 	return SVOL_HEADER_SIZE + (uint64_t)h->image_count * 3 * h->height * ((h->width + 7) / 8);
 }
 
-int svol_write(FILE *f, const struct volume *vol)
+static struct svol_header header_of(const struct volume *vol)
 {
-	struct svol_header h = {
+	return (struct svol_header){
 		.width = vol->geom.width,
 		.height = vol->geom.height,
 		.image_count = vol->image_count,
@@ -64,6 +64,26 @@ int svol_write(FILE *f, const struct volume *vol)
 		.seq = vol->seq,
 		.shown_ns = vol->shown_ns,
 	};
+}
+
+uint64_t svol_size(const struct volume *vol)
+{
+	struct svol_header h = header_of(vol);
+	return svol_file_size(&h);
+}
+
+void svol_encode(const struct volume *vol, uint8_t *out)
+{
+	struct svol_header h = header_of(vol);
+	svol_header_encode(&h, out);
+	out += SVOL_HEADER_SIZE;
+	for (uint32_t k = 0; k < vol->image_count; k++, out += volume_dense_image_bytes(vol))
+		volume_image_to_dense(vol, k, out);
+}
+
+int svol_write(FILE *f, const struct volume *vol)
+{
+	struct svol_header h = header_of(vol);
 	uint8_t hdr[SVOL_HEADER_SIZE];
 	svol_header_encode(&h, hdr);
 	if (fwrite(hdr, 1, sizeof(hdr), f) != sizeof(hdr))

@@ -32,6 +32,11 @@ int svol_header_decode(const uint8_t in[SVOL_HEADER_SIZE], struct svol_header *h
 /* Size of the whole file described by h. */
 uint64_t svol_file_size(const struct svol_header *h);
 
+/* Bytes of vol as an .svol file, and the file written into out (which has
+ * that many). */
+uint64_t svol_size(const struct volume *vol);
+void svol_encode(const struct volume *vol, uint8_t *out);
+
 /* Writes vol as an .svol stream. Returns 0 or negative errno. */
 int svol_write(FILE *f, const struct volume *vol);
 

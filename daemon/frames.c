@@ -1,14 +1,11 @@
 #include "frames.h"
 
 #include <errno.h>
-#include <fcntl.h>
-#include <stdio.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include "log.h"
+#include "sealed.h"
 #include "svol.h"
 
 void frames_init(struct frames *f, const struct frames_listener *listener, void *data)
@@ -108,38 +105,18 @@ bool frames_capture_waiting(const struct frames *f)
 	return !link_empty(&f->captures);
 }
 
-/* The volume as an .svol file in a sealed memfd. -errno on failure. */
-static int svol_memfd(const struct volume *vol, uint64_t *size)
+/* svol_encode() as sealed_memfd() calls it. */
+static void fill_svol(const void *vol, uint8_t *out)
 {
-	int fd = memfd_create("spindle-capture", MFD_CLOEXEC | MFD_ALLOW_SEALING);
-	if (fd < 0)
-		return -errno;
-	int dup = fcntl(fd, F_DUPFD_CLOEXEC, 3);
-	FILE *f = dup >= 0 ? fdopen(dup, "w") : NULL;
-	int r = f ? svol_write(f, vol) : -errno;
-	if (f && fclose(f) != 0 && r == 0)
-		r = -EIO;
-	if (!f && dup >= 0)
-		close(dup);
-	struct stat st;
-	if (r == 0 && fstat(fd, &st) < 0)
-		r = -errno;
-	if (r == 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) < 0)
-		r = -errno;
-	if (r < 0) {
-		close(fd);
-		return r;
-	}
-	*size = (uint64_t)st.st_size;
-	return fd;
+	svol_encode(vol, out);
 }
 
 void frames_serve_captures(struct frames *f, const struct volume *shown)
 {
 	if (!shown || link_empty(&f->captures))
 		return;
-	uint64_t size = 0;
-	int fd = svol_memfd(shown, &size);
+	uint64_t size = svol_size(shown);
+	int fd = sealed_memfd("spindle-capture", size, fill_svol, shown);
 	if (fd < 0)
 		log_error("capture failed: %s", strerror(-fd));
 	struct waiter *w, *tmp;

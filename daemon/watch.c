@@ -1,12 +1,11 @@
 #include "watch.h"
 
 #include <errno.h>
-#include <fcntl.h>
 #include <string.h>
-#include <sys/mman.h>
 #include <unistd.h>
 
 #include "log.h"
+#include "sealed.h"
 #include "volume.h"
 #include "wvol.h"
 
@@ -69,33 +68,10 @@ void watch_release(struct watch *wt, struct watch_entry *w)
 	wt->listener->wake(wt->data);
 }
 
-/* The volume as a watch volume in a sealed memfd. -errno on failure. */
-static int wvol_memfd(const struct volume *vol, uint64_t *size)
+/* wvol_encode() as sealed_memfd() calls it. */
+static void fill_wvol(const void *vol, uint8_t *out)
 {
-	int fd = memfd_create("spindle-watch", MFD_CLOEXEC | MFD_ALLOW_SEALING);
-	if (fd < 0)
-		return -errno;
-	uint64_t n = wvol_size(vol);
-	int r = 0;
-	if (ftruncate(fd, (off_t)n) < 0) {
-		r = -errno;
-	} else {
-		void *p = mmap(NULL, n, PROT_READ | PROT_WRITE, MAP_SHARED, fd, 0);
-		if (p == MAP_FAILED) {
-			r = -errno;
-		} else {
-			wvol_encode(vol, p);
-			munmap(p, n);
-		}
-	}
-	if (r == 0 && fcntl(fd, F_ADD_SEALS, F_SEAL_SHRINK | F_SEAL_GROW | F_SEAL_WRITE | F_SEAL_SEAL) < 0)
-		r = -errno;
-	if (r < 0) {
-		close(fd);
-		return r;
-	}
-	*size = n;
-	return fd;
+	wvol_encode(vol, out);
 }
 
 /* The encoding of vol, made once per volume. */
@@ -105,7 +81,8 @@ static int encoding(struct watch *wt, const struct volume *vol)
 		return wt->fd;
 	if (wt->fd >= 0)
 		close(wt->fd);
-	wt->fd = wvol_memfd(vol, &wt->fd_size);
+	wt->fd_size = wvol_size(vol);
+	wt->fd = sealed_memfd("spindle-watch", wt->fd_size, fill_wvol, vol);
 	if (wt->fd < 0) {
 		int r = wt->fd;
 		log_error("watch: cannot encode volume %llu: %s", (unsigned long long)vol->seq, strerror(-r));
