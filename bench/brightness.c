@@ -26,6 +26,7 @@
 
 #include <spindle/spindle.h>
 
+#include "brightness_shapes.h"
 #include "light_profile.h"
 
 static const char prog[] = "spindle-bench-brightness";
@@ -35,14 +36,6 @@ static const char prog[] = "spindle-bench-brightness";
 #define UNIFORM_LIMIT 1.5 /* brightest / dimmest band or tube from 2 px to the rim */
 #define EXACT_GLOW 3.0    /* the disk's 2-4 px band over its r0 band, at least */
 #define FROM_PX 2.0       /* bands and tubes from here out are judged */
-
-/* Longest edge of a triangle of the disk and the sphere, and the grid of
- * the wall, in pixels; tube facets are at most TUBE_FACET_PX wide. */
-#define MESH_STEP_PX 4.0
-#define TUBE_FACET_PX 0.5
-/* Edges of the wall and tubes lie this far inside a row's boundary, so
- * that they light whole rows and no more. */
-#define ROW_INSET_PX 0.05
 
 enum shape { SHAPE_DISK, SHAPE_WALL, SHAPE_TUBES, SHAPE_RING, SHAPE_SPHERE, SHAPE_COUNT };
 
@@ -54,162 +47,7 @@ static const char *const shape_names[SHAPE_COUNT] = { "disk", "wall", "tubes", "
 #define ALL_SHAPES ((1u << SHAPE_COUNT) - 1)
 
 enum check { CHECK_NONE = -1, CHECK_EXACT, CHECK_EVEN, CHECK_UNIFORM };
-
-/* ---- meshes ---- */
-
-struct mesh {
-	float *v; /* xyz */
-	size_t n, cap;
-	bool failed;
-};
-
-static void vertex(struct mesh *m, double x, double y, double z)
-{
-	if (m->n == m->cap) {
-		size_t cap = m->cap ? 2 * m->cap : 4096;
-		float *v = realloc(m->v, cap * 3 * sizeof(float));
-		if (!v) {
-			m->failed = true;
-			return;
-		}
-		m->v = v;
-		m->cap = cap;
-	}
-	m->v[3 * m->n] = (float)x;
-	m->v[3 * m->n + 1] = (float)y;
-	m->v[3 * m->n + 2] = (float)z;
-	m->n++;
-}
-
-/* Point i of a horizontal ring of m points, radius r, at height y. The same
- * i always gives the same point, so that stitched rings share vertices. */
-static void ring_vertex(struct mesh *mesh, double r, double y, unsigned m, unsigned i)
-{
-	double a = 2.0 * M_PI * (i % m) / m;
-	vertex(mesh, r * cos(a), y, r * sin(a));
-}
-
-/* Triangles between two rings of ma and mb points (a ring of one point is
- * a pole or the centre), walking both by angle. */
-static void stitch(struct mesh *mesh, double ra, double ya, unsigned ma, double rb, double yb, unsigned mb)
-{
-	unsigned i = 0, j = 0;
-	while (i < ma || j < mb) {
-		bool advance_a = j == mb || (i < ma && (uint64_t)(i + 1) * mb < (uint64_t)(j + 1) * ma);
-		if (advance_a ? ma > 1 : mb > 1) {
-			ring_vertex(mesh, ra, ya, ma, i);
-			ring_vertex(mesh, rb, yb, mb, j);
-			if (advance_a)
-				ring_vertex(mesh, ra, ya, ma, i + 1);
-			else
-				ring_vertex(mesh, rb, yb, mb, j + 1);
-		}
-		if (advance_a)
-			i++;
-		else
-			j++;
-	}
-}
-
-static unsigned ring_points(double r_px)
-{
-	unsigned m = (unsigned)ceil(2.0 * M_PI * r_px / MESH_STEP_PX);
-	return r_px > 0.0 ? (m < 8 ? 8 : m) : 1;
-}
-
-struct device {
-	uint32_t w, h, n;
-	bool mirrored;
-	double half_height;
-	double r0;    /* pixels */
-	double px;    /* volume units per horizontal pixel, 2 / W */
-	double row;   /* volume units per row, 2h / H */
-	double y_mid; /* the middle of row H/2 */
-	/* The wall's and the tubes' extent: rows v0 .. v1 - 1, whole. */
-	uint32_t v0, v1;
-	double y_top, y_bottom;
-};
-
-static double row_y(const struct device *d, double v)
-{
-	return d->half_height - v * d->row;
-}
-
-/* Horizontal disk of radius 1 at the middle of row H/2: rings MESH_STEP_PX
- * apart, each with points MESH_STEP_PX apart. */
-static void disk_mesh(struct mesh *m, const struct device *d)
-{
-	double rim = d->w / 2.0;
-	unsigned rings = (unsigned)ceil(rim / MESH_STEP_PX);
-	for (unsigned i = 0; i < rings; i++) {
-		double a = i * MESH_STEP_PX, b = i + 1 == rings ? rim : (i + 1) * MESH_STEP_PX;
-		stitch(m, a * d->px, d->y_mid, ring_points(a), b * d->px, d->y_mid, ring_points(b));
-	}
-}
-
-/* Vertical rectangle through the axis at azimuth theta, s from -1 to 1,
- * rows v0 .. v1 - 1: a grid of cells at most MESH_STEP_PX square. */
-static void wall_mesh(struct mesh *m, const struct device *d, double theta)
-{
-	unsigned ns = 2 * (unsigned)ceil(d->w / 2.0 / MESH_STEP_PX); /* even: s = 0 is a grid line */
-	unsigned nv = (unsigned)ceil((d->v1 - d->v0) / MESH_STEP_PX);
-	double c = cos(theta), sn = sin(theta);
-	for (unsigned i = 0; i < ns; i++)
-		for (unsigned j = 0; j < nv; j++) {
-			double s0 = -1.0 + 2.0 * i / ns, s1 = -1.0 + 2.0 * (i + 1) / ns;
-			double y0 = d->y_top + (d->y_bottom - d->y_top) * j / nv;
-			double y1 = d->y_top + (d->y_bottom - d->y_top) * (j + 1) / nv;
-			static const int quad[6][2] = { { 0, 0 }, { 1, 0 }, { 1, 1 }, { 0, 0 }, { 1, 1 }, { 0, 1 } };
-			for (int k = 0; k < 6; k++) {
-				double s = quad[k][0] ? s1 : s0, y = quad[k][1] ? y1 : y0;
-				vertex(m, s * c, y, s * sn);
-			}
-		}
-}
-
-/* Vertical cylinder of radius r_px pixels over rows v0 .. v1 - 1, facets at
- * most TUBE_FACET_PX wide, each two triangles the tube's height. */
-static void tube_mesh(struct mesh *m, const struct device *d, double r_px)
-{
-	unsigned f = (unsigned)ceil(2.0 * M_PI * r_px / TUBE_FACET_PX);
-	if (f < 16)
-		f = 16;
-	double r = r_px * d->px;
-	for (unsigned i = 0; i < f; i++) {
-		ring_vertex(m, r, d->y_top, f, i);
-		ring_vertex(m, r, d->y_bottom, f, i);
-		ring_vertex(m, r, d->y_bottom, f, i + 1);
-		ring_vertex(m, r, d->y_top, f, i);
-		ring_vertex(m, r, d->y_bottom, f, i + 1);
-		ring_vertex(m, r, d->y_top, f, i + 1);
-	}
-}
-
-/* Sphere of radius r_px pixels centred on the axis: rings of latitude
- * MESH_STEP_PX apart along the surface, stitched. */
-static void sphere_mesh(struct mesh *m, const struct device *d, double r_px)
-{
-	unsigned lat = (unsigned)ceil(M_PI * r_px / MESH_STEP_PX);
-	if (lat < 8)
-		lat = 8;
-	double r = r_px * d->px;
-	for (unsigned i = 0; i < lat; i++) {
-		double t0 = M_PI * i / lat, t1 = M_PI * (i + 1) / lat;
-		double ra = i == 0 ? 0.0 : r * sin(t0), rb = i + 1 == lat ? 0.0 : r * sin(t1);
-		stitch(m, ra, r * cos(t0), ring_points(ra / d->px), rb, r * cos(t1), ring_points(rb / d->px));
-	}
-}
-
-/* Horizontal circle of radius r_px at the middle of row H/2 as a closed
- * line strip, segments about a pixel long. */
-static void ring_mesh(struct mesh *m, const struct device *d, double r_px)
-{
-	unsigned n = (unsigned)ceil(2.0 * M_PI * r_px);
-	if (n < 32)
-		n = 32;
-	for (unsigned i = 0; i <= n; i++)
-		ring_vertex(m, r_px * d->px, d->y_mid, n, i);
-}
+static const char *const check_names[] = { "exact", "even", "uniform" };
 
 /* ---- measuring ---- */
 
@@ -224,7 +62,7 @@ struct result {
 struct run {
 	struct spindle *sp;
 	struct spindle_layer *layer;
-	struct device dev;
+	struct light_device dev;
 	struct result *results;
 	size_t count, cap;
 };
@@ -237,24 +75,24 @@ static void report(struct spindle *sp, const char *what, int err)
 
 /* Shows the mesh alone (white), captures the next volume shown, removes
  * it and profiles the capture as ls. 0 or -errno (reported). */
-static int measure(struct run *run, const struct mesh *m, enum spindle_mode mode, const struct light_shape *ls,
+static int measure(struct run *run, const struct vbuf *m, enum spindle_mode mode, const struct light_shape *ls,
 		   struct light_profile *prof)
 {
 	struct spindle *sp = run->sp;
-	if (m->failed || m->n == 0) {
+	if (m->oom || m->count == 0) {
 		report(NULL, "building a shape", ENOMEM);
 		return -ENOMEM;
 	}
 	int fd = -1;
 	size_t size = 0;
 	void *data = MAP_FAILED;
-	struct spindle_buffer *buf = spindle_buffer_create(sp, m->v, m->n * 3 * sizeof(float));
+	struct spindle_buffer *buf = spindle_buffer_create(sp, m->xyz, m->count * 3 * sizeof(float));
 	struct spindle_list *list = buf ? spindle_list_create(sp) : NULL;
 	int r = list ? 0 : -errno;
 	if (r == 0)
 		r = spindle_list_set_color(list, 255, 255, 255, 255);
 	if (r == 0)
-		r = spindle_list_draw(list, mode, buf, 0, (uint32_t)m->n, 0);
+		r = spindle_list_draw(list, mode, buf, 0, m->count, 0);
 	if (r == 0)
 		r = spindle_layer_set_list(run->layer, list);
 	if (r == 0)
@@ -329,7 +167,7 @@ static int cmp_double(const void *a, const void *b)
 
 /* The tubes' radii: 2.5, 4, 6, 10, 16, r0, 2 r0, 4 r0, ... below the rim,
  * sorted, each moved to its column's centre. */
-static size_t tube_radii(const struct device *d, double nominal[], size_t max)
+static size_t tube_radii(const struct light_device *d, double nominal[], size_t max)
 {
 	static const double fixed[] = { 2.5, 4, 6, 10, 16 };
 	size_t n = 0;
@@ -348,8 +186,8 @@ static size_t tube_radii(const struct device *d, double nominal[], size_t max)
 
 static int run_shape(struct run *run, enum shape shape)
 {
-	const struct device *d = &run->dev;
-	struct mesh m = { 0 };
+	const struct light_device *d = &run->dev;
+	struct vbuf m = { 0 };
 	int r = 0;
 	if (shape == SHAPE_TUBES) {
 		double nominal[32];
@@ -363,11 +201,11 @@ static int run_shape(struct run *run, enum shape shape)
 			res->radius_px = column_centre(nominal[i]);
 			res->ls = (struct light_shape){ LIGHT_SHAPE_TUBE, res->radius_px * d->px,
 							d->y_top - d->y_bottom };
-			m.n = 0;
-			tube_mesh(&m, d, res->radius_px);
+			m.count = 0;
+			light_shape_tube(&m, d, res->radius_px);
 			r = measure(run, &m, SPINDLE_TRIANGLES, &res->ls, &res->prof);
 		}
-		free(m.v);
+		vbuf_free(&m);
 		return r;
 	}
 	struct result *res = add_result(run);
@@ -379,7 +217,7 @@ static int run_shape(struct run *run, enum shape shape)
 	case SHAPE_DISK:
 		res->ls = (struct light_shape){ LIGHT_SHAPE_DISK, 1.0, 0.0 };
 		res->radius_px = d->w / 2.0;
-		disk_mesh(&m, d);
+		light_shape_disk(&m, d);
 		break;
 	case SHAPE_WALL: {
 		/* The centre of image j: it lies in that one slice. */
@@ -387,14 +225,14 @@ static int run_shape(struct run *run, enum shape shape)
 		res->ls = (struct light_shape){ LIGHT_SHAPE_WALL, 1.0, d->y_top - d->y_bottom };
 		res->radius_px = d->w / 2.0;
 		res->nominal_px = j; /* the image */
-		wall_mesh(&m, d, 2.0 * M_PI * j / d->n);
+		light_shape_wall(&m, d, 2.0 * M_PI * j / d->n);
 		break;
 	}
 	case SHAPE_RING:
 		res->nominal_px = 0.5 * d->w / 2.0;
 		res->radius_px = column_centre(res->nominal_px);
 		res->ls = (struct light_shape){ LIGHT_SHAPE_RING, res->radius_px * d->px, 0.0 };
-		ring_mesh(&m, d, res->radius_px);
+		light_shape_ring(&m, d, res->radius_px);
 		mode = SPINDLE_LINE_STRIP;
 		break;
 	case SHAPE_SPHERE: {
@@ -402,14 +240,14 @@ static int run_shape(struct run *run, enum shape shape)
 		res->nominal_px = radius * d->w / 2.0;
 		res->radius_px = column_centre(res->nominal_px);
 		res->ls = (struct light_shape){ LIGHT_SHAPE_SPHERE, res->radius_px * d->px, 0.0 };
-		sphere_mesh(&m, d, res->radius_px);
+		light_shape_sphere(&m, d, res->radius_px);
 		break;
 	}
 	default:
 		break;
 	}
 	r = measure(run, &m, mode, &res->ls, &res->prof);
-	free(m.v);
+	vbuf_free(&m);
 	return r;
 }
 
@@ -449,7 +287,7 @@ static void consider(struct summary *s, const struct result *res, int band, doub
 	s->values++;
 }
 
-static void summarise(struct run *run, struct summary *s)
+static void summarise(const struct run *run, struct summary *s)
 {
 	memset(s, 0, sizeof(*s));
 	double r0 = run->dev.r0, sum = 0.0;
@@ -574,7 +412,7 @@ static bool check(const struct run *run, const struct summary *s, enum check c, 
 
 static void print_table(const struct run *run, enum shape shape)
 {
-	const struct device *d = &run->dev;
+	const struct light_device *d = &run->dev;
 	if (shape == SHAPE_TUBES || shape == SHAPE_RING) {
 		if (shape == SHAPE_TUBES)
 			printf("tubes: vertical cylinders about the axis, rows %u-%u (%.2f px high), each at the "
@@ -683,7 +521,7 @@ static void json_number(double v)
 static void print_json(const struct run *run, const struct summary *s, unsigned shapes, int c, bool passed,
 		       const char *msg)
 {
-	const struct device *d = &run->dev;
+	const struct light_device *d = &run->dev;
 	printf("{\"device\":{\"width\":%u,\"height\":%u,\"images_per_rev\":%u,\"mirrored\":%s,\"half_height\":", d->w,
 	       d->h, d->n, d->mirrored ? "true" : "false");
 	json_number(d->half_height);
@@ -757,8 +595,8 @@ static void print_json(const struct run *run, const struct summary *s, unsigned 
 	printf(",\"mean\":");
 	json_number(s->values ? s->mean : NAN);
 	if (c != CHECK_NONE) {
-		static const char *const names[] = { "exact", "even", "uniform" };
-		printf(",\"check\":{\"mode\":\"%s\",\"passed\":%s,\"message\":\"", names[c], passed ? "true" : "false");
+		printf(",\"check\":{\"mode\":\"%s\",\"passed\":%s,\"message\":\"", check_names[c],
+		       passed ? "true" : "false");
 		for (const char *p = msg; *p; p++)
 			printf(*p == '"' || *p == '\\' ? "\\%c" : "%c", *p);
 		printf("\"}");
@@ -805,131 +643,115 @@ static int parse_shapes(const char *list, unsigned *out)
 	return r < 0 ? r : mask ? 0 : -EINVAL;
 }
 
-int main(int argc, char **argv)
+/* The command line. */
+struct args {
+	const char *socket;
+	unsigned shapes;
+	bool json;
+	int check; /* enum check */
+};
+
+/* Returns 0 to run, or the exit status (0 for --help). */
+static int parse_args(int argc, char **argv, struct args *a)
 {
 	static const struct option longopts[] = {
 		{ "socket", required_argument, NULL, 's' }, { "shapes", required_argument, NULL, 'S' },
 		{ "json", no_argument, NULL, 'j' },         { "check", required_argument, NULL, 'c' },
 		{ "help", no_argument, NULL, 'h' },         { NULL, 0, NULL, 0 },
 	};
-	const char *socket = NULL;
-	unsigned shapes = DEFAULT_SHAPES;
-	bool json = false;
-	int c = CHECK_NONE, opt;
+	*a = (struct args){ .shapes = DEFAULT_SHAPES, .check = CHECK_NONE };
+	int opt;
 	while ((opt = getopt_long(argc, argv, "h", longopts, NULL)) != -1) {
-		switch (opt) {
-		case 's':
-			socket = optarg;
-			break;
-		case 'S':
-			if (parse_shapes(optarg, &shapes) < 0) {
+		if (opt == 's') {
+			a->socket = optarg;
+		} else if (opt == 'S') {
+			if (parse_shapes(optarg, &a->shapes) < 0) {
 				fprintf(stderr, "%s: --shapes: unknown shape in '%s'\n", prog, optarg);
 				return 2;
 			}
-			break;
-		case 'j':
-			json = true;
-			break;
-		case 'c':
-			if (!strcmp(optarg, "exact"))
-				c = CHECK_EXACT;
-			else if (!strcmp(optarg, "even"))
-				c = CHECK_EVEN;
-			else if (!strcmp(optarg, "uniform"))
-				c = CHECK_UNIFORM;
-			else {
+		} else if (opt == 'j') {
+			a->json = true;
+		} else if (opt == 'c') {
+			for (a->check = 2; a->check >= 0 && strcmp(optarg, check_names[a->check]); a->check--)
+				;
+			if (a->check < 0) {
 				fprintf(stderr, "%s: --check: one of exact, even, uniform\n", prog);
 				return 2;
 			}
-			break;
-		case 'h':
-			usage(stdout);
-			return 0;
-		default:
-			usage(stderr);
-			return 2;
+		} else {
+			usage(opt == 'h' ? stdout : stderr);
+			return opt == 'h' ? 0 : 2;
 		}
 	}
-	if (optind < argc) {
-		usage(stderr);
-		return 2;
-	}
-	if (c == CHECK_EXACT && !(shapes & (1u << SHAPE_DISK))) {
+	if (optind < argc)
+		return usage(stderr), 2;
+	if (a->check == CHECK_EXACT && !(a->shapes & (1u << SHAPE_DISK))) {
 		fprintf(stderr, "%s: --check exact needs the disk among the shapes\n", prog);
 		return 2;
 	}
-	if (c == CHECK_UNIFORM && !(shapes & ALL_SHAPES & ~(1u << SHAPE_RING))) {
+	if (a->check == CHECK_UNIFORM && !(a->shapes & ALL_SHAPES & ~(1u << SHAPE_RING))) {
 		fprintf(stderr, "%s: --check uniform needs a surface among the shapes\n", prog);
 		return 2;
 	}
+	return -1;
+}
 
+/* Prints what was measured and checks it; 0, or 1 when the check failed. */
+static int report_run(const struct run *run, const struct args *a)
+{
+	const struct light_device *d = &run->dev;
+	struct summary s;
+	char msg[1024] = "";
+	summarise(run, &s);
+	bool passed = a->check == CHECK_NONE || check(run, &s, (enum check)a->check, a->shapes, msg, sizeof(msg));
+	if (a->json) {
+		print_json(run, &s, a->shapes, a->check, passed, msg);
+	} else {
+		printf("%ux%u, N = %u%s, h = %g, r0 = %.2f px; light/area: lit voxels (any channel, every "
+		       "image of the capture) per px^2 of surface\n\n",
+		       d->w, d->h, d->n, d->mirrored ? " mirrored" : "", d->half_height, d->r0);
+		for (int sh = 0; sh < SHAPE_COUNT; sh++)
+			if (a->shapes & (1u << sh))
+				print_table(run, (enum shape)sh);
+		print_summary(run, &s, a->shapes);
+		if (a->check != CHECK_NONE)
+			printf("check %s: %s\n", check_names[a->check], passed ? "passed" : "FAILED");
+	}
+	if (passed)
+		return 0;
+	fprintf(stderr, "%s: check %s failed: %s\n", prog, check_names[a->check], msg);
+	return 1;
+}
+
+int main(int argc, char **argv)
+{
+	struct args a;
+	int status = parse_args(argc, argv, &a);
+	if (status >= 0)
+		return status;
 	struct run run = { 0 };
-	run.sp = spindle_connect(socket);
+	run.sp = spindle_connect(a.socket);
 	if (!run.sp) {
 		const char *env = getenv("SPINDLE_SOCKET");
 		fprintf(stderr, "%s: cannot connect to spindled at %s: %s\n", prog,
-			socket        ? socket
+			a.socket      ? a.socket
 			: env && *env ? env
 				      : SPINDLE_DEFAULT_SOCKET,
 			errno == EPROTO ? "no common protocol version" : strerror(errno));
 		return 3;
 	}
-	const struct spindle_device_info *info = spindle_get_device_info(run.sp);
-	struct device *d = &run.dev;
-	d->w = info->width;
-	d->h = info->height;
-	d->n = info->images_per_rev;
-	d->mirrored = info->mirrored;
-	d->half_height = info->half_height;
-	d->r0 = d->n / (2.0 * M_PI);
-	d->px = 2.0 / d->w;
-	d->row = 2.0 * d->half_height / d->h;
-	d->y_mid = row_y(d, d->h / 2 + 0.5);
-	d->v0 = d->h / 4;
-	d->v1 = d->h - d->h / 4;
-	d->y_top = row_y(d, d->v0 + ROW_INSET_PX);
-	d->y_bottom = row_y(d, d->v1 - ROW_INSET_PX);
-
-	int status = 0;
+	light_shape_device(&run.dev, spindle_get_device_info(run.sp));
+	status = 0;
 	run.layer = spindle_layer_create(run.sp);
 	if (!run.layer) {
 		report(run.sp, "creating a layer", errno);
 		status = 1;
 	}
 	for (int sh = 0; sh < SHAPE_COUNT && status == 0; sh++)
-		if (shapes & (1u << sh) && run_shape(&run, (enum shape)sh) < 0)
+		if (a.shapes & (1u << sh) && run_shape(&run, (enum shape)sh) < 0)
 			status = 1;
-	if (status == 0) {
-		struct summary s;
-		char msg[1024] = "";
-		summarise(&run, &s);
-		bool passed = c == CHECK_NONE || check(&run, &s, (enum check)c, shapes, msg, sizeof(msg));
-		if (json) {
-			print_json(&run, &s, shapes, c, passed, msg);
-		} else {
-			printf("%ux%u, N = %u%s, h = %g, r0 = %.2f px; light/area: lit voxels (any channel, every "
-			       "image of the capture) per px^2 of surface\n\n",
-			       d->w, d->h, d->n, d->mirrored ? " mirrored" : "", d->half_height, d->r0);
-			for (int sh = 0; sh < SHAPE_COUNT; sh++)
-				if (shapes & (1u << sh))
-					print_table(&run, (enum shape)sh);
-			print_summary(&run, &s, shapes);
-			if (c != CHECK_NONE)
-				printf("check %s: %s\n",
-				       c == CHECK_EXACT  ? "exact"
-				       : c == CHECK_EVEN ? "even"
-							 : "uniform",
-				       passed ? "passed" : "FAILED");
-		}
-		if (!passed) {
-			fprintf(stderr, "%s: check %s failed: %s\n", prog,
-				c == CHECK_EXACT  ? "exact"
-				: c == CHECK_EVEN ? "even"
-						  : "uniform",
-				msg);
-			status = 1;
-		}
-	}
+	if (status == 0)
+		status = report_run(&run, &a);
 	spindle_layer_destroy(run.layer);
 	spindle_disconnect(run.sp);
 	free(run.results);
