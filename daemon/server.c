@@ -1,10 +1,8 @@
 #include "server.h"
 
-#include <dirent.h>
 #include <errno.h>
 #include <grp.h>
 #include <malloc.h>
-#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -22,6 +20,7 @@
 #include "log.h"
 #include "pipeline.h"
 #include "privilege.h"
+#include "process.h"
 #include "render.h"
 #include "watchdog.h"
 
@@ -473,19 +472,6 @@ void server_get_status(struct server *srv, struct proto_display_status_args *out
 	};
 }
 
-/* The fds open now (for the limits event: asked for, never polled). */
-static uint32_t open_fds(void)
-{
-	DIR *d = opendir("/proc/self/fd");
-	if (!d)
-		return 0;
-	uint32_t n = 0;
-	while (readdir(d))
-		n++;
-	closedir(d);
-	return n > 3 ? n - 3 : 0; /* ".", "..", and the directory's own fd */
-}
-
 void server_get_composition(struct server *srv, struct proto_display_composition_args *out)
 {
 	struct cache_stats st;
@@ -527,7 +513,7 @@ void server_get_limits(struct server *srv, struct proto_display_limits_args *out
 		.handshake_timeouts = a->handshake_timeouts,
 		.accept_pauses = srv->sock.pauses,
 		.clients_in_handshake = incomplete,
-		.fds = open_fds(),
+		.fds = process_open_fds(),
 		.fd_limit = rl.rlim_cur > UINT32_MAX ? UINT32_MAX : (uint32_t)rl.rlim_cur,
 		.memory_used = t->buffer_bytes + t->vertices * CLIENT_VERTEX_BYTES,
 		.memory_budget = srv->cfg.memory_budget,
@@ -597,46 +583,13 @@ static gid_t admin_gid(const char *name)
 
 /* ---- set-up and the loop ---- */
 
-static int on_signal(sd_event_source *s, const struct signalfd_siginfo *si, void *data)
-{
-	log_info("signal %u (%s): shutting down", si->ssi_signo, strsignal((int)si->ssi_signo));
-	return sd_event_exit(sd_event_source_get_event(s), 0);
-}
-
-/* The configuration is read at start only: a reload would have to move
- * the socket, the devices and the renderer under running clients. */
-static int on_hangup(sd_event_source *s, const struct signalfd_siginfo *si, void *data)
-{
-	log_info("SIGHUP: ignored (spindled does not reload its configuration; restart it)");
-	return 0;
-}
-
-/* Signals whose default would kill the daemon without its shutdown path
- * (projector dark, socket removed, STOPPING=1) take that path instead. */
-static const int shutdown_signals[] = { SIGINT, SIGTERM, SIGQUIT, SIGUSR1, SIGUSR2, SIGALRM, SIGVTALRM };
-
-static int setup_signals(struct server *srv)
-{
-	sigset_t mask;
-	sigemptyset(&mask);
-	for (size_t i = 0; i < sizeof(shutdown_signals) / sizeof(shutdown_signals[0]); i++)
-		sigaddset(&mask, shutdown_signals[i]);
-	sigaddset(&mask, SIGHUP);
-	sigprocmask(SIG_BLOCK, &mask, NULL);
-	signal(SIGPIPE, SIG_IGN);
-	int r;
-	for (size_t i = 0; i < sizeof(shutdown_signals) / sizeof(shutdown_signals[0]); i++)
-		if ((r = sd_event_add_signal(srv->event, NULL, shutdown_signals[i], on_signal, srv)) < 0)
-			return r;
-	return sd_event_add_signal(srv->event, NULL, SIGHUP, on_hangup, srv);
-}
-
 static int setup_loop(struct server *srv)
 {
 	int r = sd_event_new(&srv->event);
 	if (r < 0)
 		return r;
-	if ((r = setup_signals(srv)) < 0 || (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
+	if ((r = process_setup_signals(srv->event)) < 0 ||
+	    (r = sd_event_add_defer(srv->event, &srv->reap_source, reap, srv)) < 0)
 		return r;
 	sd_event_source_set_enabled(srv->reap_source, SD_EVENT_OFF);
 	sd_event_source_set_priority(srv->reap_source, SD_EVENT_PRIORITY_NORMAL + 10);
@@ -783,24 +736,6 @@ int server_add_client(struct server *srv, int fd)
 	return 0;
 }
 
-/* As many fds as the hard limit allows (systemd's default soft limit is
- * 1024): clients hold fds while their messages wait, and running out only
- * pauses accepting (pause_accept()). The daemon polls with epoll only. */
-static void raise_fd_limit(void)
-{
-	struct rlimit rl;
-	if (getrlimit(RLIMIT_NOFILE, &rl) < 0 || rl.rlim_cur >= rl.rlim_max)
-		return;
-	rlim_t was = rl.rlim_cur;
-	rl.rlim_cur = rl.rlim_max;
-	if (setrlimit(RLIMIT_NOFILE, &rl) < 0)
-		log_warn("cannot raise the fd limit from %llu to %llu: %s", (unsigned long long)was,
-			 (unsigned long long)rl.rlim_max, strerror(errno));
-	else
-		log_debug("fd limit raised from %llu to %llu", (unsigned long long)was,
-			  (unsigned long long)rl.rlim_max);
-}
-
 /* What the limits did, for the log at exit. */
 static void log_admission(const struct server *srv)
 {
@@ -815,7 +750,7 @@ static void log_admission(const struct server *srv)
 int server_run(const struct config *cfg)
 {
 	struct server srv;
-	raise_fd_limit();
+	process_raise_fd_limit();
 	int r = server_init(&srv, cfg, true);
 	if (r < 0)
 		goto out;
