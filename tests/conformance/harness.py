@@ -8,6 +8,7 @@ exits 0 (under ASan the daemon's leak report makes the exit status non-zero).
 import os
 import shutil
 import signal
+import socket
 import struct
 import subprocess
 import sys
@@ -221,6 +222,38 @@ class Abuse:
 
 
 SHARED = {}
+
+
+NOBODY = 65534  # nobody: no capture, watch or admin rights
+
+
+def connect_as(uid, path, n):
+    """n sockets connected to path by uid (a forked child that dropped to
+    it, connected, and passed them back over a socketpair)."""
+    a, b = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
+    pid = os.fork()
+    if pid == 0:
+        a.close()
+        code = 0
+        try:
+            os.setgroups([])
+            os.setresgid(uid, uid, uid)
+            os.setresuid(uid, uid, uid)
+            socks = []
+            for _ in range(n):
+                s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+                s.connect(path)
+                socks.append(s)
+            socket.send_fds(b, [b'x'], [s.fileno() for s in socks])
+        except BaseException:
+            code = 1
+        os._exit(code)
+    b.close()
+    _, fds, _, _ = socket.recv_fds(a, 1, n)
+    a.close()
+    _, status = os.waitpid(pid, 0)
+    check(status == 0 and len(fds) == n, f'child connecting as uid {uid} failed')
+    return [Conn(path, sock=socket.socket(fileno=fd)) for fd in fds]
 
 
 def shared(*settings):

@@ -7,14 +7,11 @@ rate; max-watchers refused and capture's policy denied with watcher.failed,
 the connection going on; all of it counted in the watchers event."""
 import math
 import os
-import socket
 import struct
 import time
 
-from harness import (ERR, P, MODE, case, check, run, shared, svol_header, svol_planes, lit, w)
-from spindlewire import Conn
+from harness import (ERR, NOBODY, P, MODE, case, check, connect_as, run, shared, svol_header, svol_planes, lit, w)
 
-NOBODY = 65534
 FAILURE = {n: v for n, (v, _) in P.enums['watcher.failure'].items()}
 SETTINGS = ('max-watch-rate=8', 'max-watchers=2')
 
@@ -229,27 +226,7 @@ def denied_unprivileged():
     """Watching follows capture's policy: uid 65534 gets failed denied and
     stays connected."""
     d, wit = shared(*SETTINGS)
-    a, b = socket.socketpair(socket.AF_UNIX, socket.SOCK_STREAM)
-    pid = os.fork()
-    if pid == 0:
-        a.close()
-        code = 0
-        try:
-            os.setgroups([])
-            os.setresgid(NOBODY, NOBODY, NOBODY)
-            os.setresuid(NOBODY, NOBODY, NOBODY)
-            s = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-            s.connect(d.sock)
-            socket.send_fds(b, [b'x'], [s.fileno()])
-        except BaseException:
-            code = 1
-        os._exit(code)
-    b.close()
-    _, fds, _, _ = socket.recv_fds(a, 1, 1)
-    a.close()
-    _, status = os.waitpid(pid, 0)
-    check(status == 0 and len(fds) == 1, 'connected as nobody')
-    c = Conn(d.sock, sock=socket.socket(fileno=fds[0]))
+    c, = connect_as(NOBODY, d.sock, 1)
     c.hello()
     wid = watch(c)
     ev = next_volume(c, wid)
