@@ -63,6 +63,17 @@ static GLuint shader(GLenum type, const char *src)
 	return s;
 }
 
+/* The bound vertex array's layout: struct view_point, position and
+ * normalised RGBA, from the bound array buffer. */
+static void point_attribs(void)
+{
+	glEnableVertexAttribArray(0);
+	glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(struct view_point), (void *)0);
+	glEnableVertexAttribArray(1);
+	glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(struct view_point),
+			      (void *)offsetof(struct view_point, rgba));
+}
+
 /* The cylinder's rims and four posts, and (from slice_first) one slice
  * plane's outline: the vertex layout of the points, dim grey. */
 static void make_outline(struct view_gl *v, float h)
@@ -100,11 +111,7 @@ static void make_outline(struct view_gl *v, float h)
 	glBindVertexArray(v->outline_vao);
 	glBindBuffer(GL_ARRAY_BUFFER, v->outline_vbo);
 	glBufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(n * sizeof(pts[0])), pts, GL_STATIC_DRAW);
-	glEnableVertexAttribArray(0);
-	glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(struct view_point), (void *)0);
-	glEnableVertexAttribArray(1);
-	glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(struct view_point),
-			      (void *)offsetof(struct view_point, rgba));
+	point_attribs();
 	glBindVertexArray(0);
 	v->half_height = h;
 }
@@ -143,11 +150,7 @@ struct view_gl *view_gl_create(void)
 	glGenBuffers(1, &v->outline_vbo);
 	glBindVertexArray(v->vao);
 	glBindBuffer(GL_ARRAY_BUFFER, v->vbo);
-	glEnableVertexAttribArray(0);
-	glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(struct view_point), (void *)0);
-	glEnableVertexAttribArray(1);
-	glVertexAttribPointer(1, 4, GL_UNSIGNED_BYTE, GL_TRUE, sizeof(struct view_point),
-			      (void *)offsetof(struct view_point, rgba));
+	point_attribs();
 	glBindVertexArray(0);
 	make_outline(v, 1.0f);
 	return v;
