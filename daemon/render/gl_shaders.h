@@ -139,6 +139,22 @@ static const char gl_bright_prelude[] = "#define BRIGHT 1\n";
 	"}\n"                                                                                             \
 	"#endif\n"
 
+/* The fragment's colour v_rgb (weighted with BRIGHT: a fragment that
+ * weighs 0 is dropped), its tile row marked. */
+#define GL_SHADER_EMIT                                               \
+	"flat in uint v_rgb;\n"                                      \
+	"out vec4 o_colour;\n"                                       \
+	"void emit() {\n"                                            \
+	"	uvec3 c = uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u;\n" \
+	"#ifdef BRIGHT\n"                                            \
+	"	c = weigh(c);\n"                                           \
+	"	if (c == uvec3(0u))\n"                                     \
+	"		discard;\n"                                               \
+	"#endif\n"                                                   \
+	"	mark();\n"                                                 \
+	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"                  \
+	"}\n"
+
 /* Faces: each triangle drawn whole with the slice's projection; the
  * fragment shader keeps what lies in the bow tie, widened near the axis to
  * the hyperbola t^2 <= (s tau)^2 + b^2 so the thin wedges leave no dead
@@ -173,22 +189,13 @@ static const char gl_face_vs[] = GL_SHADER_VERSION GL_SHADER_COMMON
 
 static const char gl_face_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH "uniform vec4 u_slice;\n"
+	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH GL_SHADER_EMIT "uniform vec4 u_slice;\n"
 	"in vec2 v_st;\n"
-	"flat in uint v_rgb;\n"
-	"out vec4 o_colour;\n"
 	"void main() {\n"
 	"	float s = v_st.x * u_slice.z, t = v_st.y;\n"
 	"	if (t * t > s * s + u_slice.w * u_slice.w)\n"
 	"		discard;\n"
-	"	uvec3 c = uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u;\n"
-	"#ifdef BRIGHT\n"
-	"	c = weigh(c);\n"
-	"	if (c == uvec3(0u))\n"
-	"		discard;\n"
-	"#endif\n"
-	"	mark();\n"
-	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"
+	"	emit();\n"
 	"}\n";
 
 /* Sections, drawn as GL_LINES and again as GL_POINTS (so a section shorter
@@ -310,17 +317,8 @@ static const char gl_point_vs[] = GL_SHADER_VERSION
  * never weighted) the colour is weighted as the face pass weights it. */
 static const char gl_flat_fs[] = GL_SHADER_VERSION
 	"precision highp float;\n"
-	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH "flat in uint v_rgb;\n"
-	"out vec4 o_colour;\n"
-	"void main() {\n"
-	"	uvec3 c = uvec3(v_rgb, v_rgb >> 8, v_rgb >> 16) & 255u;\n"
-	"#ifdef BRIGHT\n"
-	"	c = weigh(c);\n"
-	"	if (c == uvec3(0u))\n"
-	"		discard;\n"
-	"#endif\n"
-	"	mark();\n"
-	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"
+	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH GL_SHADER_EMIT "void main() {\n"
+	"	emit();\n"
 	"}\n";
 
 /* The touched tiles of a batch as a list of (tile, row mask), whose header
