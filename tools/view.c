@@ -514,6 +514,43 @@ static int write_snapshot(const char *path, int width, int height)
 	return r;
 }
 
+/* Thins the cloud when a frame took too long, thickens it when there is
+ * time (the point budget --max-points set adaptively). */
+static void adapt_points(struct live *l, double dt)
+{
+	if (dt > ADAPT_HIGH_S && l->max_points > ADAPT_MIN_POINTS)
+		l->max_points = l->max_points * 7 / 10 > ADAPT_MIN_POINTS ? l->max_points * 7 / 10 : ADAPT_MIN_POINTS;
+	else if (dt < ADAPT_LOW_S && l->pts.stride > 1 && l->max_points < ADAPT_MAX_POINTS)
+		l->max_points = l->max_points * 5 / 4;
+}
+
+/* Draws the window's frame (and its snapshot, on the last). Returns whether
+ * it was the last (--exit-after); a failed snapshot sets *status. */
+static bool draw_frame(struct window *w, struct live *l, const struct view_args *a, int *status)
+{
+	double t0 = now_s();
+	int width, height;
+	SDL_GL_GetDrawableSize(w->win, &width, &height);
+	view_gl_draw(w->gl, &w->cam, width, height, w->slices);
+	uint64_t drawn = l->received;
+	bool last = a->exit_after && drawn >= a->exit_after;
+	if (last && a->snapshot) {
+		int r = write_snapshot(a->snapshot, width, height);
+		if (r < 0) {
+			fprintf(stderr, "spindle-view: %s: %s\n", a->snapshot, strerror(-r));
+			*status = VIEW_FAILED;
+		}
+	}
+	SDL_GL_SwapWindow(w->win);
+	w->dirty = false;
+	double dt = now_s() - t0;
+	l->draw_s += dt;
+	l->draws++;
+	if (a->adapt && l->sp && drawn > 1)
+		adapt_points(l, dt);
+	return last;
+}
+
 static int run_window(const struct view_args *a)
 {
 	struct live l = { 0 };
@@ -541,14 +578,12 @@ static int run_window(const struct view_args *a)
 		view_gl_upload(w.gl, &file_pts);
 		l.received = 1;
 	}
-	uint64_t drawn = 0;
 	while (!w.quit && status == VIEW_OK) {
 		SDL_Event e;
 		while (SDL_PollEvent(&e))
 			window_event(&w, &e);
 		if (l.sp && (status = live_pump(&l, w.dirty ? 0 : 8)) != VIEW_OK)
 			break;
-		double t0 = now_s();
 		if (l.fresh) {
 			view_gl_upload(w.gl, &l.pts);
 			l.fresh = false;
@@ -559,31 +594,7 @@ static int run_window(const struct view_args *a)
 				SDL_WaitEventTimeout(NULL, 50);
 			continue;
 		}
-		int width, height;
-		SDL_GL_GetDrawableSize(w.win, &width, &height);
-		view_gl_draw(w.gl, &w.cam, width, height, w.slices);
-		drawn = l.received;
-		bool last = a->exit_after && drawn >= a->exit_after;
-		if (last && a->snapshot) {
-			int r = write_snapshot(a->snapshot, width, height);
-			if (r < 0) {
-				fprintf(stderr, "spindle-view: %s: %s\n", a->snapshot, strerror(-r));
-				status = VIEW_FAILED;
-			}
-		}
-		SDL_GL_SwapWindow(w.win);
-		w.dirty = false;
-		double dt = now_s() - t0;
-		l.draw_s += dt;
-		l.draws++;
-		if (a->adapt && l.sp && drawn > 1) {
-			if (dt > ADAPT_HIGH_S && l.max_points > ADAPT_MIN_POINTS)
-				l.max_points = l.max_points * 7 / 10 > ADAPT_MIN_POINTS ? l.max_points * 7 / 10
-											: ADAPT_MIN_POINTS;
-			else if (dt < ADAPT_LOW_S && l.pts.stride > 1 && l.max_points < ADAPT_MAX_POINTS)
-				l.max_points = l.max_points * 5 / 4;
-		}
-		if (last)
+		if (draw_frame(&w, &l, a, &status))
 			break;
 	}
 	window_close(&w);
@@ -592,14 +603,15 @@ static int run_window(const struct view_args *a)
 	return status;
 }
 
-int main(int argc, char **argv)
+/* The command line into *a-> Returns -1 to go on, else the exit status. */
+static int parse_args(int argc, char **argv, struct view_args *a)
 {
-	struct view_args a = { .frames = 12,
-			       .size = 256,
-			       .width = 800,
-			       .height = 800,
-			       .max_points = DEFAULT_MAX_POINTS,
-			       .adapt = true };
+	*a = (struct view_args){ .frames = 12,
+				 .size = 256,
+				 .width = 800,
+				 .height = 800,
+				 .max_points = DEFAULT_MAX_POINTS,
+				 .adapt = true };
 	static const struct option opts[] = {
 		{ "socket", required_argument, NULL, 's' },   { "rate", required_argument, NULL, 'r' },
 		{ "input", required_argument, NULL, 'i' },    { "turntable", required_argument, NULL, 't' },
@@ -614,49 +626,49 @@ int main(int argc, char **argv)
 	while ((c = getopt_long(argc, argv, "s:r:i:t:n:z:o:x:g:m:Svh", opts, NULL)) != -1) {
 		switch (c) {
 		case 's':
-			a.socket = optarg;
+			a->socket = optarg;
 			break;
 		case 'r':
-			if (!parse_u32(optarg, 1, 1000, &a.rate))
+			if (!parse_u32(optarg, 1, 1000, &a->rate))
 				return usage_error("--rate takes 1 to 1000");
 			break;
 		case 'i':
-			a.input = optarg;
+			a->input = optarg;
 			break;
 		case 't':
-			a.turntable = optarg;
+			a->turntable = optarg;
 			break;
 		case 'n':
-			if (!parse_u32(optarg, 1, 360, &a.frames))
+			if (!parse_u32(optarg, 1, 360, &a->frames))
 				return usage_error("--frames takes 1 to 360");
 			break;
 		case 'z':
-			if (!parse_u32(optarg, 16, 4096, &a.size))
+			if (!parse_u32(optarg, 16, 4096, &a->size))
 				return usage_error("--size takes 16 to 4096");
 			break;
 		case 'o':
-			a.snapshot = optarg;
+			a->snapshot = optarg;
 			break;
 		case 'x':
-			if (!parse_u32(optarg, 1, UINT32_MAX, &a.exit_after))
+			if (!parse_u32(optarg, 1, UINT32_MAX, &a->exit_after))
 				return usage_error("--exit-after takes a count of volumes");
 			break;
 		case 'g':
-			if (sscanf(optarg, "%ux%u", &a.width, &a.height) != 2 || a.width < 16 || a.height < 16 ||
-			    a.width > 8192 || a.height > 8192)
+			if (sscanf(optarg, "%ux%u", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
+			    a->width > 8192 || a->height > 8192)
 				return usage_error("--geometry takes WxH");
 			break;
 		case 'm':
 			if (!parse_u32(optarg, 1000, UINT32_MAX, &mp))
 				return usage_error("--max-points takes 1000 or more");
-			a.max_points = mp;
-			a.adapt = false;
+			a->max_points = mp;
+			a->adapt = false;
 			break;
 		case 'S':
-			a.slices = true;
+			a->slices = true;
 			break;
 		case 'v':
-			a.stats = true;
+			a->stats = true;
 			break;
 		case 'h':
 			fputs(usage_text, stdout);
@@ -667,9 +679,18 @@ int main(int argc, char **argv)
 	}
 	if (optind < argc)
 		return usage_error("unexpected argument");
-	if (a.snapshot && !a.exit_after)
-		a.exit_after = 1;
-	if (a.input && a.socket)
+	if (a->snapshot && !a->exit_after)
+		a->exit_after = 1;
+	if (a->input && a->socket)
 		return usage_error("--input and --socket exclude each other");
+	return -1;
+}
+
+int main(int argc, char **argv)
+{
+	struct view_args a;
+	int status = parse_args(argc, argv, &a);
+	if (status >= 0)
+		return status;
 	return a.turntable ? run_turntable(&a) : run_window(&a);
 }
