@@ -75,6 +75,40 @@ double light_shape_area(const struct light_shape *shape, uint32_t width, uint32_
 	return 0.0;
 }
 
+/* Lit voxels per band: the OR of the three planes, bit by bit, each
+ * column's band from its radius |u + 0.5 - W/2|. 0, or -EINVAL for an
+ * image wider than the table. */
+static int count_lit(const uint8_t *svol, const struct svol_header *hd, const double *hi, unsigned n,
+		     struct light_profile *out)
+{
+	const struct svol_header h = *hd;
+	uint8_t band_of[8192];
+	if (h.width > sizeof(band_of))
+		return -EINVAL;
+	for (uint32_t u = 0; u < h.width; u++) {
+		double r = fabs(u + 0.5 - h.width / 2.0);
+		unsigned i = 0;
+		while (i + 1 < n && r >= hi[i])
+			i++;
+		band_of[u] = (uint8_t)i;
+	}
+	size_t row_bytes = (h.width + 7) / 8, plane = row_bytes * h.height;
+	const uint8_t *p = svol + SVOL_HEADER_SIZE;
+	for (uint32_t k = 0; k < h.image_count; k++, p += 3 * plane) {
+		for (size_t i = 0; i < plane; i++) {
+			unsigned bits = p[i] | p[plane + i] | p[2 * plane + i];
+			if (!bits)
+				continue;
+			size_t u0 = (i % row_bytes) * 8;
+			for (unsigned bit = 0; bit < 8; bit++)
+				if (bits & (0x80u >> bit) && u0 + bit < h.width)
+					out->band[band_of[u0 + bit]].lit++;
+		}
+	}
+
+	return 0;
+}
+
 int light_profile_compute(const uint8_t *svol, size_t size, const struct light_shape *shape, struct light_profile *out)
 {
 	struct svol_header h;
@@ -110,32 +144,8 @@ int light_profile_compute(const uint8_t *svol, size_t size, const struct light_s
 	if (!(out->area > 0.0))
 		return -EINVAL;
 
-	/* Lit voxels per column: the OR of the three planes, bit by bit. Each
-	 * column's band comes from its radius |u + 0.5 - W/2|. */
-	uint8_t band_of[8192];
-	if (h.width > sizeof(band_of))
+	if (count_lit(svol, &h, hi, n, out) < 0)
 		return -EINVAL;
-	for (uint32_t u = 0; u < h.width; u++) {
-		double r = fabs(u + 0.5 - h.width / 2.0);
-		unsigned i = 0;
-		while (i + 1 < n && r >= hi[i])
-			i++;
-		band_of[u] = (uint8_t)i;
-	}
-	size_t row_bytes = (h.width + 7) / 8, plane = row_bytes * h.height;
-	const uint8_t *p = svol + SVOL_HEADER_SIZE;
-	for (uint32_t k = 0; k < h.image_count; k++, p += 3 * plane) {
-		for (size_t i = 0; i < plane; i++) {
-			unsigned bits = p[i] | p[plane + i] | p[2 * plane + i];
-			if (!bits)
-				continue;
-			size_t u0 = (i % row_bytes) * 8;
-			for (unsigned bit = 0; bit < 8; bit++)
-				if (bits & (0x80u >> bit) && u0 + bit < h.width)
-					out->band[band_of[u0 + bit]].lit++;
-		}
-	}
-
 	for (unsigned i = 0; i < n; i++) {
 		struct light_band *b = &out->band[i];
 		out->lit += b->lit;
