@@ -57,6 +57,34 @@ int wvol_is(const uint8_t *buf, size_t size)
 	return size >= WVOL_HEADER_SIZE && memcmp(buf, "SPWV", 4) == 0;
 }
 
+/* Image k from *p (before end): its tile count, mask and tiles, checked
+ * against each other; *p moves past them. 0, -EINVAL or -ENOMEM. */
+static int decode_image(struct volume *vol, uint32_t k, const uint8_t **pp, const uint8_t *end)
+{
+	uint32_t per_image = volume_tiles_per_image(vol), mask = padded_mask(vol->mask_bytes);
+	const uint8_t *p = *pp;
+	if ((size_t)(end - p) < 4 + (size_t)mask)
+		return -EINVAL;
+	uint32_t count = le_get32(p), bits = 0;
+	const uint8_t *m = p + 4;
+	for (uint32_t i = 0; i < vol->mask_bytes; i++)
+		bits += volume_mask_bits(m[i]);
+	if (bits != count || (size_t)(end - p - 4 - mask) / VOLUME_TILE_BYTES < count)
+		return -EINVAL;
+	p += 4 + mask;
+	if (count && volume_image_reserve(vol, k, count) < 0)
+		return -ENOMEM;
+	for (uint32_t t = 0; t < vol->mask_bytes * 8 && count; t++) {
+		if (!((m[t / 8] >> (t % 8)) & 1))
+			continue;
+		if (t >= per_image || volume_image_append(vol, k, t, p) < 0)
+			return -EINVAL;
+		p += VOLUME_TILE_BYTES;
+	}
+	*pp = p;
+	return 0;
+}
+
 struct volume *wvol_decode(const uint8_t *buf, size_t size)
 {
 	if (!wvol_is(buf, size) || buf[4] != WVOL_VERSION || buf[5] || buf[6] != WVOL_HEADER_SIZE || buf[7] ||
@@ -85,32 +113,18 @@ struct volume *wvol_decode(const uint8_t *buf, size_t size)
 		goto invalid;
 	vol->seq = le_get64(buf + 32);
 	vol->shown_ns = le_get64(buf + 40);
-	uint32_t per_image = volume_tiles_per_image(vol), mask = padded_mask(vol->mask_bytes);
 	const uint8_t *p = buf + WVOL_HEADER_SIZE, *end = buf + size;
 	uint64_t total = 0;
 	for (uint32_t k = 0; k < vol->image_count; k++) {
-		if ((size_t)(end - p) < 4 + (size_t)mask)
-			goto invalid;
-		uint32_t count = le_get32(p), bits = 0;
-		const uint8_t *m = p + 4;
-		for (uint32_t i = 0; i < vol->mask_bytes; i++)
-			bits += volume_mask_bits(m[i]);
-		if (bits != count || (size_t)(end - p - 4 - mask) / VOLUME_TILE_BYTES < count)
-			goto invalid;
-		p += 4 + mask;
-		if (count && volume_image_reserve(vol, k, count) < 0) {
+		int r = decode_image(vol, k, &p, end);
+		if (r == -ENOMEM) {
 			volume_destroy(vol);
 			errno = ENOMEM;
 			return NULL;
 		}
-		for (uint32_t t = 0; t < vol->mask_bytes * 8 && count; t++) {
-			if (!((m[t / 8] >> (t % 8)) & 1))
-				continue;
-			if (t >= per_image || volume_image_append(vol, k, t, p) < 0)
-				goto invalid;
-			p += VOLUME_TILE_BYTES;
-		}
-		total += count;
+		if (r < 0)
+			goto invalid;
+		total += vol->images[k].tile_count;
 	}
 	if (p != end || total != le_get32(buf + 60))
 		goto invalid;
