@@ -295,6 +295,16 @@ def vertices(points, fmt='xyz', colors=None):
     return out
 
 
+def read_memfd(ev):
+    """The bytes of the sealed memfd an event (capture.ready, watcher.volume)
+    carries as fd and size; the fd is closed."""
+    fd = ev['fd']
+    try:
+        return os.pread(fd, ev['size'], 0)
+    finally:
+        os.close(fd)
+
+
 class Conn:
     """One client connection. Requests by name; events decoded and kept in
     order; the version negotiated is checked against every event."""
@@ -476,12 +486,7 @@ class Conn:
         ev = self.wait(lambda e: e.obj == cid, timeout, 'capture')
         if ev.name == 'capture.failed':
             return ev
-        fd = ev['fd']
-        try:
-            data = os.pread(fd, ev['size'], 0)
-        finally:
-            os.close(fd)
-        return data
+        return read_memfd(ev)
 
     def status(self, timeout=5.0):
         self.req(1, 'display.get_status')

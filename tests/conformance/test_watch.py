@@ -83,12 +83,7 @@ def next_volume(c, wid, timeout=5.0):
     if ev.name == 'watcher.failed':
         c.objects.pop(wid, None)
         return ev
-    fd = ev['fd']
-    try:
-        data = os.pread(fd, ev['size'], 0)
-    finally:
-        os.close(fd)
-    return ev, data
+    return ev, w.read_memfd(ev)
 
 
 def watch_stats(c):
