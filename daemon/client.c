@@ -27,6 +27,7 @@ static void client_kill(struct client *c)
 {
 	c->dead = true;
 	c->left_scene = objects_leave_stage(c);
+	objects_leave_watch(c);
 	/* A closed socket stays readable: stop listening, or the loop spins. */
 	sd_event_source_set_enabled(c->source, SD_EVENT_OFF);
 	c->env->listener->dead(c->env->data, c);

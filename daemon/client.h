@@ -214,6 +214,8 @@ bool objects_commit(struct client *c);
 uint32_t objects_commit_check(struct client *c, uint32_t *object, char *text, size_t size);
 /* Takes every layer of c off the stage. Returns whether the scene changed. */
 bool objects_leave_stage(struct client *c);
+/* Takes every watcher of c out of the daemon's watch. */
+void objects_leave_watch(struct client *c);
 /* The exclusive policy lets c have exclusive layers. */
 bool client_may_be_exclusive(const struct client *c);
 /* Sends c a state event if the state changed (version 2 clients). */

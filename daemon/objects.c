@@ -672,6 +672,18 @@ bool objects_leave_stage(struct client *c)
 	return changed;
 }
 
+/* A departing client's watchers stop now: nothing more is sent to it, and
+ * they no longer count against max-watchers (the objects are freed with the
+ * client, at the reap). */
+void objects_leave_watch(struct client *c)
+{
+	for (uint32_t i = 0; i < c->objects.cap; i++) {
+		struct object *obj = c->objects.slots[i].value;
+		if (c->objects.slots[i].id && obj->type == PROTO_IFACE_WATCHER)
+			watch_remove(c->env->watch, &((struct watcher *)obj)->entry);
+	}
+}
+
 /* The pending state becomes what the stage shows of y. */
 static void layer_commit(struct layer *y)
 {
