@@ -98,6 +98,12 @@ int volume_copy(struct volume *dst, const struct volume *src);
  * else. 0 or -ENOMEM/-EINVAL. */
 int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src);
 
+/* dst (same size as src, not src) becomes src moved by du columns and dv
+ * rows: pixel (u, v) of dst is pixel (u - du, v - dv) of src, dark where
+ * that is outside the image (calibration.h's axis offset). seq and
+ * shown_ns are copied. 0, -ENOMEM or -EINVAL. */
+int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
+
 /* Bytes of image k if stored dense: 3 planes of H rows of ceil(W/8). */
 size_t volume_dense_image_bytes(const struct volume *vol);
 

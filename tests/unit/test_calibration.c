@@ -1,0 +1,163 @@
+/* Calibration (calibration.h): keys, ranges and text; the transform's
+ * turn and scale; and volume_shift() against a pixel-by-pixel shift of
+ * random sparse volumes, at sizes with partial edge tiles and offsets of
+ * whole tiles, parts of tiles and past the image. */
+#include <errno.h>
+#include <math.h>
+#include <string.h>
+
+#include "calibration.h"
+#include "check.h"
+#include "volume.h"
+
+static void test_keys(void)
+{
+	struct calibration c;
+	calibration_identity(&c);
+	CHECK(!calibration_has_transform(&c));
+	for (unsigned k = 0; k < CALIBRATION_KEYS; k++)
+		CHECK_EQ(calibration_key_from_name(calibration_key_name(k)), k);
+	CHECK(calibration_key_name(CALIBRATION_KEYS) == NULL);
+	CHECK_EQ(calibration_key_from_name("phase"), -ENOENT);
+	CHECK(calibration_set_text(&c, CALIBRATION_PHASE, "-12.5") == 0 && c.phase_deg == -12.5f);
+	CHECK(calibration_set_text(&c, CALIBRATION_PHASE, "180.5") == -EINVAL && c.phase_deg == -12.5f);
+	CHECK(calibration_set_text(&c, CALIBRATION_PHASE, "nan") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_PHASE, "1x") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_PHASE, "") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_AXIS_U, "-7") == 0 && c.axis_u == -7);
+	CHECK(calibration_set_text(&c, CALIBRATION_AXIS_U, "2.5") == -EINVAL && c.axis_u == -7);
+	CHECK(calibration_set_text(&c, CALIBRATION_AXIS_V, "4097") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_AXIS_V, "3") == 0 && c.axis_v == 3);
+	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "0.49") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "inf") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "1.25") == 0);
+	CHECK(calibration_set(&c, 9, 0) == -EINVAL);
+	char text[32];
+	calibration_format(&c, CALIBRATION_PHASE, text, sizeof(text));
+	CHECK(!strcmp(text, "-12.5"));
+	calibration_format(&c, CALIBRATION_AXIS_U, text, sizeof(text));
+	CHECK(!strcmp(text, "-7"));
+	calibration_format(&c, CALIBRATION_VERTICAL_SCALE, text, sizeof(text));
+	CHECK(!strcmp(text, "1.25"));
+	CHECK(calibration_has_transform(&c));
+	/* A quarter of the image at most. */
+	struct geometry g;
+	CHECK(geometry_from_profile("small", &g) == 0);
+	c.axis_u = 32, c.axis_v = -32;
+	CHECK(calibration_check(&c, &g) == 0);
+	c.axis_u = 33;
+	CHECK(calibration_check(&c, &g) == -EINVAL);
+}
+
+/* The point at azimuth phi + phase goes to azimuth phi; y is scaled. */
+static void test_transform(void)
+{
+	struct calibration c;
+	calibration_identity(&c);
+	c.phase_deg = 30.0f;
+	c.vertical_scale = 0.8f;
+	float m[16];
+	calibration_transform(&c, m);
+	double a = (10.0 + 30.0) * M_PI / 180.0, r = 0.7, y = 0.5;
+	double p[4] = { r * cos(a), y, r * sin(a), 1 }, q[3] = { 0 };
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			q[i] += m[j * 4 + i] * p[j];
+	CHECK(fabs(atan2(q[2], q[0]) - 10.0 * M_PI / 180.0) < 1e-6);
+	CHECK(fabs(hypot(q[0], q[2]) - r) < 1e-6);
+	CHECK(fabs(q[1] - 0.8 * y) < 1e-6);
+	CHECK(m[15] == 1.0f && m[12] == 0.0f && m[13] == 0.0f && m[14] == 0.0f);
+}
+
+static uint32_t rng = 12345;
+static uint32_t next(void)
+{
+	rng = rng * 1664525u + 1013904223u;
+	return rng >> 8;
+}
+
+/* A volume with sparse random pixels, some tiles full, some empty. */
+static struct volume *random_volume(const struct geometry *g)
+{
+	struct volume *v = volume_create(g);
+	CHECK(v != NULL);
+	uint32_t per = volume_tiles_per_image(v);
+	uint8_t tile[VOLUME_TILE_BYTES];
+	for (uint32_t k = 0; k < v->image_count; k++)
+		for (uint32_t t = 0; t < per; t++) {
+			uint32_t kind = next() % 4; /* empty, sparse, sparse, full */
+			for (int i = 0; i < VOLUME_TILE_BYTES; i++)
+				tile[i] = kind == 0 ? 0 : kind == 3 ? 0xff : (uint8_t)(next() % 7 == 0 ? next() : 0);
+			/* Keep the padding past W and H dark. */
+			uint32_t tx = t % v->tiles_x, ty = t / v->tiles_x;
+			for (int c = 0; c < 3; c++)
+				for (uint32_t j = 0; j < VOLUME_TILE; j++)
+					for (uint32_t i = 0; i < VOLUME_TILE; i++)
+						if (tx * VOLUME_TILE + i >= g->width ||
+						    ty * VOLUME_TILE + j >= g->height)
+							tile[c * VOLUME_TILE_PLANE_BYTES + j * 4 + i / 8] &=
+								(uint8_t) ~(0x80u >> (i % 8));
+			CHECK(volume_image_append(v, k, t, tile) == 0);
+		}
+	return v;
+}
+
+static void check_shift(const struct geometry *g, int du, int dv)
+{
+	struct volume *src = random_volume(g), *dst = volume_create(g);
+	src->seq = 77;
+	CHECK(volume_shift(dst, src, du, dv) == 0);
+	CHECK_EQ(dst->seq, 77);
+	for (uint32_t k = 0; k < src->image_count; k++)
+		for (uint32_t v = 0; v < g->height; v++)
+			for (uint32_t u = 0; u < g->width; u++)
+				for (int c = 0; c < 3; c++) {
+					int64_t su = (int64_t)u - du, sv = (int64_t)v - dv;
+					int want = su >= 0 && sv >= 0 && su < g->width && sv < g->height
+							   ? volume_pixel(src, k, (uint32_t)su, (uint32_t)sv, c)
+							   : 0;
+					CHECK_MSG(volume_pixel(dst, k, u, v, c) == want, "shift %d,%d image %u (%u,%u)",
+						  du, dv, k, u, v);
+				}
+	/* Only tiles with something lit are stored; the padding stays dark. */
+	for (uint32_t k = 0; k < dst->image_count; k++) {
+		const struct volume_image *img = &dst->images[k];
+		for (uint32_t i = 0; i < img->tile_count; i++) {
+			bool any = false;
+			for (int b = 0; b < VOLUME_TILE_BYTES; b++)
+				any |= img->tiles[(size_t)i * VOLUME_TILE_BYTES + b] != 0;
+			CHECK(any);
+		}
+	}
+	volume_destroy(src);
+	volume_destroy(dst);
+}
+
+static void test_shift(void)
+{
+	/* 100 x 72: partial edge tiles, W not a multiple of 8. */
+	struct geometry g = { .width = 100, .height = 72, .images_per_rev = 6, .half_height = 1, .rpm = 600 };
+	static const int offsets[][2] = { { 0, 0 },    { 1, 0 },   { 0, 1 },    { -1, -1 },   { 5, -3 },
+					  { -13, 17 }, { 31, 0 },  { 32, -32 }, { -33, 33 },  { 64, 7 },
+					  { -99, 71 }, { 100, 0 }, { 0, -72 },  { 250, -300 } };
+	for (size_t i = 0; i < sizeof(offsets) / sizeof(offsets[0]); i++)
+		check_shift(&g, offsets[i][0], offsets[i][1]);
+	struct geometry small;
+	CHECK(geometry_from_profile("small", &small) == 0);
+	small.images_per_rev = 8;
+	check_shift(&small, 3, -2);
+	/* Different sizes, or in place: refused. */
+	struct volume *a = volume_create(&g), *b = volume_create(&small);
+	CHECK(volume_shift(a, b, 1, 1) == -EINVAL);
+	CHECK(volume_shift(a, a, 1, 1) == -EINVAL);
+	volume_destroy(a);
+	volume_destroy(b);
+}
+
+int main(void)
+{
+	test_keys();
+	test_transform();
+	test_shift();
+	return check_done();
+}
