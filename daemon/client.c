@@ -264,6 +264,14 @@ static int display_commit(void *target)
 	return 0;
 }
 
+static void send_calibration(struct client *c)
+{
+	struct calibration cal;
+	c->env->listener->calibration(c->env->data, &cal);
+	client_sent(
+		c, proto_ev_display_calibration(c->conn, 1, cal.phase_deg, cal.axis_u, cal.axis_v, cal.vertical_scale));
+}
+
 static int display_get_status(void *target)
 {
 	struct client *c = target;
@@ -288,6 +296,8 @@ static int display_get_status(void *target)
 							 wa.volumes_sent, wa.volumes_skipped, wa.bytes_sent, wa.refused,
 							 wa.denied));
 	}
+	if (c->version >= 6)
+		send_calibration(c);
 	struct proto_display_status_args st;
 	c->env->listener->status(c->env->data, &st);
 	client_sent(c, proto_ev_display_status(c->conn, 1, &st));
@@ -341,6 +351,33 @@ static int display_watch(void *target, const struct proto_display_watch_args *a)
 	return 0;
 }
 
+/* Root or the daemon's own user: who may change the calibration. */
+static bool client_privileged(const struct client *c)
+{
+	return c->uid == 0 || c->uid == geteuid();
+}
+
+static int display_calibrate(void *target, const struct proto_display_calibrate_args *a)
+{
+	struct client *c = target;
+	const char *name = calibration_key_name(a->key);
+	if (!name)
+		return client_fail(c, 1, PROTO_ERR_VALUE, "calibrate: unknown key %u", a->key);
+	char text[160];
+	uint32_t code = 0;
+	if (!client_privileged(c)) {
+		code = PROTO_DISPLAY_REFUSAL_DENIED;
+		snprintf(text, sizeof(text), "calibration is restricted to root and the daemon's user");
+	} else if (c->env->listener->calibrate(c->env->data, a->key, a->value, c->uid) < 0) {
+		code = PROTO_DISPLAY_REFUSAL_OUT_OF_RANGE;
+		snprintf(text, sizeof(text), "calibrate: %s %g is out of range (spindled(8))", name, (double)a->value);
+	}
+	if (code)
+		client_sent(c, proto_ev_display_refused(c->conn, 1, 1, code, text));
+	send_calibration(c);
+	return 0;
+}
+
 static int watcher_release(void *target)
 {
 	struct watcher *wa = target;
@@ -371,6 +408,7 @@ static const struct proto_display_requests display_requests = {
 	.get_status = display_get_status,
 	.capture = display_capture,
 	.watch = display_watch,
+	.calibrate = display_calibrate,
 };
 
 /* ---- dispatch ---- */

@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <sys/types.h>
 
+#include "calibration.h"
 #include "frames.h"
 #include "idmap.h"
 #include "layer.h"
@@ -43,6 +44,11 @@ struct client_listener {
 	void (*composition)(void *data, struct proto_display_composition_args *out);
 	/* What the watchers did, for display.get_status (version 5). */
 	void (*watchers)(void *data, struct proto_display_watchers_args *out);
+	/* The calibration in use (version 6); and a change of one key by a
+	 * privileged client of uid: 0, or -EINVAL out of range (nothing
+	 * changes). */
+	void (*calibration)(void *data, struct calibration *out);
+	int (*calibrate)(void *data, unsigned key, double value, uid_t uid);
 };
 
 /* The daemon-wide budget counts this much for a vertex a list holds

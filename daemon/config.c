@@ -38,6 +38,7 @@ void config_defaults(struct config *cfg)
 		.cache_budget = 256ull << 20,
 		.exclusive = POLICY_ADMIN,
 	};
+	calibration_identity(&cfg->calibration);
 	strcpy(cfg->admin_group, "spindle-admin");
 	const char *user = getenv("SPINDLE_USER");
 	snprintf(cfg->user, sizeof(cfg->user), "%s", user && *user ? user : "spindle");
@@ -165,6 +166,9 @@ int config_set(struct config *cfg, const char *key, const char *value)
 	}
 	if (!strcmp(key, "brightness"))
 		return geometry_brightness_parse(value, &cfg->brightness);
+	int cal = calibration_key_from_name(key);
+	if (cal >= 0)
+		return calibration_set_text(&cfg->calibration, (unsigned)cal, value);
 	if (!strcmp(key, "render-threads"))
 		return set_u32(&cfg->render_threads, value, 0, 256);
 	if (!strcmp(key, "projector-buffers"))

@@ -6,6 +6,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "calibration.h"
+
 #define CONFIG_DEFAULT_PATH "/etc/spindle/spindled.conf"
 
 /* Who a privilege is granted to: nobody, root + the daemon's user + the
@@ -52,6 +54,7 @@ struct config {
 	bool cache;                            /* the object cache and compositor (cache.h) */
 	bool half_turn_swaps;                  /* swap at half-turn starts where the projector can */
 	uint8_t brightness;                    /* enum geometry_brightness (geometry.h) */
+	struct calibration calibration;        /* calibration.h: changed live by display.calibrate */
 	uint64_t cache_budget;                 /* bytes it may hold */
 	enum policy exclusive;                 /* who may have exclusive layers */
 	char admin_group[32];                  /* may capture, and be exclusive under "admin" */

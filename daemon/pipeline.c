@@ -64,7 +64,29 @@ struct pipeline {
 	/* The object cache, or NULL (off), and the threads it composes on. */
 	struct cache *cache;
 	struct pool *pool;
+	/* The calibration (calibration.h): its transform goes into each
+	 * scene built; a render is moved by the job's offset (job_u, job_v,
+	 * the render thread's copy) through unshifted, which then holds the
+	 * render as it came. A scene is the last one rendered only under the
+	 * same calibration: building_cal is the one of building, last_cal of
+	 * last. */
+	struct calibration calibration, building_cal, last_cal;
+	int32_t job_u, job_v;
+	struct volume *unshifted;
 };
+
+/* The render moved by the calibration's axis offset: p->work becomes the
+ * shifted volume and p->unshifted the render. On the render thread. */
+static int shift_render(struct pipeline *p, int32_t du, int32_t dv)
+{
+	int r = volume_shift(p->unshifted, p->work, du, dv);
+	if (r < 0)
+		return r;
+	struct volume *shifted = p->unshifted;
+	p->unshifted = p->work;
+	p->work = shifted;
+	return 0;
+}
 
 static void *render_thread(void *data)
 {
@@ -76,9 +98,12 @@ static void *render_thread(void *data)
 		if (p->quit)
 			break;
 		const struct scene *scene = p->job_scene;
+		int32_t du = p->job_u, dv = p->job_v;
 		pthread_mutex_unlock(&p->lock);
 		int r = p->cache ? cache_render(p->cache, p->renderer, scene, p->work)
 				 : render_volume(p->renderer, scene, p->work);
+		if (r == 0 && (du || dv))
+			r = shift_render(p, du, dv);
 		pthread_mutex_lock(&p->lock);
 		p->result = r;
 		p->job = false;
@@ -169,8 +194,12 @@ static void skip_unchanged(struct pipeline *p)
 
 static void start_render(struct pipeline *p)
 {
+	float pre[16];
+	bool calibrated = calibration_has_transform(&p->calibration);
+	if (calibrated)
+		calibration_transform(&p->calibration, pre);
 	if (snapshot_build(p->building, p->cfg.stage, p->cfg.max_scene_primitives,
-			   p->renderer->impl->render_canvas != NULL) < 0) {
+			   p->renderer->impl->render_canvas != NULL, calibrated ? pre : NULL) < 0) {
 		log_error("out of memory building the scene; retrying with the next change");
 		return;
 	}
@@ -180,7 +209,9 @@ static void start_render(struct pipeline *p)
 		log_info("%u layers left out of the scene: over max-scene-primitives (%llu)", p->layers_left_out,
 			 (unsigned long long)p->cfg.max_scene_primitives);
 	}
-	if (p->have_last && snapshot_same(p->building, p->last)) {
+	p->building_cal = p->calibration;
+	if (p->have_last && snapshot_same(p->building, p->last) &&
+	    !memcmp(&p->building_cal, &p->last_cal, sizeof(p->last_cal))) {
 		skip_unchanged(p);
 		return;
 	}
@@ -194,6 +225,8 @@ static void start_render(struct pipeline *p)
 	pthread_mutex_lock(&p->lock);
 	p->started_ns = now_ns();
 	p->job_scene = &p->building->scene;
+	p->job_u = p->building_cal.axis_u;
+	p->job_v = p->building_cal.axis_v;
 	p->job = true;
 	pthread_cond_signal(&p->cond);
 	pthread_mutex_unlock(&p->lock);
@@ -206,6 +239,7 @@ static void keep_rendered(struct pipeline *p)
 	snapshot_release(old);
 	p->last = p->building;
 	p->building = old;
+	p->last_cal = p->building_cal;
 	p->have_last = true;
 	p->last_seq = p->work_seq;
 }
@@ -321,6 +355,12 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 int64_t pipeline_render_started(struct pipeline *p)
 {
 	return p && p->busy ? p->started_ns : 0; /* both the loop's */
+}
+
+void pipeline_set_calibration(struct pipeline *p, const struct calibration *cal)
+{
+	p->calibration = *cal;
+	pipeline_mark_dirty(p);
 }
 
 void pipeline_mark_dirty(struct pipeline *p)
@@ -439,7 +479,8 @@ static int create_cache(struct pipeline *p, const struct geometry *g)
 static int create_volumes(struct pipeline *p, const struct geometry *g)
 {
 	p->work = volume_create(g);
-	if (!p->work)
+	p->unshifted = volume_create(g);
+	if (!p->work || !p->unshifted)
 		return -ENOMEM;
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++) {
 		p->content[b] = volume_create(g);
@@ -459,6 +500,7 @@ struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct rende
 		return NULL;
 	}
 	p->cfg = *cfg;
+	p->calibration = cfg->calibration;
 	p->listener = listener;
 	p->data = data;
 	p->renderer = renderer;
@@ -515,6 +557,7 @@ void pipeline_destroy(struct pipeline *p)
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++)
 		volume_destroy(p->content[b]);
 	volume_destroy(p->work);
+	volume_destroy(p->unshifted);
 	cache_destroy(p->cache);
 	pool_destroy(p->pool);
 	render_destroy(p->renderer);

@@ -10,6 +10,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "calibration.h"
 #include "geometry.h"
 
 struct devices;
@@ -35,8 +36,9 @@ struct pipeline_config {
 	uint64_t max_scene_primitives;
 	/* The object cache (cache.h): off renders every scene whole. */
 	bool cache;
-	uint64_t cache_budget; /* bytes */
-	unsigned threads;      /* composing; 0 = one per core */
+	uint64_t cache_budget;          /* bytes */
+	unsigned threads;               /* composing; 0 = one per core */
+	struct calibration calibration; /* applied to every volume (calibration.h) */
 };
 
 #define PIPELINE_LISTENER_VERSION 1
@@ -66,6 +68,9 @@ void pipeline_destroy(struct pipeline *p);
  * on its way) shows those commits too, and nothing is rendered or
  * uploaded. */
 void pipeline_mark_dirty(struct pipeline *p);
+/* The calibration from the next scene taken on: a scene is rendered
+ * unless it is the one last rendered under the same calibration. */
+void pipeline_set_calibration(struct pipeline *p, const struct calibration *cal);
 /* The projector reports buffer, holding volume seq, shown from time_ns on. */
 void pipeline_swapped(struct pipeline *p, uint32_t buffer, int64_t time_ns, uint64_t seq);
 /* The projector lost what was sent to buffer (its error event): a swap

@@ -204,6 +204,26 @@ static void client_limits(void *data, struct proto_display_limits_args *out)
 	server_get_limits(data, out);
 }
 
+static void client_calibration(void *data, struct calibration *out)
+{
+	struct server *srv = data;
+	*out = srv->cfg.calibration;
+}
+
+static int client_calibrate(void *data, unsigned key, double value, uid_t uid)
+{
+	struct server *srv = data;
+	struct calibration cal = srv->cfg.calibration;
+	if (calibration_set(&cal, key, value) < 0 || calibration_check(&cal, &srv->geom) < 0)
+		return -EINVAL;
+	char text[32];
+	calibration_format(&cal, key, text, sizeof(text));
+	log_info("calibration: %s = %s (set by uid %u)", calibration_key_name(key), text, (unsigned)uid);
+	srv->cfg.calibration = cal;
+	pipeline_set_calibration(srv->pipe, &cal);
+	return 0;
+}
+
 static const struct client_listener client_listener = {
 	.version = CLIENT_LISTENER_VERSION,
 	.dead = client_dead,
@@ -211,6 +231,8 @@ static const struct client_listener client_listener = {
 	.limits = client_limits,
 	.composition = client_composition,
 	.watchers = client_watchers,
+	.calibration = client_calibration,
+	.calibrate = client_calibrate,
 	.service = client_service,
 };
 
@@ -643,6 +665,7 @@ static int setup_render(struct server *srv)
 		.cache = cfg->cache,
 		.cache_budget = cfg->cache_budget,
 		.threads = cfg->render_threads,
+		.calibration = cfg->calibration,
 	};
 	srv->pipe = pipeline_create(&pc, r, &pipeline_listener, srv);
 	return srv->pipe ? 0 : -errno;
@@ -701,6 +724,11 @@ int server_init(struct server *srv, const struct config *cfg, bool listen)
 		return r;
 	}
 	srv->geom.brightness = cfg->brightness;
+	if (calibration_check(&cfg->calibration, &srv->geom) < 0) {
+		log_error("axis-offset-u %d or axis-offset-v %d: more than a quarter of the image (%ux%u)",
+			  cfg->calibration.axis_u, cfg->calibration.axis_v, srv->geom.width, srv->geom.height);
+		return -EINVAL;
+	}
 	if ((r = setup_loop(srv)) < 0) {
 		log_error("event loop: %s", strerror(-r));
 		return r;

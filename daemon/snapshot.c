@@ -40,7 +40,7 @@ static int add_object(struct snapshot *snap, const struct stage_layer *y)
 	return 0;
 }
 
-static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool turns)
+static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool turns, const float *pre)
 {
 	const struct draw_array *a = y->draws;
 	if (a->count && add_object(snap, y) < 0)
@@ -61,6 +61,11 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 		 * (layer.h): the renderer shifts images instead of turning
 		 * vertices, and the cache reuses what it rendered. */
 		mat4_mul(sd->transform, turns ? y->base : y->transform, d->transform);
+		if (pre) {
+			float placed[16];
+			memcpy(placed, sd->transform, sizeof(placed));
+			mat4_mul(sd->transform, pre, placed);
+		}
 		sd->turn = turns ? (uint16_t)y->turn : 0;
 		for (int c = 0; c < 3; c++)
 			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);
@@ -69,7 +74,7 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 	return 0;
 }
 
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns)
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns, const float *pre)
 {
 	snap->scene.draw_count = 0;
 	snap->scene.object_count = 0;
@@ -87,7 +92,7 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 			break;
 		}
 		prims += y->draws->prims;
-		if (add_layer(snap, y, turns) < 0) {
+		if (add_layer(snap, y, turns, pre) < 0) {
 			snapshot_release(snap);
 			return -ENOMEM;
 		}

@@ -32,8 +32,10 @@ struct snapshot {
  * renderer draws turns natively (the CPU renderer), so a layer is drawn as
  * its base turned by whole images (scene_draw.turn) rather than by the
  * transform the client gave, which it equals within TURN_TOLERANCE. 0 or
- * -ENOMEM. */
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns);
+ * -ENOMEM. pre: NULL, or a transform applied after every layer's (the
+ * calibration's, calibration_transform(): a turn and a vertical scale,
+ * which commute with the layers' turns). */
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns, const float *pre);
 /* Whether a draws exactly what b draws: draw for draw the same primitive,
  * vertex data, transform and colour. Vertex data is compared by identity:
  * safe because b holds references to its data, so none of it can have been

@@ -263,9 +263,23 @@ static int on_refused(void *target, const struct proto_display_refused_args *a)
 	struct spindle *sp = target;
 	sp->refusals++;
 	sp->last_refusal = a->code;
-	lib_log(sp, "spindled refused a commit (object %u): %s", a->object, a->message);
+	lib_log(sp, "spindled refused a request (object %u): %s", a->object, a->message);
 	if (sp->listener && sp->listener->refused)
 		sp->listener->refused(sp->listener_data, (enum spindle_refusal)a->code, a->object, a->message);
+	return 0;
+}
+
+/* In answer to calibrate, and before status (version 6). */
+static int on_calibration(void *target, const struct proto_display_calibration_args *a)
+{
+	struct spindle *sp = target;
+	sp->calibration = (struct spindle_calibration){
+		.phase_offset = a->phase_offset,
+		.axis_offset_u = a->axis_offset_u,
+		.axis_offset_v = a->axis_offset_v,
+		.vertical_scale = a->vertical_scale,
+	};
+	sp->calibration_serial++;
 	return 0;
 }
 
@@ -280,6 +294,7 @@ static const struct proto_display_events display_events = {
 	.composition = on_composition,
 	.service = on_service,
 	.watchers = on_watchers,
+	.calibration = on_calibration,
 };
 
 static int on_done(void *target, const struct proto_callback_done_args *a)

@@ -52,6 +52,8 @@ struct spindle {
 	bool composition_known;
 	struct spindle_watch_stats watch_stats; /* from the watchers event before status (version 5) */
 	uint64_t status_serial;
+	struct spindle_calibration calibration; /* the last calibration event (version 6) */
+	uint64_t calibration_serial;            /* calibration events received */
 	struct spindle_state state; /* version 2: the last state event */
 	uint64_t refusals;          /* refused events received */
 	uint32_t last_refusal;      /* the code of the last one */

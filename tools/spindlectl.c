@@ -1,4 +1,5 @@
-/* spindlectl: status, show a model file, capture and preview volumes.
+/* spindlectl: status, show a model file, test patterns, calibration,
+ * capture and preview volumes.
  * main() parses the command line and hands over to one function per
  * command; each returns the process exit status. */
 #include <errno.h>
@@ -16,6 +17,8 @@
 
 #include <spindle/spindle.h>
 
+#include "calibration.h"
+#include "config_edit.h"
 #include "model.h"
 #include "patterns.h"
 #include "preview.h"
@@ -49,6 +52,8 @@ struct ctl_args {
 	bool has_size;
 	uint32_t size;
 	bool json;
+	bool save;          /* calibrate: write the value into the config file */
+	const char *config; /* its path; NULL: /etc/spindle/spindled.conf */
 };
 
 static const char usage_text[] =
@@ -67,6 +72,12 @@ static const char usage_text[] =
 	"                                  walls, slice-index\n"
 	"  preview IN.svol OUT.png [--size N]\n"
 	"                                  picture of a captured volume (no daemon)\n"
+	"  calibrate [KEY VALUE [--save [--config PATH]]]\n"
+	"                                  show the calibration, or set one key\n"
+	"                                  live (root or the daemon's user):\n"
+	"                                  phase-offset, axis-offset-u,\n"
+	"                                  axis-offset-v, vertical-scale; --save\n"
+	"                                  also writes it to the config file\n"
 	"\n"
 	"options:\n"
 	"  -s, --socket PATH   daemon socket (default: $SPINDLE_SOCKET, else\n"
@@ -186,6 +197,12 @@ static void print_composition(const struct spindle_composition *c)
 	       c->render_us / 1e3, c->objects_reused, c->compose_us / 1e3);
 }
 
+static void print_calibration(const struct spindle_calibration *c)
+{
+	printf("calibration: phase-offset %g deg, axis-offset-u %d px, axis-offset-v %d px, vertical-scale %g\n",
+	       (double)c->phase_offset, c->axis_offset_u, c->axis_offset_v, (double)c->vertical_scale);
+}
+
 static int cmd_status(const struct ctl_args *a)
 {
 	struct spindle_status st;
@@ -199,6 +216,12 @@ static int cmd_status(const struct ctl_args *a)
 		ret = spindle_get_watch_stats(sp, &ws);
 		watch_known = ret == 0;
 	}
+	struct spindle_calibration cal;
+	bool cal_known = false;
+	if (ret == 0 && spindle_get_version(sp) >= 6) { /* protocol 6 */
+		ret = spindle_get_calibration(sp, &cal);
+		cal_known = ret == 0;
+	}
 	if (ret < 0) {
 		report_failure(sp, "status", ret);
 		spindle_disconnect(sp);
@@ -206,7 +229,7 @@ static int cmd_status(const struct ctl_args *a)
 	}
 	if (a->json) {
 		status_print_json(stdout, socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st,
-				  watch_known ? &ws : NULL);
+				  watch_known ? &ws : NULL, cal_known ? &cal : NULL);
 		spindle_disconnect(sp);
 		return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
 	}
@@ -226,8 +249,84 @@ static int cmd_status(const struct ctl_args *a)
 		       ws.watchers, ws.max_watchers, ws.max_rate_hz, (unsigned long long)ws.volumes_sent,
 		       (unsigned long long)ws.bytes_sent, (unsigned long long)ws.volumes_skipped,
 		       (unsigned long long)ws.refused, (unsigned long long)ws.denied);
+	if (cal_known)
+		print_calibration(&cal);
 	spindle_disconnect(sp);
 	return fflush(stdout) == 0 ? 0 : 1;
+}
+
+/* ---- calibrate ---- */
+
+#define CONFIG_PATH "/etc/spindle/spindled.conf"
+
+/* Checks KEY VALUE here first, for a usage error rather than a refusal. */
+static int parse_calibration(const struct ctl_args *a, int *key, struct calibration *cal)
+{
+	calibration_identity(cal);
+	*key = calibration_key_from_name(a->operand[0]);
+	if (*key < 0)
+		return usage_error("unknown calibration key '%s' (phase-offset, axis-offset-u, axis-offset-v, "
+				   "vertical-scale)",
+				   a->operand[0]);
+	if (calibration_set_text(cal, (unsigned)*key, a->operand[1]) < 0)
+		return usage_error("bad value '%s' (phase-offset: -180..180 degrees; axis offsets: whole pixels; "
+				   "vertical-scale: 0.5..2)",
+				   a->operand[1]);
+	return -1;
+}
+
+/* The value set, into the config file the daemon reads at start. */
+static int save_calibration(const struct ctl_args *a, const struct calibration *cal, int key)
+{
+	char value[32], err[600];
+	calibration_format(cal, (unsigned)key, value, sizeof(value));
+	const char *path = a->config ? a->config : CONFIG_PATH;
+	if (config_edit_set(path, calibration_key_name((unsigned)key), value, err, sizeof(err)) < 0) {
+		fprintf(stderr, "spindlectl: --save: %s\n", err);
+		return CTL_FAILED;
+	}
+	printf("saved %s = %s in %s\n", calibration_key_name((unsigned)key), value, path);
+	return CTL_OK;
+}
+
+static int cmd_calibrate(const struct ctl_args *a)
+{
+	int key = -1, status;
+	struct calibration want;
+	if (a->operand_count == 2 && (status = parse_calibration(a, &key, &want)) >= 0)
+		return status;
+	if (a->operand_count == 0 && (a->save || a->config))
+		return usage_error("%s", "--save and --config go with 'calibrate KEY VALUE'");
+	if (a->config && !a->save)
+		return usage_error("%s", "--config goes with --save");
+	struct spindle *sp = connect_daemon(a);
+	if (!sp)
+		return CTL_CONNECT;
+	struct spindle_calibration cal;
+	int r = key < 0 ? spindle_get_calibration(sp, &cal)
+			: spindle_calibrate(sp, (enum spindle_calibration_key)key,
+					    (float)calibration_get(&want, (unsigned)key), &cal);
+	status = CTL_OK;
+	if (r == -EPROTONOSUPPORT) {
+		fprintf(stderr, "spindlectl: calibrate: spindled speaks protocol %u; calibration needs 6\n",
+			spindle_get_version(sp));
+		status = CTL_FAILED;
+	} else if (r == -EACCES || r == -ERANGE) {
+		fprintf(stderr, "spindlectl: calibrate: refused: %s\n",
+			r == -EACCES ? "only root and the daemon's user may calibrate"
+				     : "value out of range for this display");
+		status = CTL_REFUSED;
+	} else if (r < 0) {
+		report_failure(sp, "calibrate", r);
+		status = CTL_FAILED;
+	}
+	spindle_disconnect(sp);
+	if (status != CTL_OK)
+		return status;
+	print_calibration(&cal);
+	if (a->save)
+		status = save_calibration(a, &want, key);
+	return fflush(stdout) == 0 ? status : CTL_FAILED;
 }
 
 /* ---- show ---- */
@@ -622,13 +721,19 @@ static int parse_size(const char *s, uint32_t *out)
 	return 0;
 }
 
-enum { OPT_NO_FIT = 256, OPT_COLOR, OPT_SIZE, OPT_JSON };
+enum { OPT_NO_FIT = 256, OPT_COLOR, OPT_SIZE, OPT_JSON, OPT_SAVE, OPT_CONFIG };
 
 static const struct option long_options[] = {
-	{ "socket", required_argument, NULL, 's' },      { "help", no_argument, NULL, 'h' },
-	{ "version", no_argument, NULL, 'V' },           { "no-fit", no_argument, NULL, OPT_NO_FIT },
-	{ "color", required_argument, NULL, OPT_COLOR }, { "size", required_argument, NULL, OPT_SIZE },
-	{ "json", no_argument, NULL, OPT_JSON },         { NULL, 0, NULL, 0 },
+	{ "socket", required_argument, NULL, 's' },
+	{ "help", no_argument, NULL, 'h' },
+	{ "version", no_argument, NULL, 'V' },
+	{ "no-fit", no_argument, NULL, OPT_NO_FIT },
+	{ "color", required_argument, NULL, OPT_COLOR },
+	{ "size", required_argument, NULL, OPT_SIZE },
+	{ "json", no_argument, NULL, OPT_JSON },
+	{ "save", no_argument, NULL, OPT_SAVE },
+	{ "config", required_argument, NULL, OPT_CONFIG },
+	{ NULL, 0, NULL, 0 },
 };
 
 /* Returns -1 to go on, else the exit status (help, version, bad usage). */
@@ -656,6 +761,12 @@ static int parse_option(int c, struct ctl_args *a)
 	case OPT_JSON:
 		a->json = true;
 		return -1;
+	case OPT_SAVE:
+		a->save = true;
+		return -1;
+	case OPT_CONFIG:
+		a->config = optarg;
+		return -1;
 	default: /* getopt has said what was wrong */
 		fprintf(stderr, "Try 'spindlectl --help'.\n");
 		return CTL_USAGE;
@@ -664,15 +775,18 @@ static int parse_option(int c, struct ctl_args *a)
 
 struct ctl_command {
 	const char *name;
-	int operands;
+	int operands, or_operands; /* how many it takes (or_operands: also that many, when not 0) */
 	bool show_opts, preview_opts, status_opts;
 	int (*run)(const struct ctl_args *a);
 };
 
 static const struct ctl_command commands[] = {
-	{ "status", 0, false, false, true, cmd_status },    { "show", 1, true, false, false, cmd_show },
-	{ "capture", 1, false, false, false, cmd_capture }, { "pattern", 1, false, false, false, cmd_pattern },
-	{ "preview", 2, false, true, false, cmd_preview },
+	{ "status", 0, 0, false, false, true, cmd_status },
+	{ "show", 1, 0, true, false, false, cmd_show },
+	{ "capture", 1, 0, false, false, false, cmd_capture },
+	{ "pattern", 1, 0, false, false, false, cmd_pattern },
+	{ "preview", 2, 0, false, true, false, cmd_preview },
+	{ "calibrate", 0, 2, false, false, false, cmd_calibrate },
 };
 
 /* Picks the command and checks its operands and options. */
@@ -685,7 +799,7 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 	*status = CTL_USAGE;
 	if (!cmd)
 		usage_error("unknown command '%s'", a->command);
-	else if (a->operand_count != cmd->operands)
+	else if (a->operand_count != cmd->operands && (!cmd->or_operands || a->operand_count != cmd->or_operands))
 		usage_error("wrong number of arguments for '%s'", cmd->name);
 	else if ((a->no_fit || a->has_color) && !cmd->show_opts)
 		usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
@@ -693,31 +807,83 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 		usage_error("--size goes with 'preview', not '%s'", cmd->name);
 	else if (a->json && !cmd->status_opts)
 		usage_error("--json goes with 'status', not '%s'", cmd->name);
+	else if ((a->save || a->config) && cmd->run != cmd_calibrate)
+		usage_error("--save and --config go with 'calibrate', not '%s'", cmd->name);
 	else
 		return cmd;
 	return NULL;
 }
 
-int main(int argc, char **argv)
+static bool is_negative_number(const char *s)
 {
-	struct ctl_args a = { 0 };
+	char *end;
+	if (s[0] != '-' || !s[1])
+		return false;
+	(void)strtod(s, &end);
+	return *end == '\0';
+}
+
+/* A negative number (calibrate axis-offset-v -5) is an operand, not
+ * options: such arguments move behind a "--" at the end, in their order,
+ * so that getopt leaves them to the operands. Returns argv itself when
+ * there is none or the user wrote "--", else a new array to free. */
+static char **negatives_last(int argc, char **argv, int *out_argc)
+{
+	*out_argc = argc;
+	int moved = 0;
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--"))
+			return argv;
+		moved += is_negative_number(argv[i]);
+	}
+	char **out = moved ? calloc((size_t)argc + 2, sizeof(*out)) : NULL;
+	if (!out)
+		return argv;
+	int n = 0;
+	for (int i = 0; i < argc; i++)
+		if (i == 0 || !is_negative_number(argv[i]))
+			out[n++] = argv[i];
+	out[n++] = "--";
+	for (int i = 1; i < argc; i++)
+		if (is_negative_number(argv[i]))
+			out[n++] = argv[i];
+	*out_argc = n;
+	return out;
+}
+
+/* Options and operands into a. Returns -1 to go on, else the exit status. */
+static int parse_command_line(int argc, char **argv, struct ctl_args *a)
+{
 	int c, status;
-
-	/* A closed stdout or socket must give an error return, not kill us. */
-	signal(SIGPIPE, SIG_IGN);
-
 	while ((c = getopt_long(argc, argv, "s:hV", long_options, NULL)) != -1) {
-		if ((status = parse_option(c, &a)) >= 0)
+		if ((status = parse_option(c, a)) >= 0)
 			return status;
 	}
 	if (optind >= argc)
 		return usage_error("%s", "no command given");
-	a.command = argv[optind++];
+	a->command = argv[optind++];
 	for (; optind < argc; optind++) {
-		if (a.operand_count == 2)
-			return usage_error("too many arguments for '%s'", a.command);
-		a.operand[a.operand_count++] = argv[optind];
+		if (a->operand_count == 2)
+			return usage_error("too many arguments for '%s'", a->command);
+		a->operand[a->operand_count++] = argv[optind];
 	}
+	return -1;
+}
+
+int main(int argc, char **argv)
+{
+	struct ctl_args a = { 0 };
+	int status;
+
+	/* A closed stdout or socket must give an error return, not kill us. */
+	signal(SIGPIPE, SIG_IGN);
+
+	char **args = negatives_last(argc, argv, &argc);
+	status = parse_command_line(argc, args, &a);
+	if (args != argv)
+		free(args);
+	if (status >= 0)
+		return status;
 	const struct ctl_command *cmd = check_command(&a, &status);
 	return cmd ? cmd->run(&a) : status;
 }

@@ -127,8 +127,16 @@ static void put_watchers(FILE *f, const struct spindle_watch_stats *w)
 		(unsigned long long)w->denied);
 }
 
+static void put_calibration(FILE *f, const struct spindle_calibration *c)
+{
+	fprintf(f, ", \"calibration\": {\"phase_offset\": %.9g, \"axis_offset_u\": %d, \"axis_offset_v\": %d",
+		(double)c->phase_offset, c->axis_offset_u, c->axis_offset_v);
+	fprintf(f, ", \"vertical_scale\": %.9g}", (double)c->vertical_scale);
+}
+
 void status_print_json(FILE *f, const char *socket, uint32_t protocol, const struct spindle_device_info *dev,
-		       const struct spindle_status *st, const struct spindle_watch_stats *ws)
+		       const struct spindle_status *st, const struct spindle_watch_stats *ws,
+		       const struct spindle_calibration *cal)
 {
 	fputs("{\"socket\": ", f);
 	put_string(f, socket);
@@ -143,5 +151,7 @@ void status_print_json(FILE *f, const char *socket, uint32_t protocol, const str
 	}
 	if (ws)
 		put_watchers(f, ws); /* protocol 5 */
+	if (cal)
+		put_calibration(f, cal); /* protocol 6 */
 	fputs("}\n", f);
 }

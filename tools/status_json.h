@@ -9,8 +9,10 @@
 #include <spindle/spindle.h>
 
 /* Writes the object and a newline to f. socket is the path used; ws the
- * watchers' counters (protocol 5), or NULL. */
+ * watchers' counters (protocol 5), or NULL; cal the calibration (protocol
+ * 6), or NULL. */
 void status_print_json(FILE *f, const char *socket, uint32_t protocol, const struct spindle_device_info *dev,
-		       const struct spindle_status *st, const struct spindle_watch_stats *ws);
+		       const struct spindle_status *st, const struct spindle_watch_stats *ws,
+		       const struct spindle_calibration *cal);
 
 #endif

@@ -86,7 +86,9 @@ class RefusedQuota(CommitRefused):
 
 
 class RefusedDenied(CommitRefused):
-    """Commit refusal 2 (denied): the policy does not let this client have an exclusive layer."""
+    """Commit refusal 2 (denied): the policy does not let this client have an exclusive layer, or
+    (version 6) calibrate.
+    """
     code = 2
     name = 'denied'
 
@@ -95,6 +97,14 @@ class RefusedBusy(CommitRefused):
     """Commit refusal 3 (busy): another client's exclusive layer is showing."""
     code = 3
     name = 'busy'
+
+
+class RefusedOutOfRange(CommitRefused):
+    """Commit refusal 4 (out_of_range): version 6: a calibration value out of its range (enum
+    calibration_key).
+    """
+    code = 4
+    name = 'out_of_range'
 
 
 ERRORS = {
@@ -113,6 +123,7 @@ REFUSALS = {
     1: RefusedQuota,
     2: RefusedDenied,
     3: RefusedBusy,
+    4: RefusedOutOfRange,
 }
 
 __all__ = [
@@ -128,6 +139,7 @@ __all__ = [
     'RefusedQuota',
     'RefusedDenied',
     'RefusedBusy',
+    'RefusedOutOfRange',
     'ERRORS',
     'REFUSALS',
 ]

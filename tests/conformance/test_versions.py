@@ -138,7 +138,8 @@ def valid_args(c, msg, objs):
             'list.multiply_transform': (IDENTITY,),
             'layer.set_priority': (1,),
             'layer.set_exclusive': (0,),
-            'display.watch': (c.new_id(), 0)}
+            'display.watch': (c.new_id(), 0),
+            'display.calibrate': (0, 0.0)}
     return vals[msg.full]
 
 

@@ -90,6 +90,41 @@ def show_colored(sock):
             show.kill()
 
 
+def calibrate(sock, tmp):
+    """calibrate sets a key live, --save writes it into the config file
+    (keeping every other line), a daemon started on that file has it, and
+    a value out of range for the display is refused (exit 4)."""
+    conf = os.path.join(tmp, 'spindled.conf')
+    with open(conf, 'w') as f:
+        f.write('# kept\nprofile = small\naxis-offset-u = 9  # old value\n')
+    out = ctl_run(sock, 'calibrate', 'axis-offset-u', '-3', '--save', '--config', conf)
+    if 'axis-offset-u -3 px' not in out or f'saved axis-offset-u = -3 in {conf}' not in out:
+        fail(f'calibrate printed {out!r}')
+    with open(conf) as f:
+        text = f.read()
+    if text != '# kept\nprofile = small\naxis-offset-u = -3 # old value\n':
+        fail(f'saved config {text!r}')
+    ctl_run(sock, 'calibrate', 'phase-offset', '2.5')
+    js = json.loads(ctl_run(sock, 'status', '--json'))
+    if js['calibration'] != {'phase_offset': 2.5, 'axis_offset_u': -3, 'axis_offset_v': 0, 'vertical_scale': 1}:
+        fail(f'status --json calibration {js["calibration"]!r}')
+    p = subprocess.run([ctl, '--socket', sock, 'calibrate', 'axis-offset-v', '33'], capture_output=True,
+                       text=True, timeout=60)
+    if p.returncode != 4 or 'out of range' not in p.stderr:
+        fail(f'axis-offset-v 33 at 128x128: exit {p.returncode}: {p.stderr!r}')
+    sock2 = os.path.join(tmp, 'saved.sock')
+    d2 = subprocess.Popen([spindled, '--device', 'sim', '--socket', sock2, '--config', conf],
+                          stderr=subprocess.DEVNULL)
+    try:
+        wait_socket(sock2, d2)
+        out = ctl_run(sock2, 'calibrate')
+        if 'axis-offset-u -3 px' not in out or 'phase-offset 0 deg' not in out:
+            fail(f'daemon on the saved config: {out!r}')
+    finally:
+        d2.send_signal(signal.SIGTERM)
+        d2.wait(timeout=10)
+
+
 def main():
     tmp = tempfile.mkdtemp(prefix='spindle-e2e-')
     sock = os.path.join(tmp, 'spindle.sock')
@@ -114,8 +149,10 @@ def main():
             fail('no volume shown')
         js = json.loads(ctl_run(sock, 'status', '--json'))  # one JSON object, the same figures
         if (js['device']['width'], js['device']['mirrored'], js['display']['clients'], js['protocol']) != \
-                (128, True, 2, 5) or js['display']['volumes_shown'] < 1 or 'composition' not in js or \
-                js.get('watchers', {}).get('max_watchers') != 4:
+                (128, True, 2, 6) or js['display']['volumes_shown'] < 1 or 'composition' not in js or \
+                js.get('watchers', {}).get('max_watchers') != 4 or \
+                js.get('calibration') != {'phase_offset': 0, 'axis_offset_u': 0, 'axis_offset_v': 0,
+                                          'vertical_scale': 1}:
             fail(f'status --json: {js!r}')
 
         svol = os.path.join(work, 'e2e-bunny.svol')
@@ -143,6 +180,7 @@ def main():
             fail(f'show exited {show.returncode} on SIGTERM')
         show = None
         show_colored(sock)
+        calibrate(sock, tmp)
     finally:
         if show:
             show.kill()

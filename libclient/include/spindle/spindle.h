@@ -130,12 +130,14 @@ struct spindle_state {
 	float rpm; /* measured, 0 when not turning */
 };
 
-/* Why the daemon refused a commit (protocol version 2). A refused commit
- * shows nothing: every change stays pending, frame requests too. */
+/* Why the daemon refused a commit (protocol version 2), or a calibration
+ * (version 6). A refused commit shows nothing: every change stays pending,
+ * frame requests too. */
 enum spindle_refusal {
-	SPINDLE_REFUSED_QUOTA = 1,  /* more primitives than this client's quota */
-	SPINDLE_REFUSED_DENIED = 2, /* exclusive layer not allowed by policy */
-	SPINDLE_REFUSED_BUSY = 3,   /* another client's exclusive layer shows */
+	SPINDLE_REFUSED_QUOTA = 1,        /* more primitives than this client's quota */
+	SPINDLE_REFUSED_DENIED = 2,       /* exclusive layer, or calibration, not allowed */
+	SPINDLE_REFUSED_BUSY = 3,         /* another client's exclusive layer shows */
+	SPINDLE_REFUSED_OUT_OF_RANGE = 4, /* a calibration value out of its range */
 };
 
 /* Asynchronous events, called from spindle_dispatch() (and from the
@@ -373,6 +375,33 @@ struct spindle_watch_stats {
 /* Blocking: the daemon's watcher counters (one display.get_status round).
  * 0 or -errno; -EPROTONOSUPPORT from a daemon older than protocol 5. */
 int spindle_get_watch_stats(struct spindle *sp, struct spindle_watch_stats *out);
+
+/* The display's calibration (protocol 6; spindled(8), docs/rendering.md
+ * "Calibration"): where a real projector's images land against volume
+ * space, corrected in the render geometry. */
+enum spindle_calibration_key {
+	SPINDLE_CALIBRATION_PHASE_OFFSET = 0,   /* degrees, -180 to 180 */
+	SPINDLE_CALIBRATION_AXIS_OFFSET_U = 1,  /* whole pixels */
+	SPINDLE_CALIBRATION_AXIS_OFFSET_V = 2,  /* whole pixels */
+	SPINDLE_CALIBRATION_VERTICAL_SCALE = 3, /* 0.5 to 2 */
+};
+
+struct spindle_calibration {
+	float phase_offset;                   /* degrees */
+	int32_t axis_offset_u, axis_offset_v; /* pixels */
+	float vertical_scale;
+};
+
+/* Blocking: the calibration in use (one display.get_status round). 0 or
+ * -errno; -EPROTONOSUPPORT from a daemon older than protocol 6. */
+int spindle_get_calibration(struct spindle *sp, struct spindle_calibration *out);
+/* Blocking: sets one calibration value from the next volume on; out (may
+ * be NULL) gets the calibration in use afterwards. 0, -EACCES (only root
+ * and the daemon's user may calibrate), -ERANGE (value out of its range),
+ * -EPROTONOSUPPORT (daemon older than protocol 6), or -errno. The daemon's
+ * config file is not written. */
+int spindle_calibrate(struct spindle *sp, enum spindle_calibration_key key, float value,
+		      struct spindle_calibration *out);
 
 #ifdef __cplusplus
 }
