@@ -78,7 +78,15 @@ static void spawn(struct daemon *d, const char *renderer, const char *config)
 	CHECK(mkdtemp(d->dir) != NULL);
 	snprintf(d->socket, sizeof(d->socket), "%s/spindle.sock", d->dir);
 	snprintf(d->log, sizeof(d->log), "%s/spindled.log", d->dir);
-	char conf[128] = "/dev/null";
+	char conf[128] = "/dev/null", text[1024];
+	const struct calibration *cal = test_calibration();
+	if (memcmp(cal, &(struct calibration){ .vertical_scale = 1.0f }, sizeof(*cal))) {
+		snprintf(text, sizeof(text),
+			 "%s\nphase-offset = %.9g\naxis-offset-u = %d\naxis-offset-v = %d\nvertical-scale = %.9g\n",
+			 config ? config : "", (double)cal->phase_deg, cal->axis_u, cal->axis_v,
+			 (double)cal->vertical_scale);
+		config = text;
+	}
 	if (config) {
 		snprintf(conf, sizeof(conf), "%s/spindled.conf", d->dir);
 		FILE *f = fopen(conf, "w");
@@ -309,15 +317,48 @@ void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t coun
 	CHECK(frame.volume_seq > 0 && frame.time_ns > 0);
 }
 
+const struct calibration *test_calibration(void)
+{
+	static struct calibration cal;
+	static bool parsed;
+	if (parsed)
+		return &cal;
+	calibration_identity(&cal);
+	const char *env = getenv("SPINDLE_TEST_CALIBRATION");
+	if (env && *env) {
+		double v[4];
+		char end;
+		CHECK_MSG(sscanf(env, "%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &end) == 4,
+			  "SPINDLE_TEST_CALIBRATION=%s: want PHASE,U,V,SCALE", env);
+		for (unsigned k = 0; k < CALIBRATION_KEYS; k++)
+			CHECK(calibration_set(&cal, k, v[k]) == 0);
+	}
+	parsed = true;
+	return &cal;
+}
+
+void calibrated_point(double x, double y, double z, double out[3])
+{
+	const struct calibration *cal = test_calibration();
+	double a = cal->phase_deg * M_PI / 180.0;
+	out[0] = x * cos(a) + z * sin(a);
+	out[1] = y * cal->vertical_scale;
+	out[2] = -x * sin(a) + z * cos(a);
+}
+
 struct voxel expected_point(const struct geometry *g, double x, double y, double z)
 {
-	double phi = atan2(z, x);
+	const struct calibration *cal = test_calibration();
+	double p[3];
+	calibrated_point(x, y, z, p);
+	double phi = atan2(p[2], p[0]);
 	uint32_t k = geometry_image_of_azimuth(g, phi);
 	if (g->mirrored)
 		k %= g->images_per_rev / 2;
 	double th = geometry_image_angle(g, k);
-	double s = x * cos(th) + z * sin(th);
-	return (struct voxel){ k, geometry_column(g, s), geometry_row(g, y) };
+	double s = p[0] * cos(th) + p[2] * sin(th);
+	return (struct voxel){ k, geometry_column(g, s) + (uint32_t)cal->axis_u,
+			       geometry_row(g, p[1]) + (uint32_t)cal->axis_v };
 }
 
 bool lit_near(const struct volume *vol, uint32_t k, int u, int v, int c, int radius)

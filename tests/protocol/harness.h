@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <sys/types.h>
 
+#include "calibration.h"
 #include "check.h"
 #include "geometry.h"
 #include "spindle/spindle.h"
@@ -74,8 +75,18 @@ struct volume *capture_volume(struct spindle *sp);
  * until shown. The objects stay alive until the connection is closed. */
 void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g, uint8_t b);
 
+/* The calibration the suite's daemons run with: $SPINDLE_TEST_CALIBRATION
+ * as "PHASE,U,V,SCALE" (phase-offset, axis-offset-u, axis-offset-v,
+ * vertical-scale; calibration.h), else none. The expectations below are
+ * shifted by it: the point turned by -PHASE about the axis with its height
+ * scaled by SCALE, its voxel then moved by U columns and V rows. */
+const struct calibration *test_calibration(void);
+/* Where the calibration puts volume-space point (x, y, z) for rendering. */
+void calibrated_point(double x, double y, double z, double out[3]);
+
 /* Expectations from docs/design.md section 3 (computed here, not by spindled):
- * the volume image, column and row a point lights. */
+ * the volume image, column and row a point lights (under test_calibration(),
+ * which must keep it inside the image). */
 struct voxel {
 	uint32_t k, u, v;
 };

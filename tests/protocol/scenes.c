@@ -17,13 +17,25 @@ struct geometry small(void)
 int col(double s)
 {
 	struct geometry g = small();
-	return (int)geometry_column(&g, s);
+	return (int)geometry_column(&g, s) + test_calibration()->axis_u;
 }
 
 int row(double y)
 {
 	struct geometry g = small();
-	return (int)geometry_row(&g, y);
+	const struct calibration *cal = test_calibration();
+	return (int)geometry_row(&g, y * cal->vertical_scale) + cal->axis_v;
+}
+
+double col_s(int u)
+{
+	return (u - test_calibration()->axis_u + 0.5) * 2.0 / W - 1.0;
+}
+
+double row_y(int v)
+{
+	const struct calibration *cal = test_calibration();
+	return (1.0 - (v - cal->axis_v + 0.5) * 2.0 / H) / cal->vertical_scale;
 }
 
 /* ---- shapes ---- */

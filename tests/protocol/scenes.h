@@ -11,9 +11,15 @@
 #define NV 64 /* images per volume: N = 128, mirrored */
 
 struct geometry small(void);
-/* Column of volume-space s, row of height y, at the small profile. */
+/* Column of volume-space s, row of height y, at the small profile, under
+ * the suite's calibration (test_calibration(): the column moved by its U,
+ * the height scaled by its SCALE and the row moved by its V); and back,
+ * the s and height of the centre of column u and row v. Columns and rows
+ * of an axis-symmetric shape: the phase does not move it. */
 int col(double s);
 int row(double y);
+double col_s(int u);
+double row_y(int v);
 
 /* Shapes: vertices written to v, their count returned. The axis from
  * y -0.6 to 0.6 as one line; a horizontal disk of radius r at height y as

@@ -93,7 +93,7 @@ static void test_sphere(void)
 	struct daemon d;
 	daemon_start(&d);
 	struct spindle *sp = client_connect(&d);
-	const double r = 0.6, voxel = 2.0 / W;
+	const double r = 0.6, voxel = 2.0 / W, scale = test_calibration()->vertical_scale;
 	static float v[48 * 24 * 18];
 	show_vertices(sp, 2, v, sphere(v, r, 48, 24), 0, 0, 255);
 	struct volume *vol = capture_volume(sp);
@@ -106,8 +106,8 @@ static void test_sphere(void)
 			for (int u = 0; u < W; u++) {
 				if (!volume_pixel(vol, k, (uint32_t)u, (uint32_t)y, 2))
 					continue;
-				double s = (u + 0.5) * voxel - 1, yy = 1 - (y + 0.5) * voxel;
-				CHECK(fabs(hypot(s, yy) - r) <= 2.5 * voxel);
+				/* The distance in volume space, heights unscaled. */
+				CHECK(fabs(hypot(col_s(u), row_y(y)) - r) <= 2.5 * voxel / fmin(scale, 1.0));
 			}
 	}
 	CHECK(!lit_near(vol, 0, col(0), row(0), 0, 3)); /* red stays dark */
@@ -144,11 +144,14 @@ static void test_wall(void)
  * expected voxel does not depend on rounding. */
 static bool point_unambiguous(const struct geometry *g, double x, double y, double z)
 {
+	double p[3]; /* where the calibration puts it */
+	calibrated_point(x, y, z, p);
+	struct voxel e = expected_point(g, x, y, z);
+	x = p[0], y = p[1], z = p[2];
 	double phi = atan2(z, x), d = 2 * M_PI / g->images_per_rev;
 	double f = phi / d - floor(phi / d);
 	if (fabs(f - 0.5) < 0.05)
 		return false;
-	struct voxel e = expected_point(g, x, y, z);
 	double th = geometry_image_angle(g, e.k);
 	double s = x * cos(th) + z * sin(th);
 	double fu = (s + 1) / 2 * g->width, fv = (1 - y) / 2 * g->height;
