@@ -86,3 +86,34 @@ double micro_halftone_gbps(halftone_fn fn, uint32_t tiles, int runs)
 	free(out);
 	return median(rate, runs);
 }
+
+double micro_shift_ms(const struct geometry *g, double fill, int32_t du, int32_t dv, int runs, uint64_t *tiles)
+{
+	struct volume *src = volume_create(g), *dst = volume_create(g);
+	uint8_t tile[VOLUME_TILE_BYTES];
+	struct rng rng = rng_seed(0x53484654u);
+	int err = !src || !dst || runs < 1 || runs > MAX_RUNS;
+	for (uint32_t k = 0; src && !err && k < src->image_count; k++)
+		for (uint32_t t = 0; !err && t < volume_tiles_per_image(src); t++) {
+			if ((double)(rng_next(&rng) >> 11) * 0x1p-53 >= fill)
+				continue;
+			fill_random(tile, sizeof(tile), rng_next(&rng));
+			/* Edge tiles keep their padding dark: shift whole tiles in. */
+			uint32_t x_end = g->width - t % src->tiles_x * VOLUME_TILE;
+			uint32_t y_end = g->height - t / src->tiles_x * VOLUME_TILE;
+			if (x_end < VOLUME_TILE || y_end < VOLUME_TILE)
+				continue;
+			err = volume_image_append(src, k, t, tile) < 0;
+		}
+	double ms[MAX_RUNS];
+	for (int i = 0; !err && i < runs; i++) {
+		int64_t t0 = now_ns();
+		err = volume_shift(dst, src, du, dv) < 0;
+		ms[i] = (double)(now_ns() - t0) / 1e6;
+	}
+	if (!err)
+		*tiles = volume_tile_count(src);
+	volume_destroy(src);
+	volume_destroy(dst);
+	return err ? -1 : median(ms, runs);
+}

@@ -103,6 +103,9 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src);
  * that is outside the image (calibration.h's axis offset). seq and
  * shown_ns are copied. 0, -ENOMEM or -EINVAL. */
 int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
+/* The same without SIMD (volume_shift() takes AVX2 where the CPU has it),
+ * bit for bit: for tests and benchmarks. */
+int volume_shift_scalar(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
 
 /* Bytes of image k if stored dense: 3 planes of H rows of ceil(W/8). */
 size_t volume_dense_image_bytes(const struct volume *vol);

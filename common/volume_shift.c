@@ -4,21 +4,103 @@
 #include <errno.h>
 #include <stdbool.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "volume.h"
 
+/* Rows of the big-endian 32-bit words, as numbers. */
 static inline uint32_t be32_load(const uint8_t *p)
 {
-	return (uint32_t)p[0] << 24 | (uint32_t)p[1] << 16 | (uint32_t)p[2] << 8 | p[3];
+	uint32_t v;
+	memcpy(&v, p, sizeof(v));
+	return __builtin_bswap32(v);
 }
 
 static inline void be32_store(uint8_t *p, uint32_t v)
 {
-	p[0] = (uint8_t)(v >> 24);
-	p[1] = (uint8_t)(v >> 16);
-	p[2] = (uint8_t)(v >> 8);
-	p[3] = (uint8_t)v;
+	v = __builtin_bswap32(v);
+	memcpy(p, &v, sizeof(v));
 }
+
+static const uint8_t dark_tile[VOLUME_TILE_BYTES];
+
+/* Where one plane of a result tile comes from: its row i is row ry + i of
+ * the top tiles (left a, right b), or past their end row ry + i - 32 of the
+ * bottom ones, taken from pixel r on. */
+struct plane_source {
+	const uint8_t *ta, *tb, *ba, *bb;
+	unsigned ry, r;
+	uint32_t mask; /* columns inside the image */
+};
+
+static inline uint32_t shift_row(const struct plane_source *p, unsigned i)
+{
+	unsigned row = p->ry + i;
+	const uint8_t *a = row < VOLUME_TILE ? p->ta : p->ba, *b = row < VOLUME_TILE ? p->tb : p->bb;
+	row %= VOLUME_TILE;
+	uint64_t pair = (uint64_t)be32_load(a + 4 * row) << 32 | be32_load(b + 4 * row);
+	return (uint32_t)(pair << p->r >> 32) & p->mask;
+}
+
+/* The plane's 32 rows into out; returns their OR. */
+static uint32_t shift_plane_scalar(uint8_t *out, const struct plane_source *p)
+{
+	uint32_t any = 0;
+	for (unsigned i = 0; i < VOLUME_TILE; i++) {
+		uint32_t w = shift_row(p, i);
+		be32_store(out + 4 * i, w);
+		any |= w;
+	}
+	return any;
+}
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define SHIFT_AVX2 1
+
+/* 8 rows from source row row on of tiles top and bottom (row + 8 past the
+ * top's end: the block that crosses into the bottom tile), as numbers. */
+__attribute__((target("avx2"))) static inline __m256i rows8(const uint8_t *top, const uint8_t *bottom, unsigned row,
+							    __m256i swap)
+{
+	if (row + 8 <= VOLUME_TILE)
+		return _mm256_shuffle_epi8(_mm256_loadu_si256((const __m256i *)(top + 4 * row)), swap);
+	if (row >= VOLUME_TILE)
+		return _mm256_shuffle_epi8(_mm256_loadu_si256((const __m256i *)(bottom + 4 * (row - VOLUME_TILE))),
+					   swap);
+	/* Lane k: top row row + k while that is in the top tile, else bottom
+	 * row row + k - 32; both are lane (t + k) & 7 of the last 8 rows of the
+	 * top and the first 8 of the bottom, t = row - 24. */
+	const __m256i iota = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+	int t = (int)row - (VOLUME_TILE - 8);
+	__m256i idx = _mm256_and_si256(_mm256_add_epi32(iota, _mm256_set1_epi32(t)), _mm256_set1_epi32(7));
+	__m256i hi =
+		_mm256_permutevar8x32_epi32(_mm256_loadu_si256((const __m256i *)(top + 4 * (VOLUME_TILE - 8))), idx);
+	__m256i lo = _mm256_permutevar8x32_epi32(_mm256_loadu_si256((const __m256i *)bottom), idx);
+	__m256i from_top = _mm256_cmpgt_epi32(_mm256_set1_epi32(8 - t), iota);
+	return _mm256_shuffle_epi8(_mm256_blendv_epi8(lo, hi, from_top), swap);
+}
+
+/* The same, 8 rows at a time. */
+__attribute__((target("avx2"))) static uint32_t shift_plane_avx2(uint8_t *out, const struct plane_source *p)
+{
+	const __m256i swap = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5,
+					      4, 11, 10, 9, 8, 15, 14, 13, 12);
+	const __m128i left = _mm_cvtsi32_si128((int)p->r), right = _mm_cvtsi32_si128((int)(VOLUME_TILE - p->r));
+	const __m256i mask = _mm256_set1_epi32((int)p->mask);
+	__m256i acc = _mm256_setzero_si256();
+	for (unsigned i0 = 0; i0 < VOLUME_TILE; i0 += 8) {
+		__m256i va = rows8(p->ta, p->ba, p->ry + i0, swap), vb = rows8(p->tb, p->bb, p->ry + i0, swap);
+		__m256i w = _mm256_and_si256(_mm256_or_si256(_mm256_sll_epi32(va, left), _mm256_srl_epi32(vb, right)),
+					     mask);
+		acc = _mm256_or_si256(acc, w);
+		_mm256_storeu_si256((__m256i *)(out + 4 * i0), _mm256_shuffle_epi8(w, swap));
+	}
+	return (uint32_t)!_mm256_testz_si256(acc, acc);
+}
+#endif
+
+typedef uint32_t (*shift_plane_fn)(uint8_t *out, const struct plane_source *p);
 
 /* floor(a / VOLUME_TILE) for negative a too. */
 static inline int64_t tile_of(int64_t a)
@@ -27,6 +109,7 @@ static inline int64_t tile_of(int64_t a)
 }
 
 struct shift_image {
+	shift_plane_fn plane;
 	const struct volume *src;
 	const uint8_t **tile; /* per tile number: its bytes in the source, or NULL */
 	int64_t du, dv;
@@ -48,38 +131,47 @@ static bool shift_tile(const struct shift_image *s, uint32_t tx, uint32_t ty, ui
 	int64_t sx = (int64_t)tx * VOLUME_TILE - s->du, sy = (int64_t)ty * VOLUME_TILE - s->dv;
 	int64_t stx = tile_of(sx), sty = tile_of(sy);
 	unsigned r = (unsigned)(sx - stx * VOLUME_TILE), ry = (unsigned)(sy - sty * VOLUME_TILE);
-	/* [row][column]: the tiles the rows come from, top then bottom. */
-	const uint8_t *src[2][2] = {
-		{ source_tile(s, stx, sty), r ? source_tile(s, stx + 1, sty) : NULL },
-		{ ry ? source_tile(s, stx, sty + 1) : NULL, r && ry ? source_tile(s, stx + 1, sty + 1) : NULL },
-	};
-	if (!src[0][0] && !src[0][1] && !src[1][0] && !src[1][1])
+	/* The tiles the rows come from: top left and right, bottom left and
+	 * right. */
+	const uint8_t *tl = source_tile(s, stx, sty), *tr = r ? source_tile(s, stx + 1, sty) : NULL;
+	const uint8_t *bl = ry ? source_tile(s, stx, sty + 1) : NULL,
+		      *br = r && ry ? source_tile(s, stx + 1, sty + 1) : NULL;
+	if (!tl && !tr && !bl && !br)
 		return false;
 	uint32_t x_end = g->width - tx * VOLUME_TILE, y_end = g->height - ty * VOLUME_TILE;
-	uint32_t col_mask = x_end >= VOLUME_TILE ? UINT32_MAX : ~(UINT32_MAX >> x_end);
+	struct plane_source p = {
+		.ry = ry,
+		.r = r,
+		.mask = x_end >= VOLUME_TILE ? UINT32_MAX : ~(UINT32_MAX >> x_end),
+	};
 	uint32_t any = 0;
-	for (unsigned c = 0; c < 3; c++)
-		for (unsigned j = 0; j < VOLUME_TILE; j++) {
-			unsigned row = ry + j, half = row >= VOLUME_TILE;
-			size_t at = c * VOLUME_TILE_PLANE_BYTES + (row - half * VOLUME_TILE) * 4;
-			const uint8_t *a = src[half][0], *b = src[half][1];
-			uint32_t wa = a ? be32_load(a + at) : 0, wb = b ? be32_load(b + at) : 0;
-			uint32_t w = r ? wa << r | wb >> (VOLUME_TILE - r) : wa;
-			w = j < y_end ? w & col_mask : 0;
-			be32_store(out + c * VOLUME_TILE_PLANE_BYTES + j * 4, w);
-			any |= w;
+	for (unsigned c = 0; c < 3; c++) {
+		size_t plane = (size_t)c * VOLUME_TILE_PLANE_BYTES;
+		p.ta = (tl ? tl : dark_tile) + plane, p.tb = (tr ? tr : dark_tile) + plane;
+		p.ba = (bl ? bl : dark_tile) + plane, p.bb = (br ? br : dark_tile) + plane;
+		any |= s->plane(out + plane, &p);
+	}
+	if (y_end < VOLUME_TILE) { /* rows past H stay dark (volume.h) */
+		any = 0;
+		for (unsigned c = 0; c < 3; c++) {
+			uint8_t *plane = out + (size_t)c * VOLUME_TILE_PLANE_BYTES;
+			memset(plane + 4 * y_end, 0, 4 * (VOLUME_TILE - y_end));
+			for (unsigned i = 0; i < 4 * y_end; i++)
+				any |= plane[i];
 		}
+	}
 	return any != 0;
 }
 
-int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
+static int shift_with(struct volume *dst, const struct volume *src, int32_t du, int32_t dv, shift_plane_fn plane)
 {
 	if (dst == src || dst->image_count != src->image_count || dst->tiles_x != src->tiles_x ||
 	    dst->tiles_y != src->tiles_y || dst->geom.width != src->geom.width || dst->geom.height != src->geom.height)
 		return -EINVAL;
 	volume_clear(dst);
 	uint32_t tiles = volume_tiles_per_image(src);
-	struct shift_image s = { .src = src, .tile = malloc(tiles * sizeof(*s.tile)), .du = du, .dv = dv };
+	struct shift_image
+		s = { .src = src, .tile = malloc(tiles * sizeof(*s.tile)), .du = du, .dv = dv, .plane = plane };
 	if (!s.tile)
 		return -ENOMEM;
 	int r = 0;
@@ -103,4 +195,19 @@ int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32
 	dst->seq = src->seq;
 	dst->shown_ns = src->shown_ns;
 	return r;
+}
+
+int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
+{
+#ifdef SHIFT_AVX2
+	__builtin_cpu_init();
+	if (__builtin_cpu_supports("avx2"))
+		return shift_with(dst, src, du, dv, shift_plane_avx2);
+#endif
+	return shift_with(dst, src, du, dv, shift_plane_scalar);
+}
+
+int volume_shift_scalar(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
+{
+	return shift_with(dst, src, du, dv, shift_plane_scalar);
 }

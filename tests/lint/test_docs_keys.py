@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The documents list what the code takes: every config key of
-daemon/config.c is described in docs/man/spindled.8 (CONFIGURATION KEYS)
+daemon/config.c (and common/calibration.c's) is described in docs/man/spindled.8 (CONFIGURATION KEYS)
 and named in README.md (the --set row), and nothing else is; every long
 option of daemon/main.c is in the man page's OPTIONS and the README's
 table; and the man pages render without warnings (man --warnings, where
@@ -52,6 +52,8 @@ config_c, main_c = read('daemon/config.c'), read('daemon/main.c')
 man8, readme = read('docs/man/spindled.8'), read('README.md')
 
 keys = set(re.findall(r'strcmp\(key, "([a-z0-9-]+)"\)', config_c))
+# The calibration keys (config_set() looks them up in common/calibration.c).
+keys |= set(re.findall(r'\[CALIBRATION_\w+\] = "([a-z0-9-]+)"', read('common/calibration.c')))
 check(len(keys) > 20, f'{len(keys)} keys found in daemon/config.c')
 man_keys = man_tagged(man_section(man8, 'CONFIGURATION KEYS'))
 check(keys == man_keys, 'spindled.8 describes every key and no other: missing '

@@ -102,11 +102,13 @@ static struct volume *random_volume(const struct geometry *g)
 	return v;
 }
 
-static void check_shift(const struct geometry *g, int du, int dv)
+typedef int (*shift_fn)(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
+
+static void check_shift_with(shift_fn shift, const struct geometry *g, int du, int dv)
 {
 	struct volume *src = random_volume(g), *dst = volume_create(g);
 	src->seq = 77;
-	CHECK(volume_shift(dst, src, du, dv) == 0);
+	CHECK(shift(dst, src, du, dv) == 0);
 	CHECK_EQ(dst->seq, 77);
 	for (uint32_t k = 0; k < src->image_count; k++)
 		for (uint32_t v = 0; v < g->height; v++)
@@ -131,6 +133,13 @@ static void check_shift(const struct geometry *g, int du, int dv)
 	}
 	volume_destroy(src);
 	volume_destroy(dst);
+}
+
+/* volume_shift() (AVX2 where the CPU has it) and the scalar one. */
+static void check_shift(const struct geometry *g, int du, int dv)
+{
+	check_shift_with(volume_shift, g, du, dv);
+	check_shift_with(volume_shift_scalar, g, du, dv);
 }
 
 static void test_shift(void)
