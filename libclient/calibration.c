@@ -27,7 +27,7 @@ int spindle_calibrate(struct spindle *sp, enum spindle_calibration_key key, floa
 		return -EPIPE;
 	if (sp->version < 6)
 		return -EPROTONOSUPPORT;
-	uint64_t serial = sp->calibration_serial, refusals = sp->refusals;
+	uint64_t serial = sp->calibration_serial;
 	int r = lib_sent(sp, proto_req_display_calibrate(sp->conn, 1, (uint32_t)key, value));
 	/* The daemon answers with calibration, after refused when it refused. */
 	if (r == 0)
@@ -36,7 +36,7 @@ int spindle_calibrate(struct spindle *sp, enum spindle_calibration_key key, floa
 		return r;
 	if (out)
 		*out = sp->calibration;
-	if (sp->refusals != refusals)
-		return sp->last_refusal == PROTO_DISPLAY_REFUSAL_DENIED ? -EACCES : -ERANGE;
+	if (sp->calibration_refusal)
+		return sp->calibration_refusal == PROTO_DISPLAY_REFUSAL_DENIED ? -EACCES : -ERANGE;
 	return 0;
 }

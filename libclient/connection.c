@@ -263,6 +263,7 @@ static int on_refused(void *target, const struct proto_display_refused_args *a)
 	struct spindle *sp = target;
 	sp->refusals++;
 	sp->last_refusal = a->code;
+	sp->refused_at = sp->events;
 	lib_log(sp, "spindled refused a request (object %u): %s", a->object, a->message);
 	if (sp->listener && sp->listener->refused)
 		sp->listener->refused(sp->listener_data, (enum spindle_refusal)a->code, a->object, a->message);
@@ -280,6 +281,9 @@ static int on_calibration(void *target, const struct proto_display_calibration_a
 		.vertical_scale = a->vertical_scale,
 	};
 	sp->calibration_serial++;
+	/* The daemon answers a refused calibrate with refused, then at once
+	 * this event: a refusal just before it was that one. */
+	sp->calibration_refusal = sp->refused_at == sp->events - 1 ? sp->last_refusal : 0;
 	return 0;
 }
 
@@ -346,6 +350,7 @@ static int dispatch_one(struct spindle *sp, struct proto_message *m)
 {
 	struct proto_error err = { 0 };
 	int r;
+	sp->events++;
 	if (m->object == 1)
 		return proto_display_dispatch_event(&display_events, sp, m, sp->version ? sp->version : 1, &err) ==
 				       -EPROTO

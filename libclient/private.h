@@ -54,9 +54,12 @@ struct spindle {
 	uint64_t status_serial;
 	struct spindle_calibration calibration; /* the last calibration event (version 6) */
 	uint64_t calibration_serial;            /* calibration events received */
-	struct spindle_state state; /* version 2: the last state event */
-	uint64_t refusals;          /* refused events received */
-	uint32_t last_refusal;      /* the code of the last one */
+	uint32_t calibration_refusal;           /* the refusal code just before it, or 0 */
+	struct spindle_state state;             /* version 2: the last state event */
+	uint64_t refusals;                      /* refused events received */
+	uint32_t last_refusal;                  /* the code of the last one */
+	uint64_t refused_at;                    /* its number among the events received */
+	uint64_t events;                        /* events received */
 	const struct spindle_listener *listener;
 	void *listener_data;
 	uint32_t error_code; /* the daemon's fatal error code */

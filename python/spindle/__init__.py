@@ -32,19 +32,20 @@ from .capture import Capture
 from .errors import (CaptureError, CommitRefused, ConnectionLost, Error, LibraryError, NotConnected, NotSupported,
                      ProtocolError, Timeout)
 from .protocol_errors import (BadFdError, InvalidMessageError, InvalidMethodError, InvalidObjectError,
-                              InvalidValueError, NoMemoryError, QuotaError, RefusedBusy, RefusedDenied, RefusedQuota,
-                              TooManyClientsError, VersionError)
-from .types import (Composition, DeviceInfo, Frame, IndexType, Limits, Mode, Refusal, Service, State, Status,
-                    VertexFormat)
+                              InvalidValueError, NoMemoryError, QuotaError, RefusedBusy, RefusedDenied,
+                              RefusedOutOfRange, RefusedQuota, TooManyClientsError, VersionError)
+from .types import (Calibration, CalibrationKey, Composition, DeviceInfo, Frame, IndexType, Limits, Mode, Refusal,
+                    Service, State, Status, VertexFormat)
 
 #: Default socket path, used when neither a path nor SPINDLE_SOCKET is given.
 DEFAULT_SOCKET = '/run/spindle/spindle.sock'
 
 __all__ = [
     'connect', 'load_library', 'library_version', 'Connection', 'Buffer', 'List', 'Layer', 'FrameRequest', 'Batch',
-    'Capture', 'transform', 'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'DeviceInfo', 'State', 'Frame', 'Status',
-    'Limits', 'Service', 'Composition', 'Error', 'LibraryError', 'NotConnected', 'ConnectionLost', 'ProtocolError',
-    'CommitRefused', 'NotSupported', 'CaptureError', 'Timeout', 'InvalidObjectError', 'InvalidMethodError',
-    'InvalidMessageError', 'InvalidValueError', 'BadFdError', 'QuotaError', 'VersionError', 'NoMemoryError',
-    'TooManyClientsError', 'RefusedQuota', 'RefusedDenied', 'RefusedBusy', 'DEFAULT_SOCKET', 'INLINE_MAX'
+    'Capture', 'transform', 'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'DeviceInfo', 'State',
+    'Frame', 'Status', 'Limits', 'Service', 'Composition', 'Calibration', 'Error', 'LibraryError', 'NotConnected',
+    'ConnectionLost', 'ProtocolError', 'CommitRefused', 'NotSupported', 'CaptureError', 'Timeout',
+    'InvalidObjectError', 'InvalidMethodError', 'InvalidMessageError', 'InvalidValueError', 'BadFdError',
+    'QuotaError', 'VersionError', 'NoMemoryError', 'TooManyClientsError', 'RefusedQuota', 'RefusedDenied',
+    'RefusedBusy', 'RefusedOutOfRange', 'DEFAULT_SOCKET', 'INLINE_MAX'
 ]

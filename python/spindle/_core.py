@@ -14,9 +14,10 @@ from . import _lib
 from .capture import Capture
 from .errors import (CaptureError, CommitRefused, ConnectionLost, Error, NotConnected, NotSupported, ProtocolError,
                      Timeout)
-from .protocol_errors import ERRORS, REFUSALS
+from .protocol_errors import ERRORS, REFUSALS, RefusedDenied, RefusedOutOfRange
 from .transform import from_column_major, identity, to_column_major
-from .types import DeviceInfo, Frame, IndexType, Mode, Refusal, State, Status, VertexFormat
+from .types import (Calibration, CalibrationKey, DeviceInfo, Frame, IndexType, Mode, Refusal, State, Status,
+                    VertexFormat)
 
 _log = logging.getLogger('spindle')
 
@@ -634,7 +635,7 @@ class Connection:
     agreed), ``on_state`` (called with a :class:`State` when the display's
     state changes; version 2), ``on_refused`` (called with the
     :class:`Refusal`, the object id at fault, 1 for the display, and the
-    daemon's message when a commit is refused).
+    daemon's message when a commit, or a calibration, is refused).
     """
 
     def __init__(self, socket=None, *, version=None, library=None):
@@ -795,8 +796,8 @@ class Connection:
                 cls = ERRORS.get(code)
                 return cls(message) if cls is not None else ProtocolError(message, code)
             return ConnectionLost(message)
-        if err == errno.ENOTSUP:
-            return NotSupported(f'{what}: needs a newer protocol version than this connection\'s {self.version}')
+        if err in (errno.ENOTSUP, errno.EPROTONOSUPPORT):
+            return NotSupported(f'{what}: needs a newer protocol version than this connection\'s {self.version}', err)
         return Error.from_errno(err, what)
 
     def _check(self, r, what):
@@ -1092,3 +1093,64 @@ class Connection:
         with os.fdopen(fd.value, 'rb') as f:
             data = f.read(size.value)
         return Capture(data)
+
+    # ---- calibration (protocol version 6) ----
+
+    def _calibration_fn(self, name):
+        fn = getattr(self._lib, name, None)  # OPTIONAL: missing from a libspindle older than SPINDLE_0.4
+        if fn is None:
+            raise NotSupported(f'{name}: not in this libspindle ({_lib.loaded_path()}): it is older than '
+                               'protocol version 6', errno.EPROTONOSUPPORT)
+        return fn
+
+    def calibration(self):
+        """Blocks for the display's :class:`Calibration` in use (the
+        identity, 0, 0, 0, 1.0, until calibrated). Raises NotSupported from
+        a daemon or libspindle older than protocol version 6."""
+        self._enter('calibration()')
+        out = _lib.Calibration()
+        self._check(self._calibration_fn('spindle_get_calibration')(self._sp, ctypes.byref(out)), 'calibration')
+        return Calibration._from_c(out)
+
+    def calibrate(self, key, value):
+        """Sets one calibration value from the next volume on and returns
+        the new :class:`Calibration` (blocking; the daemon's config file is
+        not written: ``spindlectl calibrate --save`` does that). key: a
+        :class:`CalibrationKey` (or its number) or its config name
+        ('phase-offset', 'axis-offset-u', 'axis-offset-v', 'vertical-scale');
+        value: degrees (-180 to 180), whole pixels (at most a quarter of the
+        image either way), or a factor (0.5 to 2).
+
+        A refusal changes nothing and the connection goes on: RefusedDenied
+        (errno EACCES) for a client other than root and the daemon's own
+        user, RefusedOutOfRange (errno ERANGE) for a value out of its range
+        for this display, a non-integer offset included (both are
+        CommitRefused subclasses; ``on_refused`` is called too). An unknown
+        key raises ValueError, a value that is not a number TypeError,
+        before anything is sent; NotSupported from a daemon or libspindle
+        older than protocol version 6."""
+        try:
+            key = CalibrationKey(key)
+        except ValueError:
+            names = ', '.join(k.config_name for k in CalibrationKey)
+            raise ValueError(f'calibrate: {key!r} is not a calibration key ({names})') from None
+        if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+            raise TypeError(f'calibrate: the value is a number, not {type(value).__name__}')
+        self._enter('calibrate()')
+        fn = self._calibration_fn('spindle_calibrate')
+        out = _lib.Calibration()
+        refusals, last = self._refusals, self._last_refusal
+        r = fn(self._sp, int(key), float(value), ctypes.byref(out))
+        if r in (-errno.EACCES, -errno.ERANGE):
+            message = os.strerror(-r)
+            if self._refusals > refusals:
+                message = self._last_refusal[1]
+                # The calibration's refused event is no commit's: FrameRequest.wait() must not raise it.
+                self._refusals -= 1
+                if self._refusals == refusals:
+                    self._last_refusal = last
+            self._raise_pending()
+            cls = RefusedDenied if r == -errno.EACCES else RefusedOutOfRange
+            raise cls(f'spindled refused the calibration: {message}', -r)
+        self._check(r, 'calibrate')
+        return Calibration._from_c(out)

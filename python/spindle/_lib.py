@@ -128,6 +128,16 @@ class Frame(Structure):
     _fields_ = [('volume_seq', c_uint64), ('time_ns', c_uint64)]
 
 
+class Calibration(Structure):
+    """struct spindle_calibration"""
+    _fields_ = [
+        ('phase_offset', c_float),
+        ('axis_offset_u', c_int32),
+        ('axis_offset_v', c_int32),
+        ('vertical_scale', c_float),
+    ]
+
+
 STATE_FUNC = CFUNCTYPE(None, c_void_p, POINTER(State))
 REFUSED_FUNC = CFUNCTYPE(None, c_void_p, c_int, c_uint32, c_char_p)
 LOG_FUNC = CFUNCTYPE(None, c_void_p, c_char_p)
@@ -191,10 +201,12 @@ PROTOTYPES = {
     'spindle_commit_and_wait': (c_int, [_h, POINTER(Frame)]),
     'spindle_get_status': (c_int, [_h, POINTER(Status)]),
     'spindle_capture': (c_int, [_h, POINTER(c_int), POINTER(c_size_t)]),
+    'spindle_get_calibration': (c_int, [_h, POINTER(Calibration)]),
+    'spindle_calibrate': (c_int, [_h, c_int, c_float, POINTER(Calibration)]),
 }
 
 # Added after SPINDLE_0.1: a library without them still loads.
-OPTIONAL = {'spindle_library_version'}
+OPTIONAL = {'spindle_library_version', 'spindle_get_calibration', 'spindle_calibrate'}
 
 _lock = threading.Lock()
 _lib = None

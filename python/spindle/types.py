@@ -1,13 +1,13 @@
 """The value types of the spindle package: enums mirroring spindle.h's and
 frozen dataclasses for what the daemon reports (device info, status, state,
-frames)."""
+frames, calibration)."""
 import dataclasses
 import enum
 from typing import Optional
 
 __all__ = [
-    'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'DeviceInfo', 'State', 'Frame', 'Limits', 'Service',
-    'Composition', 'Status'
+    'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'DeviceInfo', 'State', 'Frame', 'Limits',
+    'Service', 'Composition', 'Status', 'Calibration'
 ]
 
 
@@ -38,10 +38,33 @@ class IndexType(enum.IntEnum):
 
 
 class Refusal(enum.IntEnum):
-    """Why the daemon refused a commit (enum spindle_refusal)."""
+    """Why the daemon refused a commit, or a calibration (enum spindle_refusal)."""
     QUOTA = 1  #: more primitives than this client's quota
-    DENIED = 2  #: exclusive layer not allowed by policy
+    DENIED = 2  #: exclusive layer, or calibration, not allowed by policy
     BUSY = 3  #: another client's exclusive layer shows
+    OUT_OF_RANGE = 4  #: a calibration value out of its range (protocol version 6)
+
+
+class CalibrationKey(enum.IntEnum):
+    """The calibration values (enum spindle_calibration_key, protocol
+    version 6). ``CalibrationKey('axis-offset-u')`` takes the config name
+    too (spindled(8), ``spindlectl calibrate``)."""
+    PHASE_OFFSET = 0  #: degrees, -180 to 180
+    AXIS_OFFSET_U = 1  #: whole pixels, at most a quarter of the image width either way
+    AXIS_OFFSET_V = 2  #: whole pixels, at most a quarter of the image height either way
+    VERTICAL_SCALE = 3  #: a factor, 0.5 to 2
+
+    @property
+    def config_name(self):
+        """The key's name in spindled's config file: 'phase-offset', 'axis-offset-u', ..."""
+        return self.name.lower().replace('_', '-')
+
+    @classmethod
+    def _missing_(cls, value):
+        for key in cls:
+            if value == key.config_name:
+                return key
+        return None
 
 
 def _from_struct(cls, s, **override):
@@ -219,3 +242,20 @@ class Status:
             limits=_from_struct(Limits, s.limits) if s.limits_known else None,
             service=_from_struct(Service, s.service) if s.composition_known else None,
             composition=_from_struct(Composition, s.composition) if s.composition_known else None)
+
+
+@dataclasses.dataclass(frozen=True)
+class Calibration:
+    """The display's calibration (struct spindle_calibration, protocol
+    version 6; :meth:`spindle.Connection.calibration`): where a real
+    projector's images land against volume space. ``phase_offset``
+    (degrees), ``axis_offset_u`` and ``axis_offset_v`` (whole pixels),
+    ``vertical_scale`` (a factor). The identity is 0, 0, 0, 1.0."""
+    phase_offset: float
+    axis_offset_u: int
+    axis_offset_v: int
+    vertical_scale: float
+
+    @classmethod
+    def _from_c(cls, c):
+        return _from_struct(cls, c)

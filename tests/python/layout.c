@@ -98,6 +98,12 @@ int main(void)
 	FIELD(spindle_listener, state);
 	FIELD(spindle_listener, refused);
 
+	STRUCT(spindle_calibration);
+	FIELD(spindle_calibration, phase_offset);
+	FIELD(spindle_calibration, axis_offset_u);
+	FIELD(spindle_calibration, axis_offset_v);
+	FIELD(spindle_calibration, vertical_scale);
+
 	/* The enums the binding passes as int. */
 	printf("enum.size %zu\n", sizeof(enum spindle_mode));
 	printf("SPINDLE_INLINE_MAX %d\n", SPINDLE_INLINE_MAX);

@@ -20,6 +20,7 @@ STRUCTS = {
     'spindle_state': _lib.State,
     'spindle_frame': _lib.Frame,
     'spindle_listener': _lib.Listener,
+    'spindle_calibration': _lib.Calibration,
 }
 
 
