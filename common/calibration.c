@@ -11,6 +11,7 @@ static const char *const key_names[CALIBRATION_KEYS] = {
 	[CALIBRATION_AXIS_U] = "axis-offset-u",
 	[CALIBRATION_AXIS_V] = "axis-offset-v",
 	[CALIBRATION_VERTICAL_SCALE] = "vertical-scale",
+	[CALIBRATION_VERTICAL_OFFSET] = "vertical-offset",
 };
 
 void calibration_identity(struct calibration *c)
@@ -57,6 +58,11 @@ int calibration_set(struct calibration *c, unsigned key, double value)
 			return -EINVAL;
 		c->vertical_scale = (float)value;
 		return 0;
+	case CALIBRATION_VERTICAL_OFFSET:
+		if (!(value >= -0.5 && value <= 0.5))
+			return -EINVAL;
+		c->vertical_offset = (float)value;
+		return 0;
 	}
 	return -EINVAL;
 }
@@ -82,6 +88,8 @@ double calibration_get(const struct calibration *c, unsigned key)
 		return c->axis_v;
 	case CALIBRATION_VERTICAL_SCALE:
 		return c->vertical_scale;
+	case CALIBRATION_VERTICAL_OFFSET:
+		return c->vertical_offset;
 	}
 	return 0.0;
 }
@@ -104,7 +112,7 @@ int calibration_check(const struct calibration *c, const struct geometry *g)
 
 bool calibration_has_transform(const struct calibration *c)
 {
-	return c->phase_deg != 0.0f || c->vertical_scale != 1.0f;
+	return c->phase_deg != 0.0f || c->vertical_scale != 1.0f || c->vertical_offset != 0.0f;
 }
 
 void calibration_transform(const struct calibration *c, float m[16])
@@ -117,5 +125,6 @@ void calibration_transform(const struct calibration *c, float m[16])
 	m[2] = -sn; /* z' = -x sin a + z cos a */
 	m[10] = cs;
 	m[5] = c->vertical_scale;
+	m[13] = c->vertical_offset;
 	m[15] = 1.0f;
 }

@@ -6,9 +6,10 @@
  * - phase: the screen has turned phase degrees past image k's nominal
  *   angle 2 pi k / N (towards increasing angles) when image k is shown, so
  *   image k shows the section at angle 2 pi k / N + phase;
- * - vertical scale s: a point at height y is drawn at height s y (rows
- *   are s times as far apart in world units as nominal: s > 1 when the
- *   projector's image came out smaller than nominal);
+ * - vertical scale s and offset o: a point at height y is drawn at height
+ *   s y + o (s > 1 when the projector's image came out smaller than
+ *   nominal; o, in volume units, moves the picture by a fraction of a row
+ *   where the axis offset below moves it by whole rows);
  * - axis offset (u, v): the projector's pixel (W/2 + u, H/2 + v) shows the
  *   axis centre: every image is shifted by u columns and v rows, and what
  *   leaves the image is dropped. On a mirrored device the half turn that
@@ -34,11 +35,12 @@
 /* The keys, by their config and spindlectl names; the numbers are the
  * protocol's (display.calibrate, enum calibration_key). */
 enum calibration_key {
-	CALIBRATION_PHASE = 0,          /* "phase-offset", degrees, -180 .. 180 */
-	CALIBRATION_AXIS_U = 1,         /* "axis-offset-u", whole pixels */
-	CALIBRATION_AXIS_V = 2,         /* "axis-offset-v", whole pixels */
-	CALIBRATION_VERTICAL_SCALE = 3, /* "vertical-scale", 0.5 .. 2 */
-	CALIBRATION_KEYS = 4,
+	CALIBRATION_PHASE = 0,           /* "phase-offset", degrees, -180 .. 180 */
+	CALIBRATION_AXIS_U = 1,          /* "axis-offset-u", whole pixels */
+	CALIBRATION_AXIS_V = 2,          /* "axis-offset-v", whole pixels */
+	CALIBRATION_VERTICAL_SCALE = 3,  /* "vertical-scale", 0.5 .. 2 */
+	CALIBRATION_VERTICAL_OFFSET = 4, /* "vertical-offset", volume units, -0.5 .. 0.5 */
+	CALIBRATION_KEYS = 5,
 };
 
 /* Whole-pixel offsets a calibration may hold, whatever the profile; a
@@ -49,6 +51,7 @@ struct calibration {
 	float phase_deg;
 	int32_t axis_u, axis_v;
 	float vertical_scale;
+	float vertical_offset;
 };
 
 /* No correction. */
@@ -71,12 +74,13 @@ void calibration_format(const struct calibration *c, unsigned key, char *out, si
  * -EINVAL. */
 int calibration_check(const struct calibration *c, const struct geometry *g);
 
-/* Whether c turns or scales volume space (phase or vertical scale). */
+/* Whether c turns, scales or lifts volume space (phase, vertical scale or
+ * offset). */
 bool calibration_has_transform(const struct calibration *c);
-/* The volume-space transform applied before every layer's: a turn by
+/* The volume-space transform applied after every layer's: a turn by
  * -phase about the y axis (azimuths decreasing: x' = x cos a + z sin a,
- * z' = -x sin a + z cos a, a = phase) with y scaled by the vertical
- * scale. Column-major 4x4. */
+ * z' = -x sin a + z cos a, a = phase) with y' = s y + o (the vertical
+ * scale and offset). Column-major 4x4. */
 void calibration_transform(const struct calibration *c, float m[16]);
 
 #endif

@@ -268,8 +268,8 @@ static void send_calibration(struct client *c)
 {
 	struct calibration cal;
 	c->env->listener->calibration(c->env->data, &cal);
-	client_sent(
-		c, proto_ev_display_calibration(c->conn, 1, cal.phase_deg, cal.axis_u, cal.axis_v, cal.vertical_scale));
+	client_sent(c, proto_ev_display_calibration(c->conn, 1, cal.phase_deg, cal.axis_u, cal.axis_v,
+						    cal.vertical_scale, cal.vertical_offset));
 }
 
 static int display_get_status(void *target)

@@ -279,6 +279,7 @@ static int on_calibration(void *target, const struct proto_display_calibration_a
 		.axis_offset_u = a->axis_offset_u,
 		.axis_offset_v = a->axis_offset_v,
 		.vertical_scale = a->vertical_scale,
+		.vertical_offset = a->vertical_offset,
 	};
 	sp->calibration_serial++;
 	/* The daemon answers a refused calibrate with refused, then at once

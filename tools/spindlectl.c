@@ -76,7 +76,8 @@ static const char usage_text[] =
 	"                                  show the calibration, or set one key\n"
 	"                                  live (root or the daemon's user):\n"
 	"                                  phase-offset, axis-offset-u,\n"
-	"                                  axis-offset-v, vertical-scale; --save\n"
+	"                                  axis-offset-v, vertical-scale,\n"
+	"                                  vertical-offset; --save\n"
 	"                                  also writes it to the config file\n"
 	"\n"
 	"options:\n"
@@ -199,8 +200,10 @@ static void print_composition(const struct spindle_composition *c)
 
 static void print_calibration(const struct spindle_calibration *c)
 {
-	printf("calibration: phase-offset %g deg, axis-offset-u %d px, axis-offset-v %d px, vertical-scale %g\n",
-	       (double)c->phase_offset, c->axis_offset_u, c->axis_offset_v, (double)c->vertical_scale);
+	printf("calibration: phase-offset %g deg, axis-offset-u %d px, axis-offset-v %d px, vertical-scale %g, "
+	       "vertical-offset %g\n",
+	       (double)c->phase_offset, c->axis_offset_u, c->axis_offset_v, (double)c->vertical_scale,
+	       (double)c->vertical_offset);
 }
 
 static int cmd_status(const struct ctl_args *a)
@@ -266,11 +269,11 @@ static int parse_calibration(const struct ctl_args *a, int *key, struct calibrat
 	*key = calibration_key_from_name(a->operand[0]);
 	if (*key < 0)
 		return usage_error("unknown calibration key '%s' (phase-offset, axis-offset-u, axis-offset-v, "
-				   "vertical-scale)",
+				   "vertical-scale, vertical-offset)",
 				   a->operand[0]);
 	if (calibration_set_text(cal, (unsigned)*key, a->operand[1]) < 0)
 		return usage_error("bad value '%s' (phase-offset: -180..180 degrees; axis offsets: whole pixels; "
-				   "vertical-scale: 0.5..2)",
+				   "vertical-scale: 0.5..2; vertical-offset: -0.5..0.5)",
 				   a->operand[1]);
 	return -1;
 }

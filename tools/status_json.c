@@ -131,7 +131,8 @@ static void put_calibration(FILE *f, const struct spindle_calibration *c)
 {
 	fprintf(f, ", \"calibration\": {\"phase_offset\": %.9g, \"axis_offset_u\": %d, \"axis_offset_v\": %d",
 		(double)c->phase_offset, c->axis_offset_u, c->axis_offset_v);
-	fprintf(f, ", \"vertical_scale\": %.9g}", (double)c->vertical_scale);
+	fprintf(f, ", \"vertical_scale\": %.9g, \"vertical_offset\": %.9g}", (double)c->vertical_scale,
+		(double)c->vertical_offset);
 }
 
 void status_print_json(FILE *f, const char *socket, uint32_t protocol, const struct spindle_device_info *dev,

@@ -1105,7 +1105,7 @@ class Connection:
 
     def calibration(self):
         """Blocks for the display's :class:`Calibration` in use (the
-        identity, 0, 0, 0, 1.0, until calibrated). Raises NotSupported from
+        identity, 0, 0, 0, 1.0, 0.0, until calibrated). Raises NotSupported from
         a daemon or libspindle older than protocol version 6."""
         self._enter('calibration()')
         out = _lib.Calibration()
@@ -1117,9 +1117,10 @@ class Connection:
         the new :class:`Calibration` (blocking; the daemon's config file is
         not written: ``spindlectl calibrate --save`` does that). key: a
         :class:`CalibrationKey` (or its number) or its config name
-        ('phase-offset', 'axis-offset-u', 'axis-offset-v', 'vertical-scale');
-        value: degrees (-180 to 180), whole pixels (at most a quarter of the
-        image either way), or a factor (0.5 to 2).
+        ('phase-offset', 'axis-offset-u', 'axis-offset-v', 'vertical-scale',
+        'vertical-offset'); value: degrees (-180 to 180), whole pixels (at most
+        a quarter of the image either way), a factor (0.5 to 2), or volume
+        units (-0.5 to 0.5).
 
         A refusal changes nothing and the connection goes on: RefusedDenied
         (errno EACCES) for a client other than root and the daemon's own

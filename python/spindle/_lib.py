@@ -135,6 +135,7 @@ class Calibration(Structure):
         ('axis_offset_u', c_int32),
         ('axis_offset_v', c_int32),
         ('vertical_scale', c_float),
+        ('vertical_offset', c_float),
     ]
 
 

@@ -53,6 +53,7 @@ class CalibrationKey(enum.IntEnum):
     AXIS_OFFSET_U = 1  #: whole pixels, at most a quarter of the image width either way
     AXIS_OFFSET_V = 2  #: whole pixels, at most a quarter of the image height either way
     VERTICAL_SCALE = 3  #: a factor, 0.5 to 2
+    VERTICAL_OFFSET = 4  #: volume units, -0.5 to 0.5
 
     @property
     def config_name(self):
@@ -250,11 +251,14 @@ class Calibration:
     version 6; :meth:`spindle.Connection.calibration`): where a real
     projector's images land against volume space. ``phase_offset``
     (degrees), ``axis_offset_u`` and ``axis_offset_v`` (whole pixels),
-    ``vertical_scale`` (a factor). The identity is 0, 0, 0, 1.0."""
+    ``vertical_scale`` (a factor) and ``vertical_offset`` (volume units):
+    heights are drawn at ``vertical_scale * y + vertical_offset``. The
+    identity is 0, 0, 0, 1.0, 0.0."""
     phase_offset: float
     axis_offset_u: int
     axis_offset_v: int
     vertical_scale: float
+    vertical_offset: float
 
     @classmethod
     def _from_c(cls, c):

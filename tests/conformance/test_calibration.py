@@ -12,7 +12,7 @@ from harness import ERR, NOBODY, P, MODE, case, check, connect_as, run, shared, 
 
 KEY = {n: v for n, (v, _) in P.enums['display.calibration_key'].items()}
 REFUSAL = {n: v for n, (v, _) in P.enums['display.refusal'].items()}
-IDENTITY = dict(phase_offset=0.0, axis_offset_u=0, axis_offset_v=0, vertical_scale=1.0)
+IDENTITY = dict(phase_offset=0.0, axis_offset_u=0, axis_offset_v=0, vertical_scale=1.0, vertical_offset=0.0)
 
 
 def calibration(c):
@@ -101,7 +101,8 @@ def set_and_refused():
     refused, cal = calibrate(c, 'phase_offset', 12.5)
     check(refused is None and cal == dict(IDENTITY, axis_offset_u=2, phase_offset=12.5), f'{refused} {cal}')
     for key, value in (('axis_offset_u', 33.0), ('axis_offset_v', -33.0), ('axis_offset_u', 2.5),
-                       ('phase_offset', 180.5), ('vertical_scale', 2.5), ('vertical_scale', math.nan)):
+                       ('phase_offset', 180.5), ('vertical_scale', 2.5), ('vertical_scale', math.nan),
+                       ('vertical_offset', 0.6)):
         refused, cal = calibrate(c, key, value)
         check(refused is not None and refused['code'] == REFUSAL['out_of_range'] and refused['object'] == 1,
               f'{key} {value}: {refused}')

@@ -82,9 +82,10 @@ static void spawn(struct daemon *d, const char *renderer, const char *config)
 	const struct calibration *cal = test_calibration();
 	if (memcmp(cal, &(struct calibration){ .vertical_scale = 1.0f }, sizeof(*cal))) {
 		snprintf(text, sizeof(text),
-			 "%s\nphase-offset = %.9g\naxis-offset-u = %d\naxis-offset-v = %d\nvertical-scale = %.9g\n",
+			 "%s\nphase-offset = %.9g\naxis-offset-u = %d\naxis-offset-v = %d\nvertical-scale = %.9g\n"
+			 "vertical-offset = %.9g\n",
 			 config ? config : "", (double)cal->phase_deg, cal->axis_u, cal->axis_v,
-			 (double)cal->vertical_scale);
+			 (double)cal->vertical_scale, (double)cal->vertical_offset);
 		config = text;
 	}
 	if (config) {
@@ -326,10 +327,10 @@ const struct calibration *test_calibration(void)
 	calibration_identity(&cal);
 	const char *env = getenv("SPINDLE_TEST_CALIBRATION");
 	if (env && *env) {
-		double v[4];
+		double v[5];
 		char end;
-		CHECK_MSG(sscanf(env, "%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &end) == 4,
-			  "SPINDLE_TEST_CALIBRATION=%s: want PHASE,U,V,SCALE", env);
+		CHECK_MSG(sscanf(env, "%lf,%lf,%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &v[3], &v[4], &end) == 5,
+			  "SPINDLE_TEST_CALIBRATION=%s: want PHASE,U,V,SCALE,OFFSET", env);
 		for (unsigned k = 0; k < CALIBRATION_KEYS; k++)
 			CHECK(calibration_set(&cal, k, v[k]) == 0);
 	}
@@ -342,7 +343,7 @@ void calibrated_point(double x, double y, double z, double out[3])
 	const struct calibration *cal = test_calibration();
 	double a = cal->phase_deg * M_PI / 180.0;
 	out[0] = x * cos(a) + z * sin(a);
-	out[1] = y * cal->vertical_scale;
+	out[1] = y * cal->vertical_scale + cal->vertical_offset;
 	out[2] = -x * sin(a) + z * cos(a);
 }
 

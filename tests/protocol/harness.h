@@ -76,10 +76,11 @@ struct volume *capture_volume(struct spindle *sp);
 void show_vertices(struct spindle *sp, int mode, const float *xyz, uint32_t count, uint8_t r, uint8_t g, uint8_t b);
 
 /* The calibration the suite's daemons run with: $SPINDLE_TEST_CALIBRATION
- * as "PHASE,U,V,SCALE" (phase-offset, axis-offset-u, axis-offset-v,
- * vertical-scale; calibration.h), else none. The expectations below are
- * shifted by it: the point turned by -PHASE about the axis with its height
- * scaled by SCALE, its voxel then moved by U columns and V rows. */
+ * as "PHASE,U,V,SCALE,OFFSET" (phase-offset, axis-offset-u, axis-offset-v,
+ * vertical-scale, vertical-offset; calibration.h), else none. The
+ * expectations below are shifted by it: the point turned by -PHASE about
+ * the axis with its height y made SCALE y + OFFSET, its voxel then moved by
+ * U columns and V rows. */
 const struct calibration *test_calibration(void);
 /* Where the calibration puts volume-space point (x, y, z) for rendering. */
 void calibrated_point(double x, double y, double z, double out[3]);

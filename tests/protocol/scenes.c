@@ -24,7 +24,7 @@ int row(double y)
 {
 	struct geometry g = small();
 	const struct calibration *cal = test_calibration();
-	return (int)geometry_row(&g, y * cal->vertical_scale) + cal->axis_v;
+	return (int)geometry_row(&g, y * cal->vertical_scale + cal->vertical_offset) + cal->axis_v;
 }
 
 double col_s(int u)
@@ -35,7 +35,7 @@ double col_s(int u)
 double row_y(int v)
 {
 	const struct calibration *cal = test_calibration();
-	return (1.0 - (v - cal->axis_v + 0.5) * 2.0 / H) / cal->vertical_scale;
+	return (1.0 - (v - cal->axis_v + 0.5) * 2.0 / H - cal->vertical_offset) / cal->vertical_scale;
 }
 
 /* ---- shapes ---- */

@@ -13,7 +13,7 @@
 struct geometry small(void);
 /* Column of volume-space s, row of height y, at the small profile, under
  * the suite's calibration (test_calibration(): the column moved by its U,
- * the height scaled by its SCALE and the row moved by its V); and back,
+ * the height y made SCALE y + OFFSET and the row moved by its V); and back,
  * the s and height of the centre of column u and row v. Columns and rows
  * of an axis-symmetric shape: the phase does not move it. */
 int col(double s);

@@ -103,6 +103,7 @@ int main(void)
 	FIELD(spindle_calibration, axis_offset_u);
 	FIELD(spindle_calibration, axis_offset_v);
 	FIELD(spindle_calibration, vertical_scale);
+	FIELD(spindle_calibration, vertical_offset);
 
 	/* The enums the binding passes as int. */
 	printf("enum.size %zu\n", sizeof(enum spindle_mode));

@@ -10,7 +10,8 @@ import pytest
 import spindle
 from spindle import CalibrationKey
 
-IDENTITY = spindle.Calibration(phase_offset=0.0, axis_offset_u=0, axis_offset_v=0, vertical_scale=1.0)
+IDENTITY = spindle.Calibration(phase_offset=0.0, axis_offset_u=0, axis_offset_v=0, vertical_scale=1.0,
+                               vertical_offset=0.0)
 
 
 def test_fresh_daemon_is_the_identity(sp):
@@ -21,24 +22,26 @@ def test_fresh_daemon_is_the_identity(sp):
 
 def test_calibrate_by_name_and_by_key(sp, daemon):
     cal = sp.calibrate('axis-offset-u', -3)
-    assert cal == spindle.Calibration(0.0, -3, 0, 1.0)
+    assert cal == spindle.Calibration(0.0, -3, 0, 1.0, 0.0)
     assert sp.calibration().axis_offset_u == -3
     assert sp.calibrate(CalibrationKey.VERTICAL_SCALE, 1.5).vertical_scale == 1.5
     assert sp.calibrate(CalibrationKey.AXIS_OFFSET_V, 2.0).axis_offset_v == 2  # a whole float is whole pixels
     assert sp.calibrate(0, -12.5).phase_offset == -12.5  # the key's number
     assert sp.calibrate('axis-offset-u', 32).axis_offset_u == 32  # a quarter of the 128 columns
-    want = spindle.Calibration(-12.5, 32, 2, 1.5)
+    assert sp.calibrate('vertical-offset', -0.25).vertical_offset == -0.25
+    want = spindle.Calibration(-12.5, 32, 2, 1.5, -0.25)
     assert sp.calibration() == want
     # It is the display's: another client sees it.
     with spindle.connect(daemon.sock) as other:
         assert other.calibration() == want
     assert [k.config_name for k in CalibrationKey] == ['phase-offset', 'axis-offset-u', 'axis-offset-v',
-                                                       'vertical-scale']
+                                                       'vertical-scale', 'vertical-offset']
     assert CalibrationKey('vertical-scale') is CalibrationKey.VERTICAL_SCALE
 
 
 @pytest.mark.parametrize('key, value', [('axis-offset-u', 1000), ('axis-offset-u', 33), ('axis-offset-v', -33),
                                         ('vertical-scale', 3), ('vertical-scale', 0.25), ('phase-offset', 180.5),
+                                        ('vertical-offset', 0.75),
                                         ('axis-offset-u', 2.5), ('axis-offset-v', float('nan'))])
 def test_out_of_range_is_refused_and_changes_nothing(sp, key, value):
     refusals = []
@@ -67,7 +70,7 @@ def test_refused_calibration_is_not_a_refused_commit(sp):
 
 
 def test_arguments_are_checked_before_sending(sp):
-    for key in ('axis_offset_u', 'AXIS_OFFSET_U', 'nope', 4, -1, None):
+    for key in ('axis_offset_u', 'AXIS_OFFSET_U', 'nope', 5, -1, None):
         with pytest.raises(ValueError, match='not a calibration key'):
             sp.calibrate(key, 1)
     for value in ('1', None, True, [1]):

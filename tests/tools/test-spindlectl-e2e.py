@@ -106,7 +106,8 @@ def calibrate(sock, tmp):
         fail(f'saved config {text!r}')
     ctl_run(sock, 'calibrate', 'phase-offset', '2.5')
     js = json.loads(ctl_run(sock, 'status', '--json'))
-    if js['calibration'] != {'phase_offset': 2.5, 'axis_offset_u': -3, 'axis_offset_v': 0, 'vertical_scale': 1}:
+    if js['calibration'] != {'phase_offset': 2.5, 'axis_offset_u': -3, 'axis_offset_v': 0, 'vertical_scale': 1,
+            'vertical_offset': 0}:
         fail(f'status --json calibration {js["calibration"]!r}')
     p = subprocess.run([ctl, '--socket', sock, 'calibrate', 'axis-offset-v', '33'], capture_output=True,
                        text=True, timeout=60)
@@ -152,7 +153,7 @@ def main():
                 (128, True, 2, 6) or js['display']['volumes_shown'] < 1 or 'composition' not in js or \
                 js.get('watchers', {}).get('max_watchers') != 4 or \
                 js.get('calibration') != {'phase_offset': 0, 'axis_offset_u': 0, 'axis_offset_v': 0,
-                                          'vertical_scale': 1}:
+                                          'vertical_scale': 1, 'vertical_offset': 0}:
             fail(f'status --json: {js!r}')
 
         svol = os.path.join(work, 'e2e-bunny.svol')

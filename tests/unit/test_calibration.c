@@ -31,6 +31,8 @@ static void test_keys(void)
 	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "0.49") == -EINVAL);
 	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "inf") == -EINVAL);
 	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_SCALE, "1.25") == 0);
+	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_OFFSET, "0.51") == -EINVAL);
+	CHECK(calibration_set_text(&c, CALIBRATION_VERTICAL_OFFSET, "-0.125") == 0 && c.vertical_offset == -0.125f);
 	CHECK(calibration_set(&c, 9, 0) == -EINVAL);
 	char text[32];
 	calibration_format(&c, CALIBRATION_PHASE, text, sizeof(text));
@@ -56,6 +58,7 @@ static void test_transform(void)
 	calibration_identity(&c);
 	c.phase_deg = 30.0f;
 	c.vertical_scale = 0.8f;
+	c.vertical_offset = 0.1f;
 	float m[16];
 	calibration_transform(&c, m);
 	double a = (10.0 + 30.0) * M_PI / 180.0, r = 0.7, y = 0.5;
@@ -65,8 +68,12 @@ static void test_transform(void)
 			q[i] += m[j * 4 + i] * p[j];
 	CHECK(fabs(atan2(q[2], q[0]) - 10.0 * M_PI / 180.0) < 1e-6);
 	CHECK(fabs(hypot(q[0], q[2]) - r) < 1e-6);
-	CHECK(fabs(q[1] - 0.8 * y) < 1e-6);
-	CHECK(m[15] == 1.0f && m[12] == 0.0f && m[13] == 0.0f && m[14] == 0.0f);
+	CHECK(fabs(q[1] - (0.8 * y + 0.1)) < 1e-6);
+	CHECK(m[15] == 1.0f && m[12] == 0.0f && m[14] == 0.0f && m[3] == 0.0f && m[7] == 0.0f && m[11] == 0.0f);
+	/* The offset alone is a transform too. */
+	calibration_identity(&c);
+	c.vertical_offset = 0.1f;
+	CHECK(calibration_has_transform(&c));
 }
 
 static uint32_t rng = 12345;

@@ -228,12 +228,15 @@ static void test_errors(void)
 static void test_calibration(void)
 {
 	struct config cfg;
-	CHECK_EQ(load_str("phase-offset = -2.5\naxis-offset-u = 3\naxis-offset-v=-1\nvertical-scale = 1.05\n", &cfg),
+	CHECK_EQ(load_str("phase-offset = -2.5\naxis-offset-u = 3\naxis-offset-v=-1\nvertical-scale = 1.05\n"
+			  "vertical-offset = 0.25\n",
+			  &cfg),
 		 0);
 	CHECK(cfg.calibration.phase_deg == -2.5f && cfg.calibration.axis_u == 3 && cfg.calibration.axis_v == -1);
-	CHECK(cfg.calibration.vertical_scale == 1.05f);
+	CHECK(cfg.calibration.vertical_scale == 1.05f && cfg.calibration.vertical_offset == 0.25f);
 	static const char *const bad[] = { "axis-offset-u = 1.5\n", "axis-offset-v = 5000\n", "phase-offset = 200\n",
-					   "vertical-scale = 0\n",  "phase-offset = nan\n",   "vertical-scale = 1x\n" };
+					   "vertical-scale = 0\n",  "vertical-offset = -1\n", "phase-offset = nan\n",
+					   "vertical-scale = 1x\n" };
 	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
 		CHECK_EQ(load_str(bad[i], &cfg), -EINVAL);
 		CHECK_MSG(strstr(errors, "spindled.conf:1: bad value for '"), "%s", errors);

@@ -380,16 +380,18 @@ int spindle_get_watch_stats(struct spindle *sp, struct spindle_watch_stats *out)
  * "Calibration"): where a real projector's images land against volume
  * space, corrected in the render geometry. */
 enum spindle_calibration_key {
-	SPINDLE_CALIBRATION_PHASE_OFFSET = 0,   /* degrees, -180 to 180 */
-	SPINDLE_CALIBRATION_AXIS_OFFSET_U = 1,  /* whole pixels */
-	SPINDLE_CALIBRATION_AXIS_OFFSET_V = 2,  /* whole pixels */
-	SPINDLE_CALIBRATION_VERTICAL_SCALE = 3, /* 0.5 to 2 */
+	SPINDLE_CALIBRATION_PHASE_OFFSET = 0,    /* degrees, -180 to 180 */
+	SPINDLE_CALIBRATION_AXIS_OFFSET_U = 1,   /* whole pixels */
+	SPINDLE_CALIBRATION_AXIS_OFFSET_V = 2,   /* whole pixels */
+	SPINDLE_CALIBRATION_VERTICAL_SCALE = 3,  /* 0.5 to 2 */
+	SPINDLE_CALIBRATION_VERTICAL_OFFSET = 4, /* volume units, -0.5 to 0.5 */
 };
 
 struct spindle_calibration {
 	float phase_offset;                   /* degrees */
 	int32_t axis_offset_u, axis_offset_v; /* pixels */
-	float vertical_scale;
+	float vertical_scale;                 /* heights drawn times this, */
+	float vertical_offset;                /* then moved up by this */
 };
 
 /* Blocking: the calibration in use (one display.get_status round). 0 or
