@@ -126,17 +126,21 @@ static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 		wt->ready = true;
 	}
 	const float *rate = wt->w.rate, kw = wt->w.kw, inv = wt->w.inv_cross;
+	/* kw <= 1, so w <= 1: at w = 1, c * w + 1e-3 rounds down to c, as
+	 * brightness_apply() returns it; no branch per channel. */
+	const float cf[3] = { rgb[0], rgb[1], rgb[2] };
+	const size_t plane = c->weighted_plane;
 	uint8_t any = 0;
 	for (uint32_t u = a; u <= b; u++) {
 		float w = rate[u] * inv;
-		if (w > kw)
-			w = kw;
+		w = w > kw ? kw : w;
 		uint8_t *out = c->weighted + (u & ~31u) + halftone_pos(u & 31u);
-		for (int i = 0; i < 3; i++) {
-			uint8_t value = w >= 1.0f ? rgb[i] : (uint8_t)((float)rgb[i] * w + 1e-3f);
-			out[(size_t)i * c->weighted_plane] = value;
-			any |= value;
-		}
+		uint8_t r = (uint8_t)(cf[0] * w + 1e-3f), g = (uint8_t)(cf[1] * w + 1e-3f),
+			bl = (uint8_t)(cf[2] * w + 1e-3f);
+		out[0] = r;
+		out[plane] = g;
+		out[2 * plane] = bl;
+		any |= r | g | bl;
 	}
 	return any != 0;
 }
