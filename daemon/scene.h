@@ -11,26 +11,68 @@ enum scene_prim {
 	SCENE_POINTS = 0,    /* count points */
 	SCENE_LINES = 1,     /* count / 2 segments, vertices 2i, 2i+1 */
 	SCENE_TRIANGLES = 2, /* count / 3 triangles, vertices 3i..3i+2 */
+	SCENE_GRID = 3,      /* a sampled 3-D grid (grid, transfer); count 0 */
+};
+
+/* A grid's sample types: the protocol's volume types. */
+enum scene_grid_type {
+	SCENE_GRID_U8 = 1,
+	SCENE_GRID_U16 = 2,
+	SCENE_GRID_I16 = 3,
+	SCENE_GRID_F32 = 4,
+	SCENE_GRID_RGBA8 = 5, /* 4 bytes R, G, B, A */
+};
+
+/* A 3-D grid of samples (medical and scientific volumes, docs/volumes.md),
+ * immutable while a scene holds it. Voxel (i, j, k) is centred at model
+ * point ((i + 0.5) sx, (j + 0.5) sy, (k + 0.5) sz) and fills the box of
+ * half a voxel around it; j is the grid's up axis and varies fastest in
+ * memory: sample (i, j, k) is element (k * n[0] + i) * n[1] + j. */
+struct scene_grid {
+	uint32_t type;    /* enum scene_grid_type */
+	uint32_t n[3];    /* samples along i, j, k, each >= 1 */
+	float spacing[3]; /* sx, sy, sz: model units between centres, > 0 */
+	const void *data; /* n[0] n[1] n[2] samples, host byte order */
+};
+
+enum scene_sampling {
+	SCENE_NEAREST = 0,   /* the sample whose box holds the point */
+	SCENE_TRILINEAR = 1, /* the 8 around it weighted (edges repeated) */
+};
+
+/* How a grid's values become colours. Scalar value v (RGBA8: its alpha)
+ * below threshold (or not a number) lights nothing; else g = (v - lo) /
+ * (hi - lo) clamped to 0..1 picks the colour: the draw's rgb times g
+ * (rounded to nearest), or lut entry round(g (lut_count - 1)). An RGBA8
+ * sample is its own colour times its alpha. */
+struct scene_transfer {
+	float threshold;
+	float lo, hi;       /* lo < hi: the window */
+	uint32_t sampling;  /* enum scene_sampling */
+	const uint8_t *lut; /* NULL, or lut_count RGB entries (alpha applied) */
+	uint32_t lut_count; /* 2 .. 4096 with a lut */
 };
 
 struct scene_draw {
 	enum scene_prim prim;
-	uint32_t count;          /* vertices; a multiple of 2 (lines) or 3 (triangles) */
-	const float *xyz;        /* count * 3 floats, immutable while the scene lives */
-	float transform[16];     /* column-major 4x4, model -> volume space (affine) */
-	uint8_t rgb[3];          /* colour, alpha already applied (emissive) */
-	uint8_t point_size;      /* points: each lights a point_size x point_size
+	uint32_t count;                 /* vertices; a multiple of 2 (lines) or 3 (triangles) */
+	const float *xyz;               /* count * 3 floats, immutable while the scene lives */
+	float transform[16];            /* column-major 4x4, model -> volume space (affine) */
+	uint8_t rgb[3];                 /* colour, alpha already applied (emissive) */
+	uint8_t point_size;             /* points: each lights a point_size x point_size
 				* pixel square around its voxel (columns
 				* u - (s-1)/2 .. u + s/2, rows likewise, clipped
 				* to the image); 0 counts as 1. At most 16. */
-	uint16_t turn;           /* 0 .. N-1: shown turned about the y axis by
+	uint16_t turn;                  /* 0 .. N-1: shown turned about the y axis by
 				* turn * 2 pi / N (azimuths increasing:
 				* x' = x cos a - z sin a, z' = x sin a + z cos a),
 				* as an image index shift (below); more than
 				* N-1 counts modulo N. 0: as it is. */
-	const uint8_t *prim_rgb; /* NULL, or one colour per primitive (3 bytes
+	const uint8_t *prim_rgb;        /* NULL, or one colour per primitive (3 bytes
 				  * each, alpha applied) used instead of rgb;
 				  * immutable while the scene lives */
+	const struct scene_grid *grid;  /* SCENE_GRID: the grid, and how */
+	struct scene_transfer transfer; /* its values show */
 };
 
 /* A draw with turn m lights, in volume image k, exactly what it would light
@@ -50,6 +92,22 @@ static inline bool scene_has_turn(const struct scene_draw *draws, uint32_t n)
 		if (draws[i].turn)
 			return true;
 	return false;
+}
+
+static inline bool scene_has_grid(const struct scene_draw *draws, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++)
+		if (draws[i].prim == SCENE_GRID)
+			return true;
+	return false;
+}
+
+/* Whether a and b draw the same grid the same way (a->prim == SCENE_GRID). */
+static inline bool scene_grid_same(const struct scene_draw *a, const struct scene_draw *b)
+{
+	const struct scene_transfer *x = &a->transfer, *y = &b->transfer;
+	return a->grid == b->grid && x->threshold == y->threshold && x->lo == y->lo && x->hi == y->hi &&
+	       x->sampling == y->sampling && x->lut == y->lut && x->lut_count == y->lut_count;
 }
 
 /* A retained object: the draws of one layer (its list placed by its

@@ -106,7 +106,7 @@ static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
 {
 	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->point_size == b->point_size &&
 	       a->turn == b->turn && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
-	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
+	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0 && (a->prim != SCENE_GRID || scene_grid_same(a, b));
 }
 
 bool snapshot_same(const struct snapshot *a, const struct snapshot *b)

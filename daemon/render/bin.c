@@ -119,6 +119,8 @@ static int draw_verts(const struct scene_draw *d)
 		return 2;
 	case SCENE_TRIANGLES:
 		return 3;
+	case SCENE_GRID: /* no vertices: sampled per image (grid.h) */
+		return 0;
 	}
 	return 0;
 }

@@ -19,6 +19,7 @@
 #include "bin.h"
 #include "brightness.h"
 #include "compose.h"
+#include "grid.h"
 #include "halftone.h"
 #include "log.h"
 #include "pool.h"
@@ -39,7 +40,9 @@ struct render_cpu {
 	struct brightness_map bright; /* geom.brightness's weights */
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
-	/* Per render: */
+	/* Per render: the scene's grid draws, prepared (grid.h). */
+	struct grid_job *grids;
+	uint32_t grid_count, grid_cap;
 	struct volume *out;
 	struct rle_volume *canvas_out; /* render_canvas(): canvases, not packed images */
 	atomic_uint next_image;
@@ -143,7 +146,36 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 			drawn++;
 		}
 	}
+	for (uint32_t i = 0; i < r->grid_count; i++) {
+		const struct grid_job *job = &r->grids[i];
+		bool mirror = false;
+		uint32_t turn = job->draw->turn % r->base.geom.images_per_rev;
+		uint32_t src = turn ? geometry_turn_source(&r->base.geom, k, turn, &mirror) : k;
+		grid_draw_image(c, job, src, mirror);
+		drawn++;
+	}
 	return drawn;
+}
+
+/* The scene's grid draws that can be drawn, prepared. 0 or -ENOMEM. */
+static int prepare_grids(struct render_cpu *r, const struct scene *scene)
+{
+	r->grid_count = 0;
+	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
+		const struct scene_draw *d = &scene->draws[i];
+		if (d->prim != SCENE_GRID || !d->grid)
+			continue;
+		if (r->grid_count == r->grid_cap) {
+			uint32_t cap = r->grid_cap ? 2 * r->grid_cap : 4;
+			struct grid_job *g = realloc(r->grids, cap * sizeof(*g));
+			if (!g)
+				return -ENOMEM;
+			r->grids = g;
+			r->grid_cap = cap;
+		}
+		r->grid_count += grid_prepare(&r->grids[r->grid_count], d);
+	}
+	return 0;
 }
 
 /* Images are handed out one at a time; each image's result depends on
@@ -210,6 +242,8 @@ static int render_to(struct render_cpu *r, const struct scene *scene, struct vol
 	base->stats.engine = RENDER_ENGINE_CPU;
 	base->stats.threads = pool_workers(r->pool);
 	err = bin_build(&r->bins, scene, r->pool);
+	if (err == 0)
+		err = prepare_grids(r, scene);
 	int64_t binned = now_ns();
 	base->stats.bin_ns = (uint64_t)(binned - start);
 	if (err < 0)
@@ -222,7 +256,7 @@ static int render_to(struct render_cpu *r, const struct scene *scene, struct vol
 	r->out = out;
 	r->canvas_out = canvas;
 	atomic_store(&r->next_image, 0);
-	if (r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
+	if (!r->grid_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
 		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
 	else
 		pool_run(r->pool, image_job, r);
@@ -282,6 +316,7 @@ static void cpu_destroy(struct renderer *base)
 	}
 	free(r->stage);
 	free(r->wedges);
+	free(r->grids);
 	brightness_tables_finish(&r->thr);
 	brightness_map_finish(&r->bright);
 	bin_finish(&r->bins);

@@ -589,7 +589,10 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	struct render_gl *r = (struct render_gl *)base;
 	/* Turned draws (scene.h) are drawn by the CPU renderer only: the whole
 	 * scene goes there, whatever no_fallback says. */
-	if (r->gl_dead || (scene && scene_has_turn(scene->draws, scene->draw_count)))
+	/* Turns and grids are drawn by the CPU renderer (GL 3-D textures for
+	 * grids are later work: docs/rendering.md, "Grids"). */
+	if (r->gl_dead || (scene && (scene_has_turn(scene->draws, scene->draw_count) ||
+				     scene_has_grid(scene->draws, scene->draw_count))))
 		return render_on_cpu(r, scene, out);
 	uint64_t t0 = (uint64_t)now_ns();
 	memset(&r->base.stats, 0, sizeof(r->base.stats));

@@ -4,9 +4,10 @@
  * recoloured, given new vertex data, hidden and shown again, deleted, and
  * deleted several at once (a client disconnecting), with budgets from
  * roomy to tiny (evictions) and none; every composed volume must be bit for
- * bit the renderer's full render of the same scene. The CPU renderer at
+ * bit the renderer's full render of the same scene. On the CPU renderer
+ * one draw in eight is a grid (scene.h, SCENE_GRID). The CPU renderer at
  * two geometries; the GL renderers, each against its own full render, when
- * they run here. */
+ * they run here, without grids (a scene with one goes whole to the CPU). */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -68,8 +69,22 @@ struct world {
 	struct scene_object objects[MAX_OBJECTS];
 };
 
+/* The grid that grid draws show (scene.h, SCENE_GRID): random values, a
+ * window that leaves most of them between dark and full. */
+static uint8_t grid_values[6 * 5 * 4];
+static const struct scene_grid test_grid = { SCENE_GRID_U8, { 6, 5, 4 }, { 0.1f, 0.12f, 0.09f }, grid_values };
+static const struct scene_transfer test_transfer = { .threshold = 40, .lo = 0, .hi = 255 };
+
+static bool with_grids = true; /* not on GL: a scene with a grid goes whole to the CPU */
+
 static struct vdata *make_data(void)
 {
+	if (with_grids && rnd() % 8 == 0) { /* a grid draw: its vdata carries no vertices */
+		struct vdata *v = calloc(1, sizeof(*v));
+		CHECK(v != NULL);
+		*v = (struct vdata){ .refs = 1, .prim = SCENE_GRID };
+		return v;
+	}
 	enum scene_prim prim = (enum scene_prim)(rnd() % 3);
 	uint32_t per = prim == SCENE_POINTS ? 1 : prim == SCENE_LINES ? 2 : 3;
 	uint32_t prims = 1 + rnd() % 12;
@@ -218,6 +233,10 @@ static void build(struct world *w)
 				.turn = o->turn,
 				.prim_rgb = o->data[d]->prim_rgb,
 			};
+			if (sd->prim == SCENE_GRID) {
+				sd->grid = &test_grid;
+				sd->transfer = test_transfer;
+			}
 			memcpy(sd->transform, o->transform, sizeof(sd->transform));
 			memcpy(sd->rgb, o->rgb[d], 3);
 			w->data[nd++] = o->data[d];
@@ -359,6 +378,8 @@ static void test_codec(void)
 int main(void)
 {
 	test_codec();
+	for (size_t i = 0; i < sizeof(grid_values); i++)
+		grid_values[i] = (uint8_t)rnd();
 	struct geometry small = rtest_small(), odd = rtest_odd();
 	struct run_totals t;
 	struct renderer *cpu = render_cpu_create(&small, 2);
@@ -394,6 +415,7 @@ int main(void)
 		render_destroy(cpu);
 	}
 	small.brightness = odd.brightness = GEOMETRY_BRIGHTNESS_EXACT;
+	with_grids = false;
 	const char *gl[] = { "egl", "osmesa" };
 	for (int i = 0; i < 2; i++) {
 		struct render_gl_options o = { .backend = gl[i], .threads = 2, .no_fallback = true };

@@ -1,6 +1,6 @@
 /* Bad input never crashes the renderer and gives sane output: empty scenes
  * and draws, short counts, unknown primitive kinds, NaN and infinite
- * coordinates or transforms (the primitive is skipped), enormous coordinates
+ * coordinates or transforms (the primitive or grid is skipped), enormous coordinates
  * (clamped to the image), degenerate primitives (still lit). */
 #include <math.h>
 #include <stdlib.h>
@@ -46,13 +46,28 @@ static void check_not_finite(const struct geometry *g)
 	rtest_mesh_add(&good, 0.2, -0.3, 0.4);
 	rtest_mesh_add(&good, -0.5, 0.6, 0.1);
 	struct scene_draw seg = rtest_draw(SCENE_LINES, &good, 255, 255, 255);
-	struct scene_draw d[5] = { rtest_draw(SCENE_TRIANGLES, &bad, 255, 255, 255),
-				   rtest_draw(SCENE_TRIANGLES, &good, 255, 255, 255), seg, seg,
-				   rtest_draw(SCENE_POINTS, &good, 255, 255, 255) };
+	/* Grids with no grid, a NaN or infinite transform: nothing. */
+	static const uint8_t one = 255;
+	static const struct scene_grid tiny = { SCENE_GRID_U8, { 1, 1, 1 }, { 0.5f, 0.5f, 0.5f }, &one };
+	struct scene_draw grid = { .prim = SCENE_GRID, .rgb = { 255, 255, 255 }, .transfer = { 1, 0, 255 } };
+	rtest_identity(grid.transform);
+	struct scene_draw d[8] = {
+		rtest_draw(SCENE_TRIANGLES, &bad, 255, 255, 255),
+		rtest_draw(SCENE_TRIANGLES, &good, 255, 255, 255),
+		seg,
+		seg,
+		rtest_draw(SCENE_POINTS, &good, 255, 255, 255),
+		grid,
+		grid,
+		grid
+	};
 	d[1].count = 2; /* too short for a triangle */
 	d[3].transform[5] = NAN;
 	d[4].prim = (enum scene_prim)7;
-	struct volume *want = rtest_render(g, &seg, 1, 1), *got = rtest_render(g, d, 5, 2);
+	d[6].grid = d[7].grid = &tiny;
+	d[6].transform[0] = NAN;
+	d[7].transform[13] = INFINITY;
+	struct volume *want = rtest_render(g, &seg, 1, 1), *got = rtest_render(g, d, 8, 2);
 	CHECK(rtest_count(want, 0) > 0);
 	CHECK(rtest_same(want, got));
 	volume_destroy(want);

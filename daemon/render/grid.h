@@ -1,0 +1,39 @@
+/* Grids (scene.h, SCENE_GRID) on the CPU renderer: each image samples a
+ * grid at the centre of every pixel whose centre lies in the grid's box,
+ * where the image's slice plane crosses it (docs/rendering.md, "Grids").
+ * This is the scalar reference path: a sample is the grid's value at the
+ * pixel centre's place in the grid, by nearest or trilinear sampling, made
+ * a colour by the draw's transfer function, weighted by the brightness
+ * model as a surface crossing the slices is, and combined by MAX. */
+#ifndef SPINDLE_GRID_H
+#define SPINDLE_GRID_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "scene.h"
+#include "section.h"
+
+/* One grid draw, prepared once per render: volume space to the grid's
+ * voxel coordinates (voxel (i, j, k) centred at integers), an affine map
+ * f = lin p + off. */
+struct grid_job {
+	const struct scene_draw *draw;
+	double lin[3][3], off[3];
+};
+
+/* Prepares d (SCENE_GRID). false: its transform cannot be inverted (or
+ * is not finite), and it lights nothing. */
+bool grid_prepare(struct grid_job *job, const struct scene_draw *d);
+
+/* Lights, in c, what job's grid shows in the slice plane of volume image
+ * src (its angle), columns mirrored (u -> W-1-u) when mirror: image k of a
+ * draw turned so that geometry_turn_source() gives src and mirror, or
+ * image src itself unturned. */
+void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint32_t src, bool mirror);
+
+/* The colour of the grid's sample at voxel coordinates f (inside the box:
+ * -0.5 <= f[a] < n[a] - 0.5), by the draw's transfer. false: dark. */
+bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3]);
+
+#endif

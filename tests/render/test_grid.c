@@ -1,0 +1,363 @@
+/* Grids (scene.h, SCENE_GRID) on the CPU renderer, against expectations
+ * computed here from docs/design.md section 3 with a transform inverted
+ * independently (Gauss-Jordan), never with grid.c's:
+ *
+ * 1. A solid box, placed by a general affine transform (turned, tilted,
+ *    sheared, moved), lights exactly the pixels of each image whose
+ *    centres lie in the box, in both lobes (pixels within 1e-9 of a face
+ *    are not judged).
+ * 2. A sphere sampled from a 32^3 grid: nearest sampling lights every
+ *    pixel whose centre is inside the analytic sphere by more than half a
+ *    voxel diagonal and none outside it by more (holes and fat: 0);
+ *    trilinear differs from nearest only within a voxel of the surface.
+ * 3. The transfer: threshold, window, lookup table, RGBA8, NaN, and the
+ *    five sample types, through grid_sample().
+ * 4. Turns: a turned grid draw lights in image k what the unturned one
+ *    lights in geometry_turn_source()'s image, mirrored as it says.
+ * 5. Threads: 1 and 3 give the same volume; a singular transform lights
+ *    nothing; the even brightness model thins only inside r0.
+ * 6. GL (EGL, OSMesa where a context can be made): a scene with a grid
+ *    renders on the CPU fallback, equal to the CPU renderer's volume.
+ *
+ * On the small profile (mirrored) and rtest_odd() (unmirrored). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "check.h"
+#include "grid.h"
+#include "render_gl.h"
+#include "rtest.h"
+
+/* Inverse of the affine column-major m into inv (column-major), by
+ * Gauss-Jordan elimination with partial pivoting on the 4x4. */
+static void invert(const float m[16], double inv[16])
+{
+	double a[4][8];
+	for (int r = 0; r < 4; r++)
+		for (int c = 0; c < 4; c++) {
+			a[r][c] = m[c * 4 + r];
+			a[r][4 + c] = r == c;
+		}
+	for (int c = 0; c < 4; c++) {
+		int p = c;
+		for (int r = c + 1; r < 4; r++)
+			if (fabs(a[r][c]) > fabs(a[p][c]))
+				p = r;
+		for (int k = 0; k < 8; k++) {
+			double t = a[c][k];
+			a[c][k] = a[p][k];
+			a[p][k] = t;
+		}
+		double d = a[c][c];
+		CHECK(fabs(d) > 1e-12);
+		for (int k = 0; k < 8; k++)
+			a[c][k] /= d;
+		for (int r = 0; r < 4; r++)
+			if (r != c) {
+				double f = a[r][c];
+				for (int k = 0; k < 8; k++)
+					a[r][k] -= f * a[c][k];
+			}
+	}
+	for (int r = 0; r < 4; r++)
+		for (int c = 0; c < 4; c++)
+			inv[c * 4 + r] = a[r][4 + c];
+}
+
+/* The model point that pixel (u, v) of volume image k shows. */
+static void pixel_model(const struct geometry *g, const double inv[16], uint32_t k, uint32_t u, uint32_t v,
+			double out[3])
+{
+	double th = 2.0 * M_PI * k / g->images_per_rev;
+	double s = (u + 0.5) * 2.0 / g->width - 1.0, y = g->half_height - (v + 0.5) * 2.0 * g->half_height / g->height;
+	double p[3] = { s * cos(th), y, s * sin(th) };
+	for (int r = 0; r < 3; r++)
+		out[r] = inv[12 + r] + inv[r] * p[0] + inv[4 + r] * p[1] + inv[8 + r] * p[2];
+}
+
+static uint32_t images_of(const struct geometry *g)
+{
+	return g->mirrored ? g->images_per_rev / 2 : g->images_per_rev;
+}
+
+/* A draw of grid gr with transform m, white, window 0..1 (every value of
+ * at least the threshold 0.5 saturated). */
+static struct scene_draw grid_draw(const struct scene_grid *gr, const float m[16])
+{
+	struct scene_draw d = {
+		.prim = SCENE_GRID,
+		.rgb = { 255, 255, 255 },
+		.grid = gr,
+		.transfer = { .threshold = 0.5f, .lo = 0.0f, .hi = 1.0f },
+	};
+	memcpy(d.transform, m, sizeof(d.transform));
+	return d;
+}
+
+/* A general affine placement: turned about y by a, tilted, sheared,
+ * scaled, moved. */
+static void placement(float m[16], double a)
+{
+	double c = cos(a), s = sin(a);
+	const float t[16] = {
+		(float)c,  0.1f,  (float)s, 0, 0.05f,  0.9f,   -0.08f, 0,
+		(float)-s, 0.07f, (float)c, 0, -0.31f, -0.27f, -0.22f, 1,
+	};
+	memcpy(m, t, sizeof(t));
+}
+
+/* 1. */
+static void check_box(const char *name, const struct geometry *g)
+{
+	static uint8_t data[7 * 5 * 6];
+	memset(data, 1, sizeof(data));
+	struct scene_grid gr = { SCENE_GRID_U8, { 7, 5, 6 }, { 0.09f, 0.11f, 0.1f }, data };
+	float m[16];
+	placement(m, 0.7);
+	struct scene_draw d = grid_draw(&gr, m);
+	struct volume *vol = rtest_render(g, &d, 1, 2);
+	double inv[16];
+	invert(m, inv);
+	uint64_t lit = 0, ambiguous = 0;
+	for (uint32_t k = 0; k < images_of(g); k++)
+		for (uint32_t v = 0; v < g->height; v++)
+			for (uint32_t u = 0; u < g->width; u++) {
+				double p[3];
+				pixel_model(g, inv, k, u, v, p);
+				bool in = true, edge = false;
+				for (int a = 0; a < 3; a++) {
+					double hi = gr.n[a] * (double)gr.spacing[a];
+					in &= p[a] >= 0.0 && p[a] < hi;
+					edge |= fabs(p[a]) < 1e-9 || fabs(p[a] - hi) < 1e-9;
+				}
+				if (edge) {
+					ambiguous++;
+					continue;
+				}
+				bool got = rtest_lit(vol, k, u, v, 0);
+				CHECK_MSG(got == in, "%s: image %u pixel (%u, %u): %s", name, k, u, v,
+					  in ? "inside the box, dark" : "outside, lit");
+				lit += got;
+			}
+	CHECK(lit > 1000);
+	printf("%s: a solid box placed by a general affine transform lights exactly the pixels whose centres lie "
+	       "in it (%llu lit, %llu on a face not judged)\n",
+	       name, (unsigned long long)lit, (unsigned long long)ambiguous);
+	volume_destroy(vol);
+}
+
+/* 2. */
+static void check_sphere(const char *name, const struct geometry *g)
+{
+	enum { N = 32 };
+	static float data[N * N * N];
+	const double r = 0.4; /* in the grid's unit cube */
+	for (uint32_t k = 0; k < N; k++)
+		for (uint32_t i = 0; i < N; i++)
+			for (uint32_t j = 0; j < N; j++) {
+				double x = (i + 0.5) / N - 0.5, y = (j + 0.5) / N - 0.5, z = (k + 0.5) / N - 0.5;
+				data[(k * N + i) * N + j] = x * x + y * y + z * z <= r * r ? 1.0f : 0.0f;
+			}
+	struct scene_grid gr = { SCENE_GRID_F32, { N, N, N }, { 1.0f / N, 1.0f / N, 1.0f / N }, data };
+	const float scale = 1.5f;
+	const float m[16] = { scale, 0, 0, 0, 0, scale, 0, 0, 0, 0, scale, 0, -scale / 2, -scale / 2, -scale / 2, 1 };
+	struct scene_draw d = grid_draw(&gr, m);
+	struct volume *nearest = rtest_render(g, &d, 1, 2);
+	d.transfer.sampling = SCENE_TRILINEAR;
+	struct volume *tri = rtest_render(g, &d, 1, 2);
+	double voxel = scale / N, half_diag = voxel * sqrt(3.0) / 2, R = r * scale;
+	uint64_t inside = 0, holes = 0, lit = 0, fat = 0, differ = 0;
+	for (uint32_t k = 0; k < images_of(g); k++)
+		for (uint32_t v = 0; v < g->height; v++)
+			for (uint32_t u = 0; u < g->width; u++) {
+				double s = (u + 0.5) * 2.0 / g->width - 1.0;
+				double y = g->half_height - (v + 0.5) * 2.0 * g->half_height / g->height;
+				double dist = hypot(s, y) - R;
+				bool a = rtest_lit(nearest, k, u, v, 0), b = rtest_lit(tri, k, u, v, 0);
+				inside += dist < -half_diag;
+				holes += dist < -half_diag && !a;
+				lit += a;
+				fat += a && dist > half_diag;
+				if (a != b) {
+					differ++;
+					CHECK_MSG(fabs(dist) <= 2 * half_diag,
+						  "%s: trilinear and nearest differ %.3f voxels "
+						  "from the surface",
+						  name, dist / voxel);
+				}
+			}
+	CHECK(inside > 1000);
+	CHECK_MSG(holes == 0 && fat == 0, "%s: sphere holes %llu of %llu, fat %llu of %llu", name,
+		  (unsigned long long)holes, (unsigned long long)inside, (unsigned long long)fat,
+		  (unsigned long long)lit);
+	printf("%s: a 32^3 sphere, nearest: 0 holes in %llu pixels inside, 0 fat in %llu lit (half a voxel "
+	       "diagonal either side); trilinear differs at %llu pixels, all within a voxel of the surface\n",
+	       name, (unsigned long long)inside, (unsigned long long)lit, (unsigned long long)differ);
+	volume_destroy(nearest);
+	volume_destroy(tri);
+}
+
+/* 3. The colour of a one-sample grid of type t holding the bytes at p. */
+static bool colour_of(uint32_t t, const void *p, const struct scene_transfer *tf, const uint8_t rgb[3], uint8_t out[3])
+{
+	struct scene_grid gr = { t, { 1, 1, 1 }, { 1, 1, 1 }, p };
+	struct scene_draw d = { .prim = SCENE_GRID, .grid = &gr, .transfer = *tf };
+	memcpy(d.rgb, rgb, 3);
+	const double f[3] = { 0.2, -0.3, 0.1 };
+	return grid_sample(&d, f, out);
+}
+
+static void check_transfer(void)
+{
+	const uint8_t rgb[3] = { 200, 100, 50 };
+	uint8_t out[3];
+	const uint16_t u16 = 300;
+	struct scene_transfer tf = { .threshold = 250, .lo = 100, .hi = 500 };
+	CHECK(colour_of(SCENE_GRID_U16, &u16, &tf, rgb, out) && out[0] == 100 && out[1] == 50 && out[2] == 25);
+	tf.threshold = 301;
+	CHECK(!colour_of(SCENE_GRID_U16, &u16, &tf, rgb, out));
+	const int16_t i16 = -1000; /* air in Hounsfield units */
+	struct scene_transfer ct = { .threshold = -500, .lo = -160, .hi = 240 };
+	CHECK(!colour_of(SCENE_GRID_I16, &i16, &ct, rgb, out));
+	const int16_t bone = 700;
+	CHECK(colour_of(SCENE_GRID_I16, &bone, &ct, rgb, out) && out[0] == 200 && out[1] == 100 && out[2] == 50);
+	const float nan = NAN, f32 = 0.25f;
+	struct scene_transfer unit = { .threshold = 0.0f, .lo = 0.0f, .hi = 1.0f };
+	CHECK(!colour_of(SCENE_GRID_F32, &nan, &unit, rgb, out));
+	CHECK(colour_of(SCENE_GRID_F32, &f32, &unit, rgb, out) && out[0] == 50 && out[1] == 25 && out[2] == 13);
+	const uint8_t u8 = 128, lut[5 * 3] = { 0, 0, 0, 10, 0, 0, 20, 30, 40, 50, 0, 0, 60, 0, 0 };
+	struct scene_transfer table = { .threshold = 1, .lo = 0, .hi = 256, .lut = lut, .lut_count = 5 };
+	CHECK(colour_of(SCENE_GRID_U8, &u8, &table, rgb, out) && out[0] == 20 && out[1] == 30 && out[2] == 40);
+	const uint8_t rgba[4] = { 100, 200, 50, 128 };
+	struct scene_transfer alpha = { .threshold = 128, .lo = 0, .hi = 1 };
+	CHECK(colour_of(SCENE_GRID_RGBA8, rgba, &alpha, rgb, out) && out[0] == 50 && out[1] == 100 && out[2] == 25);
+	alpha.threshold = 129;
+	CHECK(!colour_of(SCENE_GRID_RGBA8, rgba, &alpha, rgb, out));
+	printf("transfer: threshold, window, lookup table, RGBA8 and NaN on every sample type\n");
+}
+
+/* 4. */
+static void check_turn(const char *name, const struct geometry *g)
+{
+	static uint8_t data[4 * 6 * 3];
+	for (size_t i = 0; i < sizeof(data); i++)
+		data[i] = (uint8_t)(i % 3 != 0);
+	struct scene_grid gr = { SCENE_GRID_U8, { 4, 6, 3 }, { 0.1f, 0.12f, 0.09f }, data };
+	float m[16];
+	placement(m, 0.3);
+	struct scene_draw d = grid_draw(&gr, m);
+	struct volume *plain = rtest_render(g, &d, 1, 2);
+	const uint32_t turns[] = { 1, 5, images_of(g) - 1, images_of(g) + 3 };
+	for (size_t t = 0; t < sizeof(turns) / sizeof(turns[0]); t++) {
+		d.turn = (uint16_t)turns[t];
+		struct volume *turned = rtest_render(g, &d, 1, 2);
+		for (uint32_t k = 0; k < images_of(g); k++) {
+			bool mirror;
+			uint32_t src = geometry_turn_source(g, k, turns[t] % g->images_per_rev, &mirror);
+			for (uint32_t v = 0; v < g->height; v++)
+				for (uint32_t u = 0; u < g->width; u++)
+					CHECK_MSG(rtest_lit(turned, k, u, v, 0) ==
+							  rtest_lit(plain, src, mirror ? g->width - 1 - u : u, v, 0),
+						  "%s: turn %u image %u (%u, %u)", name, turns[t], k, u, v);
+		}
+		volume_destroy(turned);
+	}
+	printf("%s: a turned grid lights in image k what the unturned one lights in its source image, mirrored "
+	       "where that is shown mirrored\n",
+	       name);
+	volume_destroy(plain);
+}
+
+/* 5. */
+static void check_threads_and_models(const char *name, const struct geometry *g)
+{
+	static uint8_t data[5 * 5 * 5];
+	memset(data, 1, sizeof(data));
+	struct scene_grid gr = { SCENE_GRID_U8, { 5, 5, 5 }, { 0.2f, 0.2f, 0.2f }, data };
+	float m[16];
+	placement(m, 1.1);
+	struct scene_draw d = grid_draw(&gr, m);
+	struct volume *one = rtest_render(g, &d, 1, 1), *three = rtest_render(g, &d, 1, 3);
+	CHECK_MSG(rtest_same(one, three), "%s: 1 and 3 threads differ", name);
+	/* A singular transform: nothing, and no failure. */
+	struct scene_draw flat = d;
+	flat.transform[5] = 0.0f;
+	flat.transform[1] = flat.transform[9] = 0.0f;
+	struct volume *none = rtest_render(g, &flat, 1, 2);
+	CHECK(rtest_count(none, 0) == 0);
+	/* Even: inside r0 fewer voxels, beyond it the same. */
+	struct geometry ge = *g;
+	ge.brightness = GEOMETRY_BRIGHTNESS_EVEN;
+	struct volume *even = rtest_render(&ge, &d, 1, 2);
+	double r0 = geometry_r0_px(g);
+	uint64_t exact_in = 0, even_in = 0;
+	for (uint32_t k = 0; k < images_of(g); k++)
+		for (uint32_t v = 0; v < g->height; v++)
+			for (uint32_t u = 0; u < g->width; u++) {
+				double r = fabs(u + 0.5 - g->width / 2.0);
+				bool a = rtest_lit(one, k, u, v, 0), b = rtest_lit(even, k, u, v, 0);
+				if (r > r0 + 1)
+					CHECK_MSG(a == b, "%s: even changed a voxel %.1f px out", name, r);
+				else {
+					exact_in += a;
+					even_in += b;
+					CHECK(!b || a);
+				}
+			}
+	CHECK(even_in < exact_in);
+	printf("%s: 1 and 3 threads give the same volume; a singular transform lights nothing; even thins inside "
+	       "r0 only (%llu of %llu voxels kept there)\n",
+	       name, (unsigned long long)even_in, (unsigned long long)exact_in);
+	volume_destroy(one);
+	volume_destroy(three);
+	volume_destroy(none);
+	volume_destroy(even);
+}
+
+/* 6. */
+static void check_gl(const char *name, const struct geometry *g, const char *backend)
+{
+	struct render_gl_options o = { .backend = backend, .threads = 2, .no_fallback = true };
+	struct renderer *r = render_gl_create(g, &o);
+	if (!r) {
+		printf("%s %s: no GL renderer here, skipped\n", name, backend);
+		return;
+	}
+	static uint8_t data[3 * 4 * 5];
+	memset(data, 1, sizeof(data));
+	struct scene_grid gr = { SCENE_GRID_U8, { 3, 4, 5 }, { 0.2f, 0.2f, 0.2f }, data };
+	float m[16];
+	placement(m, 0.5);
+	struct scene_draw d = grid_draw(&gr, m);
+	struct scene sc = { .draw_count = 1, .draws = &d };
+	struct volume *vol = volume_create(g), *cpu = rtest_render(g, &d, 1, 2);
+	CHECK(vol && render_volume(r, &sc, vol) == 0);
+	CHECK_MSG(r->stats.engine == RENDER_ENGINE_CPU, "%s %s: a grid not on the CPU", name, backend);
+	CHECK_MSG(rtest_same(vol, cpu), "%s %s: not the CPU renderer's volume", name, backend);
+	printf("%s %s: a scene with a grid renders on the CPU fallback, the CPU renderer's volume\n", name, backend);
+	volume_destroy(vol);
+	volume_destroy(cpu);
+	render_destroy(r);
+}
+
+int main(void)
+{
+	setvbuf(stdout, NULL, _IOLBF, 0);
+	struct geometry small = rtest_small(), odd = rtest_odd();
+	const struct {
+		const char *name;
+		const struct geometry *g;
+	} geoms[] = { { "small", &small }, { "odd", &odd } };
+	check_transfer();
+	for (int i = 0; i < 2; i++) {
+		check_box(geoms[i].name, geoms[i].g);
+		check_sphere(geoms[i].name, geoms[i].g);
+		check_turn(geoms[i].name, geoms[i].g);
+		check_threads_and_models(geoms[i].name, geoms[i].g);
+		check_gl(geoms[i].name, geoms[i].g, "egl");
+		check_gl(geoms[i].name, geoms[i].g, "osmesa");
+	}
+	return check_done();
+}
