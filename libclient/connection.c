@@ -362,6 +362,7 @@ static int dispatch_one(struct spindle *sp, struct proto_message *m)
 		return r == -EPROTO ? lib_set_error(sp, EPROTO, "bad event from the daemon: %s", err.text) : 0;
 	if (!cb)
 		return lib_set_error(sp, EPROTO, "event for unknown object %u", m->object);
+	lib_watchers_forget(sp, cb->id);
 	if (cb->kind == LIB_CALLBACK_CAPTURE)
 		r = proto_capture_dispatch_event(&capture_events, cb, m, sp->version, &err);
 	else

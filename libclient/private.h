@@ -94,5 +94,8 @@ void lib_object_free(struct lib_object *obj);
  * its dispatch), or -ENOENT when m is for no watcher; all freed. */
 int lib_watch_dispatch(struct spindle *sp, struct proto_message *m, struct proto_error *err);
 void lib_watchers_free(struct spindle *sp);
+/* Frees the watchers destroyed before callback_id was made: the daemon
+ * has read their destroy once that callback's event arrives. */
+void lib_watchers_forget(struct spindle *sp, uint32_t callback_id);
 
 #endif

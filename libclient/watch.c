@@ -12,11 +12,13 @@ struct spindle_watcher {
 	struct link link; /* spindle.watchers */
 	spindle_watch_func func;
 	void *data;
-	int error; /* 0, or why the daemon ended it */
-	bool gone; /* the daemon destroyed it (failed) */
-	bool held; /* a volume is held until release */
-	int fd;    /* the volume held, or -1 */
-	void *map; /* its mapping, or NULL */
+	int error;        /* 0, or why the daemon ended it */
+	bool gone;        /* the daemon destroyed it (failed) */
+	bool destroyed;   /* the client did: kept for events already sent */
+	uint32_t horizon; /* the first id made after the destroy */
+	bool held;        /* a volume is held until release */
+	int fd;           /* the volume held, or -1 */
+	void *map;        /* its mapping, or NULL */
 	size_t size;
 };
 
@@ -91,18 +93,41 @@ int spindle_watch_get_error(const struct spindle_watcher *w)
 	return w->error;
 }
 
+/* The daemon may have sent a volume before it reads the destroy: the
+ * watcher stays, silent, to take it, until the event of a callback made
+ * after the destroy shows that the daemon read it
+ * (lib_watchers_forget()). */
 void spindle_watch_destroy(struct spindle_watcher *w)
 {
 	if (!w)
 		return;
-	if (!w->gone && !w->sp->dead)
-		lib_sent(w->sp, proto_req_watcher_destroy(w->sp->conn, w->id));
-	watcher_free(w);
+	if (w->gone || w->sp->dead) {
+		watcher_free(w);
+		return;
+	}
+	lib_sent(w->sp, proto_req_watcher_destroy(w->sp->conn, w->id));
+	drop_volume(w);
+	w->destroyed = true;
+	w->func = NULL;
+	w->horizon = w->sp->next_id;
+}
+
+void lib_watchers_forget(struct spindle *sp, uint32_t callback_id)
+{
+	struct spindle_watcher *w, *tmp;
+	link_for_each_safe(w, tmp, &sp->watchers, link) {
+		if (w->destroyed && w->horizon <= callback_id)
+			watcher_free(w);
+	}
 }
 
 static int on_volume(void *target, const struct proto_watcher_volume_args *a)
 {
 	struct spindle_watcher *w = target;
+	if (w->destroyed) {
+		close(a->fd);
+		return 0;
+	}
 	drop_volume(w);
 	w->fd = a->fd;
 	w->size = (size_t)a->size;

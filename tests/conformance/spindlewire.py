@@ -319,6 +319,12 @@ class Conn:
         self.events = []       # decoded, not yet taken
         self.log = []          # every event, for messages
         self.objects = {1: 'display'}
+        # Objects the client destroyed (destructor requests): id ->
+        # (interface, the first id made after the destroy). The daemon may
+        # have sent them events before it read the destroy; those still
+        # arrive, until the event of a callback or capture made after the
+        # destroy shows that it read it.
+        self.zombies = {}
         self.next_id = 2
         self.version = None
         self.eof = False
@@ -353,10 +359,13 @@ class Conn:
         for a, v in zip(msg.args, args):
             if a.type == 'new_id':
                 self.objects[v] = a.interface
+                self.zombies.pop(v, None)
         self.send_all(data, fds if send_fds is None else send_fds)
         self.sent.add(name)
         if msg.destructor:
-            self.objects.pop(obj, None)
+            iface = self.objects.pop(obj, None)
+            if iface is not None:
+                self.zombies[obj] = (iface, self.next_id)
 
     # convenience constructors, returning the new id
     def create(self, what, *args):
@@ -401,6 +410,9 @@ class Conn:
                 return
             body, self.buf = self.buf[12:size], self.buf[size:]
             iface = self.objects.get(obj)
+            zombie = iface is None and obj in self.zombies
+            if zombie:
+                iface = self.zombies[obj][0]
             if iface is None:
                 raise ProtocolViolation(f'event for unknown object {obj} (opcode {op})')
             msg = P.event_by_opcode(iface, op)
@@ -415,6 +427,11 @@ class Conn:
             if msg.since > v:
                 raise ProtocolViolation(f'{msg.full} (since {msg.since}) sent at version {v}')
             args = decode_args(msg, body, self.fds)
+            if zombie:   # sent before the daemon read the destroy: dropped
+                for a in msg.args:
+                    if a.type == 'fd':
+                        os.close(args[a.name])
+                continue
             ev = Event(obj, msg, args)
             if ev.name == 'display.welcome':
                 self.version = args['version']
@@ -429,6 +446,7 @@ class Conn:
                             raise ProtocolViolation(f'{ev}: {n} is newer than version {v}')
             if iface in ('callback', 'capture'):
                 self.objects.pop(obj)   # destroyed after their one event
+                self.zombies = {z: v for z, v in self.zombies.items() if v[1] > obj}
             self.log.append(ev)
             self.events.append(ev)
 

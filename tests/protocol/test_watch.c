@@ -6,6 +6,7 @@
 #include <errno.h>
 #include <poll.h>
 #include <string.h>
+#include <time.h>
 
 #include "scenes.h"
 #include "wvol.h"
@@ -133,9 +134,44 @@ static void test_watch_disconnect(void)
 	daemon_stop(&d);
 }
 
+/* Destroyed with a volume on its way: the daemon sent it before it read
+ * the destroy. It is dropped, not taken for an event of an unknown object,
+ * and the connection goes on. */
+static void test_watch_destroy_in_flight(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *sp = client_connect(&d);
+	const float line[] = { 0.1f, -0.5f, 0.0f, 0.7f, 0.4f, 0.2f };
+	show_vertices(sp, SPINDLE_LINES, line, 2, 255, 128, 0);
+	struct got g = { 0 };
+	struct spindle_watcher *w = spindle_watch_create(sp, 0, on_volume, &g);
+	CHECK(w != NULL);
+	CHECK(wait_volumes(sp, &g, 1));
+	const float line2[] = { -0.6f, 0.3f, 0.1f, 0.2f, -0.4f, -0.5f };
+	show_vertices(sp, SPINDLE_LINES, line2, 2, 0, 255, 0);
+	/* Released: the volume shown meanwhile is sent at once. Not read
+	 * before the destroy (if the daemon is slower than this, the case
+	 * checks less, and still passes). */
+	CHECK(spindle_watch_release(w) == 0);
+	struct timespec ts = { 0, 300000000 };
+	nanosleep(&ts, NULL);
+	spindle_watch_destroy(w);
+	struct spindle_watch_stats st;
+	CHECK(spindle_get_watch_stats(sp, &st) == 0 && st.watchers == 0);
+	CHECK_EQ(g.volumes, 1);
+	struct spindle_frame f;
+	CHECK(spindle_commit_and_wait(sp, &f) == 0); /* forgets the destroyed watcher */
+	CHECK(spindle_get_watch_stats(sp, &st) == 0);
+	spindle_disconnect(sp);
+	volume_destroy(g.vol);
+	daemon_stop(&d);
+}
+
 static const struct named_test tests[] = {
 	{ "lib", test_watch_lib },
 	{ "disconnect", test_watch_disconnect },
+	{ "destroy-in-flight", test_watch_destroy_in_flight },
 };
 
 int main(int argc, char **argv)
