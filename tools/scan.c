@@ -1,0 +1,287 @@
+/* Reading scans (scan.h): scan_read() picks the reader by what the path
+ * is, the raw reader, and the checks that every reader's result passes. */
+#include "scan.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "scan_priv.h"
+
+int scan_fail(char *err, size_t err_size, int code, const char *path, const char *fmt, ...)
+{
+	if (!err || err_size == 0)
+		return code;
+	int n = snprintf(err, err_size, "%s: ", path ? path : "(null)");
+	if (n >= 0 && (size_t)n < err_size) {
+		va_list ap;
+		va_start(ap, fmt);
+		vsnprintf(err + n, err_size - (size_t)n, fmt, ap);
+		va_end(ap);
+	}
+	return code;
+}
+
+size_t scan_type_size(enum scan_type type)
+{
+	switch (type) {
+	case SCAN_U8:
+		return 1;
+	case SCAN_U16:
+	case SCAN_I16:
+		return 2;
+	case SCAN_F32:
+	case SCAN_RGBA8:
+		return 4;
+	}
+	return 0;
+}
+
+const char *scan_type_name(enum scan_type type)
+{
+	switch (type) {
+	case SCAN_U8:
+		return "uint8";
+	case SCAN_U16:
+		return "uint16";
+	case SCAN_I16:
+		return "int16";
+	case SCAN_F32:
+		return "float32";
+	case SCAN_RGBA8:
+		return "RGBA8";
+	}
+	return "unknown";
+}
+
+void scan_voxel_to_ras(const struct scan *s, double i, double j, double k, double ras[3])
+{
+	for (int r = 0; r < 3; r++)
+		ras[r] = s->to_ras[r] * i + s->to_ras[4 + r] * j + s->to_ras[8 + r] * k + s->to_ras[12 + r];
+}
+
+void scan_free(struct scan *s)
+{
+	free(s->data);
+	memset(s, 0, sizeof(*s));
+}
+
+int scan_check_dims(const char *path, const uint32_t dims[3], uint64_t *voxels, char *err, size_t err_size)
+{
+	if (dims[0] == 0 || dims[1] == 0 || dims[2] == 0)
+		return scan_fail(err, err_size, -EINVAL, path, "a volume of %" PRIu32 "x%" PRIu32 "x%" PRIu32 " voxels",
+				 dims[0], dims[1], dims[2]);
+	if (dims[0] > SCAN_MAX_DIM || dims[1] > SCAN_MAX_DIM || dims[2] > SCAN_MAX_DIM)
+		return scan_fail(err, err_size, -E2BIG, path,
+				 "%" PRIu32 "x%" PRIu32 "x%" PRIu32 " voxels: over %u along an axis", dims[0], dims[1],
+				 dims[2], SCAN_MAX_DIM);
+	/* Each factor is at most 2^12, so the product fits in 36 bits. */
+	*voxels = (uint64_t)dims[0] * dims[1] * dims[2];
+	if (*voxels > SCAN_MAX_VOXELS)
+		return scan_fail(err, err_size, -E2BIG, path,
+				 "%" PRIu32 "x%" PRIu32 "x%" PRIu32 " voxels: over 2^31 in all", dims[0], dims[1],
+				 dims[2]);
+	return 0;
+}
+
+int scan_check_spacing(const char *path, const double spacing[3], char *err, size_t err_size)
+{
+	for (int a = 0; a < 3; a++)
+		if (!(isfinite(spacing[a]) && spacing[a] > 0))
+			return scan_fail(err, err_size, -EINVAL, path, "voxel spacing %g x %g x %g mm: not > 0",
+					 spacing[0], spacing[1], spacing[2]);
+	return 0;
+}
+
+/* The determinant of to_ras's upper 3x3 (columns i, j, k). */
+static double det3(const double *m)
+{
+	return m[0] * (m[5] * m[10] - m[9] * m[6]) - m[4] * (m[1] * m[10] - m[9] * m[2]) +
+	       m[8] * (m[1] * m[6] - m[5] * m[2]);
+}
+
+static bool ras_ok(const struct scan *s)
+{
+	for (int n = 0; n < 16; n++)
+		if (!isfinite(s->to_ras[n]))
+			return false;
+	if (s->to_ras[3] != 0 || s->to_ras[7] != 0 || s->to_ras[11] != 0 || s->to_ras[15] != 1)
+		return false;
+	/* Not singular: relative to the product of the column lengths. */
+	return fabs(det3(s->to_ras)) > 1e-6 * s->spacing[0] * s->spacing[1] * s->spacing[2];
+}
+
+int scan_check(const struct scan *s, const char *path, char *err, size_t err_size)
+{
+	uint64_t voxels;
+	int ret = scan_check_dims(path, s->dims, &voxels, err, err_size);
+	if (ret == 0)
+		ret = scan_check_spacing(path, s->spacing, err, err_size);
+	if (ret != 0)
+		return ret;
+	size_t per = scan_type_size(s->type);
+	if (per == 0 || !s->data || s->size != voxels * per)
+		return scan_fail(err, err_size, -EINVAL, path, "a volume without the data its size says");
+	if (!ras_ok(s))
+		return scan_fail(err, err_size, -EINVAL, path,
+				 "the voxel to patient transform is not finite or is singular");
+	return 0;
+}
+
+void scan_set_diagonal(struct scan *s)
+{
+	memset(s->to_ras, 0, sizeof(s->to_ras));
+	s->to_ras[0] = s->spacing[0];
+	s->to_ras[5] = s->spacing[1];
+	s->to_ras[10] = s->spacing[2];
+	s->to_ras[15] = 1;
+}
+
+void scan_describe(struct scan *s, const char *format, const char *extra)
+{
+	snprintf(s->what, sizeof(s->what), "%s %" PRIu32 "x%" PRIu32 "x%" PRIu32 " %s, %.4gx%.4gx%.4g mm%s%s", format,
+		 s->dims[0], s->dims[1], s->dims[2], scan_type_name(s->type), s->spacing[0], s->spacing[1],
+		 s->spacing[2], extra ? ", " : "", extra ? extra : "");
+}
+
+/* ---- raw files ---- */
+
+static enum scan_stored raw_stored(enum scan_type type)
+{
+	switch (type) {
+	case SCAN_U8:
+		return SCAN_STORED_U8;
+	case SCAN_U16:
+		return SCAN_STORED_U16;
+	case SCAN_I16:
+		return SCAN_STORED_I16;
+	case SCAN_F32:
+		return SCAN_STORED_F32;
+	case SCAN_RGBA8:
+		break;
+	}
+	return SCAN_STORED_RGBA32;
+}
+
+/* Reads exactly len bytes at offset: 0, -errno, or -EINVAL for a file that
+ * ended first (it shrank since it was measured). */
+static int pread_all(int fd, void *buf, size_t len, uint64_t offset)
+{
+	uint8_t *p = buf;
+	while (len > 0) {
+		size_t chunk = len < (1u << 30) ? len : (1u << 30);
+		ssize_t n = pread(fd, p, chunk, (off_t)offset);
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n < 0)
+			return -errno;
+		if (n == 0)
+			return -EINVAL;
+		p += n;
+		len -= (size_t)n;
+		offset += (uint64_t)n;
+	}
+	return 0;
+}
+
+/* The layout's own checks, and that the file holds the bytes it needs. */
+static int raw_check(const char *path, const struct scan_raw *raw, int fd, size_t *size, char *err, size_t err_size)
+{
+	uint64_t voxels;
+	struct stat st;
+	size_t per = scan_type_size(raw->type);
+	if (per == 0)
+		return scan_fail(err, err_size, -EINVAL, path, "unknown voxel type %d", (int)raw->type);
+	int ret = scan_check_dims(path, raw->dims, &voxels, err, err_size);
+	if (ret == 0)
+		ret = scan_check_spacing(path, raw->spacing, err, err_size);
+	if (ret != 0)
+		return ret;
+	if (fstat(fd, &st) != 0)
+		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
+	if (!S_ISREG(st.st_mode))
+		return scan_fail(err, err_size, -EINVAL, path, "not a regular file");
+	*size = (size_t)(voxels * per);
+	uint64_t have = (uint64_t)st.st_size;
+	if (raw->offset > have || have - raw->offset < *size)
+		return scan_fail(err, err_size, -EINVAL, path,
+				 "holds %" PRIu64 " bytes; %" PRIu32 "x%" PRIu32 "x%" PRIu32
+				 " %s voxels need %zu from offset %" PRIu64,
+				 have, raw->dims[0], raw->dims[1], raw->dims[2], scan_type_name(raw->type), *size,
+				 raw->offset);
+	return 0;
+}
+
+int scan_read_raw(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	size_t size = 0;
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0)
+		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
+	int ret = raw_check(path, raw, fd, &size, err, err_size);
+	void *buf = ret == 0 ? malloc(size) : NULL;
+	if (ret == 0 && !buf)
+		ret = scan_fail(err, err_size, -ENOMEM, path, "out of memory for %zu bytes", size);
+	if (ret == 0 && (ret = pread_all(fd, buf, size, raw->offset)) != 0)
+		scan_fail(err, err_size, ret, path, "%s", ret == -EINVAL ? "the file ended early" : strerror(-ret));
+	close(fd);
+	if (ret != 0) {
+		free(buf);
+		return ret;
+	}
+	size_t per = scan_type_size(raw->type);
+	if (per > 1 && raw->type != SCAN_RGBA8 && raw->big_endian != (__BYTE_ORDER__ == __ORDER_BIG_ENDIAN__))
+		scan_swap_bytes(buf, size / per, per);
+	memcpy(out->dims, raw->dims, sizeof(out->dims));
+	memcpy(out->spacing, raw->spacing, sizeof(out->spacing));
+	scan_set_diagonal(out);
+	ret = scan_finish(out, raw_stored(raw->type), buf, NULL, 0, path, err, err_size);
+	if (ret == 0)
+		scan_describe(out, "raw", raw->big_endian ? "big-endian" : NULL);
+	return ret;
+}
+
+/* ---- dispatch ---- */
+
+static bool ends_with(const char *s, const char *suffix)
+{
+	size_t n = strlen(s), m = strlen(suffix);
+	return n >= m && strcasecmp(s + n - m, suffix) == 0;
+}
+
+static int read_by_kind(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	struct stat st;
+	if (raw)
+		return scan_read_raw(path, raw, out, err, err_size);
+	if (stat(path, &st) != 0)
+		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
+	if (S_ISDIR(st.st_mode))
+		return scan_read_dicom(path, out, err, err_size);
+	if (ends_with(path, ".nii") || ends_with(path, ".nii.gz"))
+		return scan_read_nifti(path, out, err, err_size);
+	return scan_fail(err, err_size, -EINVAL, path,
+			 "not a .nii or .nii.gz file or a DICOM directory (a raw file needs its layout)");
+}
+
+int scan_read(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	memset(out, 0, sizeof(*out));
+	if (err && err_size > 0)
+		err[0] = '\0';
+	if (!path)
+		return scan_fail(err, err_size, -EINVAL, path, "no path");
+	int ret = read_by_kind(path, raw, out, err, err_size);
+	if (ret == 0)
+		ret = scan_check(out, path, err, err_size);
+	if (ret != 0)
+		scan_free(out);
+	return ret;
+}
