@@ -206,6 +206,11 @@ static int display_create_buffer(void *target, const struct proto_display_create
 	return objects_create_buffer(target, a->id, a->size, a->fd);
 }
 
+static int display_create_volume(void *target, const struct proto_display_create_volume_args *a)
+{
+	return objects_create_volume(target, a);
+}
+
 static int display_create_buffer_inline(void *target, const struct proto_display_create_buffer_inline_args *a)
 {
 	return objects_create_buffer_inline(target, a->id, a->data, a->data_size);
@@ -409,6 +414,7 @@ static const struct proto_display_requests display_requests = {
 	.capture = display_capture,
 	.watch = display_watch,
 	.calibrate = display_calibrate,
+	.create_volume = display_create_volume,
 };
 
 /* ---- dispatch ---- */
@@ -439,6 +445,9 @@ static int dispatch_message(struct client *c, struct proto_message *m)
 			break;
 		case PROTO_IFACE_WATCHER:
 			r = proto_watcher_dispatch_request(&watcher_requests, obj, m, c->version, &err);
+			break;
+		case PROTO_IFACE_VOLUME:
+			r = proto_volume_dispatch_request(&volume_requests, obj, m, c->version, &err);
 			break;
 		default:
 			return client_fail(c, m->object, PROTO_ERR_METHOD, "%s objects take no requests",

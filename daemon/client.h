@@ -116,6 +116,14 @@ struct list {
 	unsigned depth;
 	bool changed;     /* pending differs from committed */
 	struct link link; /* client.lists */
+	uint8_t *lut;     /* set_volume_lut's table: lut_count RGB entries, or NULL */
+	uint32_t lut_count;
+};
+
+/* A volume (volumes.c): its samples, shared with the draws of it. */
+struct volume_obj {
+	struct object base;
+	struct vgrid *grid;
 };
 
 /* A layer's state as requests set it, before display.commit. */
@@ -204,11 +212,30 @@ extern const struct proto_buffer_requests buffer_requests;
 extern const struct proto_list_requests list_requests;
 extern const struct proto_layer_requests layer_requests;
 extern const struct proto_watcher_requests watcher_requests;
+extern const struct proto_volume_requests volume_requests;
 
 int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd);
 int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size);
 int objects_create_list(struct client *c, uint32_t id);
 int objects_create_layer(struct client *c, uint32_t id);
+int objects_create_volume(struct client *c, const struct proto_display_create_volume_args *a);
+/* The destroy request of buffers, lists, layers and volumes. */
+int objects_destroy_req(void *target);
+/* Buffer id of c, or NULL after failing c (invalid_object on object
+ * blame; what names the request). */
+const struct buffer *objects_buffer(struct client *c, uint32_t blame, uint32_t id, const char *what);
+/* Counts bytes of c's against max-buffer-bytes and memory-budget: 0, or c
+ * failed with the quota error. objects_uncharge() gives them back. */
+int objects_charge(struct client *c, uint64_t bytes);
+void objects_uncharge(struct client *c, uint64_t bytes);
+/* Appends a draw of v (its reference taken over) to l's pending draws with
+ * l's state, its count against max-vertices and memory-budget: 0, or l's
+ * client failed (v released). */
+int objects_list_append(struct list *l, struct vdata *v);
+/* list.draw_volume and list.set_volume_lut (volumes.c). */
+int volumes_list_draw(void *target, const struct proto_list_draw_volume_args *a);
+int volumes_list_set_lut(void *target, const struct proto_list_set_volume_lut_args *a);
+void volume_object_destroy(struct volume_obj *vo);
 /* Registers a new object under its client-chosen id (checked). */
 int object_register(struct client *c, struct object *obj, uint32_t id, enum proto_interface type);
 void object_destroy(struct object *obj);

@@ -19,8 +19,27 @@ struct vdata *vdata_ref(struct vdata *v)
 
 void vdata_unref(struct vdata *v)
 {
-	if (v && --v->refs == 0)
-		free(v);
+	if (!v || --v->refs > 0)
+		return;
+	if (v->grid) {
+		vgrid_unref(v->grid);
+		free((void *)v->transfer.lut);
+	}
+	free(v);
+}
+
+struct vgrid *vgrid_ref(struct vgrid *g)
+{
+	g->refs++;
+	return g;
+}
+
+void vgrid_unref(struct vgrid *g)
+{
+	if (!g || --g->refs > 0)
+		return;
+	free(g->samples);
+	free(g);
 }
 
 void mat4_mul(float out[16], const float a[16], const float b[16])

@@ -7,18 +7,38 @@
 #ifndef SPINDLE_DRAW_H
 #define SPINDLE_DRAW_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "scene.h"
 
+/* A volume's samples in the renderers' layout (scene.h, scene_grid),
+ * counted: the volume object holds a reference and each draw of it one
+ * (through its vdata). gone: the object was destroyed; its draws show
+ * nothing from the next scene on. Main thread only. */
+struct vgrid {
+	unsigned refs;
+	bool gone;
+	uint64_t bytes; /* of samples */
+	struct scene_grid grid;
+	void *samples; /* grid.data */
+};
+
+struct vgrid *vgrid_ref(struct vgrid *g);
+void vgrid_unref(struct vgrid *g);
+
 /* Vertex data of one draw; shared by the pending and committed states
- * and by scene snapshots, hence counted. Main thread only. */
+ * and by scene snapshots, hence counted. Main thread only. A grid draw
+ * (prim SCENE_GRID) has no vertices: its grid, holding a reference, and
+ * its transfer function, whose lookup table (if any) it owns. */
 struct vdata {
 	unsigned refs;
 	enum scene_prim prim;
 	uint32_t count;    /* vertices in xyz */
 	uint32_t prims;    /* primitives they make */
 	uint8_t *prim_rgb; /* NULL, or 3 bytes per primitive (alpha applied) */
+	struct vgrid *grid;
+	struct scene_transfer transfer;
 	float xyz[];
 };
 

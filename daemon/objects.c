@@ -73,6 +73,22 @@ static void account_vertices(struct client *c, int64_t n)
 	c->env->totals->vertices += (uint64_t)n;
 }
 
+int objects_charge(struct client *c, uint64_t bytes)
+{
+	if (bytes > c->env->cfg->max_buffer_bytes - c->buffer_bytes)
+		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers and volumes over %llu bytes",
+				   (unsigned long long)c->env->cfg->max_buffer_bytes);
+	if (budget_room(c, bytes) < 0)
+		return -EPROTO;
+	account_buffer(c, (int64_t)bytes, 0);
+	return 0;
+}
+
+void objects_uncharge(struct client *c, uint64_t bytes)
+{
+	account_buffer(c, -(int64_t)bytes, 0);
+}
+
 /* ---- buffers ---- */
 
 static void buffer_destroy(struct buffer *b)
@@ -171,15 +187,14 @@ int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data
 	return r;
 }
 
-/* The destroy request of buffers, lists and layers. */
-static int destroy_req(void *target)
+int objects_destroy_req(void *target)
 {
 	object_destroy(target);
 	return 0;
 }
 
 const struct proto_buffer_requests buffer_requests = {
-	.destroy = destroy_req,
+	.destroy = objects_destroy_req,
 };
 
 /* ---- lists ---- */
@@ -241,6 +256,7 @@ void list_unref(struct list *l)
 	draws_finish(&l->pending);
 	draws_finish(&l->committed);
 	link_remove(&l->link);
+	free(l->lut);
 	free(l);
 }
 
@@ -279,6 +295,9 @@ static int list_clear(void *target)
 	account_vertices(l->base.client, -(int64_t)l->pending.vertices);
 	draws_clear(&l->pending);
 	list_reset_state(l);
+	free(l->lut);
+	l->lut = NULL;
+	l->lut_count = 0;
 	l->changed = true;
 	return 0;
 }
@@ -385,14 +404,19 @@ static const uint8_t *buffer_at(const struct buffer *b, uint64_t offset)
 	return b->map ? b->map + offset : none;
 }
 
-static struct buffer *draw_buffer(struct list *l, uint32_t id, const char *what)
+const struct buffer *objects_buffer(struct client *c, uint32_t blame, uint32_t id, const char *what)
 {
-	struct buffer *b = idmap_get(&l->base.client->objects, id);
+	struct buffer *b = idmap_get(&c->objects, id);
 	if (!b || b->base.type != PROTO_IFACE_BUFFER) {
-		list_fail(l, PROTO_ERR_OBJECT, "%s: %u is not a buffer", what, id);
+		client_fail(c, blame, PROTO_ERR_OBJECT, "%s: %u is not a buffer", what, id);
 		return NULL;
 	}
 	return b;
+}
+
+static const struct buffer *draw_buffer(struct list *l, uint32_t id, const char *what)
+{
+	return objects_buffer(l->base.client, l->base.id, id, what);
 }
 
 /* Checks mode, vertex buffer, stride and the vertex range; fills the
@@ -404,7 +428,7 @@ static int vertex_source(struct list *l, uint32_t mode, uint32_t buffer, uint64_
 	uint32_t last_mode = c->version >= 2 ? PROTO_LIST_MODE_LINE_STRIP : PROTO_LIST_MODE_TRIANGLES;
 	if (mode > last_mode)
 		return list_fail(l, PROTO_ERR_VALUE, "draw mode %u unknown at version %u", mode, c->version);
-	struct buffer *b = draw_buffer(l, buffer, "draw");
+	const struct buffer *b = draw_buffer(l, buffer, "draw");
 	if (!b)
 		return -EPROTO;
 	uint32_t size = draw_format_size(l->state.format);
@@ -452,8 +476,22 @@ static int list_append_draw(struct list *l, const struct draw_source *src)
 	case DRAW_NO_MEMORY:
 		return list_fail(l, PROTO_ERR_NO_MEMORY, "out of memory");
 	}
-	if (!v)
-		return 0;
+	return v ? objects_list_append(l, v) : 0;
+}
+
+int objects_list_append(struct list *l, struct vdata *v)
+{
+	struct client *c = l->base.client;
+	uint64_t room = c->env->cfg->max_vertices - c->vertices, budget = budget_vertices(c);
+	if (v->count > room || v->count > budget) {
+		vdata_unref(v);
+		if (budget < room) {
+			c->env->totals->refused_memory++;
+			return list_fail(l, PROTO_ERR_QUOTA, "the daemon's memory budget is used up");
+		}
+		return list_fail(l, PROTO_ERR_QUOTA, "more than %llu vertices",
+				 (unsigned long long)c->env->cfg->max_vertices);
+	}
 	struct list_item d = { .data = v, .point_size = l->state.point_size };
 	memcpy(d.transform, l->state.transform, sizeof(d.transform));
 	memcpy(d.rgba, l->state.color, 4);
@@ -483,7 +521,7 @@ static int list_draw_indexed(void *target, const struct proto_list_draw_indexed_
 		return -EPROTO;
 	if (a->index_type != PROTO_LIST_INDEX_TYPE_U16 && a->index_type != PROTO_LIST_INDEX_TYPE_U32)
 		return list_fail(l, PROTO_ERR_VALUE, "index type %u unknown", a->index_type);
-	struct buffer *ib = draw_buffer(l, a->indices, "draw_indexed");
+	const struct buffer *ib = draw_buffer(l, a->indices, "draw_indexed");
 	if (!ib)
 		return -EPROTO;
 	if (a->index_offset % a->index_type)
@@ -498,7 +536,7 @@ static int list_draw_indexed(void *target, const struct proto_list_draw_indexed_
 }
 
 const struct proto_list_requests list_requests = {
-	.destroy = destroy_req,
+	.destroy = objects_destroy_req,
 	.clear = list_clear,
 	.set_color = list_set_color,
 	.set_transform = list_set_transform,
@@ -509,6 +547,8 @@ const struct proto_list_requests list_requests = {
 	.push = list_push,
 	.pop = list_pop,
 	.multiply_transform = list_multiply_transform,
+	.draw_volume = volumes_list_draw,
+	.set_volume_lut = volumes_list_set_lut,
 };
 
 /* ---- layers ---- */
@@ -602,7 +642,7 @@ static int layer_set_exclusive(void *target, const struct proto_layer_set_exclus
 }
 
 const struct proto_layer_requests layer_requests = {
-	.destroy = destroy_req,
+	.destroy = objects_destroy_req,
 	.set_list = layer_set_list,
 	.set_transform = layer_set_transform,
 	.set_visible = layer_set_visible,
@@ -761,6 +801,9 @@ void object_destroy(struct object *obj)
 		free(wa);
 		break;
 	}
+	case PROTO_IFACE_VOLUME:
+		volume_object_destroy((struct volume_obj *)obj);
+		break;
 	case PROTO_IFACE_DISPLAY:
 		break;
 	}

@@ -57,6 +57,11 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 			.point_size = d->point_size,
 			.prim_rgb = d->data->prim_rgb,
 		};
+		/* A grid whose volume is gone draws nothing (grid NULL). */
+		if (d->data->grid && !d->data->grid->gone) {
+			sd->grid = &d->data->grid->grid;
+			sd->transfer = d->data->transfer;
+		}
 		/* With turns, the layer's base and its turn by whole images
 		 * (layer.h): the renderer shifts images instead of turning
 		 * vertices, and the cache reuses what it rendered. */

@@ -21,6 +21,10 @@ struct spindle_layer {
 	struct lib_object base;
 };
 
+struct spindle_volume {
+	struct lib_object base;
+};
+
 static void *object_new(struct spindle *sp, size_t size)
 {
 	uint32_t id;
@@ -247,6 +251,57 @@ int spindle_list_triangles(struct spindle_list *list, struct spindle_buffer *buf
 			   uint32_t stride)
 {
 	return spindle_list_draw(list, SPINDLE_TRIANGLES, buf, offset, count, stride);
+}
+
+struct spindle_volume *spindle_volume_create(struct spindle *sp, struct spindle_buffer *buf, uint64_t offset,
+					     enum spindle_volume_type type, const uint32_t size[3],
+					     const float spacing[3])
+{
+	if (!buf || !size || !spacing)
+		return fail_null(EINVAL);
+	if (sp->version < 6)
+		return fail_null(EPROTONOSUPPORT);
+	struct spindle_volume *v = object_new(sp, sizeof(*v));
+	if (!v)
+		return NULL;
+	struct proto_display_create_volume_args a = {
+		.id = v->base.id,
+		.buffer = buf->base.id,
+		.offset = offset,
+		.type = (uint32_t)type,
+		.nx = size[0],
+		.ny = size[1],
+		.nz = size[2],
+		.sx = spacing[0],
+		.sy = spacing[1],
+		.sz = spacing[2],
+	};
+	return object_created(&v->base, proto_req_display_create_volume(sp->conn, 1, &a));
+}
+
+void spindle_volume_destroy(struct spindle_volume *vol)
+{
+	object_destroyed(vol ? &vol->base : NULL, proto_req_volume_destroy);
+}
+
+#define SEND_V6(obj, call) ((obj)->sp->version < 6 && !(obj)->sp->dead ? -EPROTONOSUPPORT : SEND(obj, call))
+
+int spindle_list_draw_volume(struct spindle_list *list, struct spindle_volume *vol, enum spindle_sampling sampling,
+			     float threshold, float window_center, float window_width)
+{
+	if (!vol)
+		return -EINVAL;
+	return SEND_V6(&list->base,
+		       proto_req_list_draw_volume(list->base.sp->conn, list->base.id, vol->base.id, (uint32_t)sampling,
+						  threshold, window_center, window_width));
+}
+
+int spindle_list_set_volume_lut(struct spindle_list *list, struct spindle_buffer *buf, uint64_t offset, uint32_t count)
+{
+	if (!buf)
+		return -EINVAL;
+	return SEND_V6(&list->base,
+		       proto_req_list_set_volume_lut(list->base.sp->conn, list->base.id, buf->base.id, offset, count));
 }
 
 struct spindle_layer *spindle_layer_create(struct spindle *sp)

@@ -139,7 +139,10 @@ def valid_args(c, msg, objs):
             'layer.set_priority': (1,),
             'layer.set_exclusive': (0,),
             'display.watch': (c.new_id(), 0),
-            'display.calibrate': (0, 0.0)}
+            'display.calibrate': (0, 0.0),
+            'display.create_volume': (c.new_id(), objs['buffer'], 0, 1, 2, 2, 2, 1.0, 1.0, 1.0),
+            'list.draw_volume': (objs['buffer'], 0, 0.0, 0.0, 1.0),
+            'list.set_volume_lut': (objs['buffer'], 0, 2)}
     return vals[msg.full]
 
 
@@ -151,8 +154,8 @@ def newer_requests_fatal():
     newer = [m for m in P.requests.values() if m.since > 1]
     check(newer, 'the document has requests newer than version 1')
     for m in newer:
-        if m.interface == 'watcher':
-            continue   # no watcher exists below version 5: display.watch is the one tried
+        if m.interface in ('watcher', 'volume'):
+            continue   # none exists below version 5 (6): display.watch (create_volume) is the one tried
         with Abuse(d, wit) as a:
             c = a.conn(1)
             objs = setup_objects(c)

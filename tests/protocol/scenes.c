@@ -161,3 +161,20 @@ int run_named_tests(const struct named_test *tests, size_t count, int argc, char
 	}
 	return check_done();
 }
+
+uint64_t count_lit_image(const struct volume *vol, uint32_t k, int c)
+{
+	uint64_t n = 0;
+	for (uint32_t y = 0; y < H; y++)
+		for (uint32_t u = 0; u < W; u++)
+			n += volume_pixel(vol, k, u, y, c);
+	return n;
+}
+
+uint64_t count_lit(const struct volume *vol, int c)
+{
+	uint64_t n = 0;
+	for (uint32_t k = 0; k < vol->image_count; k++)
+		n += count_lit_image(vol, k, c);
+	return n;
+}

@@ -35,6 +35,10 @@ void check_shows_axis_line(struct spindle *sp);
 
 uint64_t mono_ns(void);
 
+/* Lit pixels of channel c in image k, and in the whole volume. */
+uint64_t count_lit_image(const struct volume *vol, uint32_t k, int c);
+uint64_t count_lit(const struct volume *vol, int c);
+
 extern const float identity[16];
 /* Identity moved by dx along x. */
 void shift_x(float m[16], float dx);

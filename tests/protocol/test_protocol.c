@@ -224,23 +224,6 @@ static void test_two_clients(void)
 	daemon_stop(&d);
 }
 
-static uint64_t count_lit_image(const struct volume *vol, uint32_t k, int c)
-{
-	uint64_t n = 0;
-	for (uint32_t y = 0; y < H; y++)
-		for (uint32_t u = 0; u < W; u++)
-			n += volume_pixel(vol, k, u, y, c);
-	return n;
-}
-
-static uint64_t count_lit(const struct volume *vol, int c)
-{
-	uint64_t n = 0;
-	for (uint32_t k = 0; k < vol->image_count; k++)
-		n += count_lit_image(vol, k, c);
-	return n;
-}
-
 /* Waits for a volume without red, i.e. without the departed client. */
 static struct volume *capture_until_no_red(struct spindle *sp)
 {

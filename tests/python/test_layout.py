@@ -63,7 +63,8 @@ def test_constants_match_the_header():
 # Exported by libspindle but not (yet) bound: the protocol 5 watchers.
 NOT_BOUND = {
     'spindle_get_watch_stats', 'spindle_watch_create', 'spindle_watch_destroy', 'spindle_watch_get_error',
-    'spindle_watch_release'
+    'spindle_watch_release', 'spindle_volume_create', 'spindle_volume_destroy', 'spindle_list_draw_volume',
+    'spindle_list_set_volume_lut'
 }
 
 

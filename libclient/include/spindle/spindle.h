@@ -376,6 +376,46 @@ struct spindle_watch_stats {
  * 0 or -errno; -EPROTONOSUPPORT from a daemon older than protocol 5. */
 int spindle_get_watch_stats(struct spindle *sp, struct spindle_watch_stats *out);
 
+/* Volumes (protocol 6; docs/volumes.md): a 3-D grid of samples, shown
+ * by a list's draw_volume where the images' slice planes cross it. */
+struct spindle_volume;
+
+enum spindle_volume_type {
+	SPINDLE_VOLUME_U8 = 1,
+	SPINDLE_VOLUME_U16 = 2,
+	SPINDLE_VOLUME_I16 = 3, /* Hounsfield units of a CT, for one */
+	SPINDLE_VOLUME_F32 = 4,
+	SPINDLE_VOLUME_RGBA8 = 5, /* each sample its own colour, alpha scaling it */
+};
+
+enum spindle_sampling {
+	SPINDLE_NEAREST = 0,
+	SPINDLE_TRILINEAR = 1,
+};
+
+/* A volume of size[0] x size[1] x size[2] samples of type from buf at
+ * offset (x fastest, then y, then z; little-endian), sample (x, y, z)
+ * centred at ((x + 0.5) spacing[0], ...) in model units, y its up axis.
+ * The daemon copies them: buf may be destroyed at once. NULL + errno:
+ * EPROTONOSUPPORT from a daemon older than protocol 6; sizes (1 to 4096,
+ * at most 2^31 samples), spacing (finite, above 0) and the buffer's
+ * length are checked by the daemon (a fatal error). */
+struct spindle_volume *spindle_volume_create(struct spindle *sp, struct spindle_buffer *buf, uint64_t offset,
+					     enum spindle_volume_type type, const uint32_t size[3],
+					     const float spacing[3]);
+/* A list drawing it shows nothing of it from the next volume on. */
+void spindle_volume_destroy(struct spindle_volume *vol);
+/* Draws vol with the list's transform and colour: a sample below
+ * threshold (rgba8: alpha below it) lights nothing; else its value in the
+ * window (centre, width > 0) scales the colour, or picks an entry of the
+ * table set by spindle_list_set_volume_lut(). 0 or -errno
+ * (-EPROTONOSUPPORT before protocol 6). */
+int spindle_list_draw_volume(struct spindle_list *list, struct spindle_volume *vol, enum spindle_sampling sampling,
+			     float threshold, float window_center, float window_width);
+/* The lookup table of the draw_volume calls that follow: count (2 to 4096)
+ * RGBA8 entries from buf at offset, copied now; count 0: the colour again. */
+int spindle_list_set_volume_lut(struct spindle_list *list, struct spindle_buffer *buf, uint64_t offset, uint32_t count);
+
 /* The display's calibration (protocol 6; spindled(8), docs/rendering.md
  * "Calibration"): where a real projector's images land against volume
  * space, corrected in the render geometry. */

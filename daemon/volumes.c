@@ -1,0 +1,211 @@
+/* Volumes (protocol 6, docs/volumes.md): display.create_volume copies a
+ * client's samples once into the renderers' layout (scene.h, scene_grid:
+ * the up axis y fastest); list.draw_volume draws one with a transfer
+ * function; list.set_volume_lut sets the lookup table of the draws that
+ * follow. The samples count against the client's max-buffer-bytes and the
+ * daemon's memory-budget while the volume object lives; a draw of one
+ * counts 1 + its table's entries as vertices (max-vertices). */
+#include <errno.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "client.h"
+#include "draw.h"
+#include "stage.h"
+
+#define VOLUME_MAX_SIZE 4096
+#define VOLUME_MAX_SAMPLES (1ull << 31)
+#define VOLUME_MAX_LUT 4096
+
+static uint32_t sample_bytes(uint32_t type)
+{
+	switch (type) {
+	case SCENE_GRID_U8:
+		return 1;
+	case SCENE_GRID_U16:
+	case SCENE_GRID_I16:
+		return 2;
+	case SCENE_GRID_F32:
+	case SCENE_GRID_RGBA8:
+		return 4;
+	}
+	return 0;
+}
+
+/* Sample (x, y, z) of src (x fastest, little-endian) to the grid's layout
+ * (y fastest): sample (x, y, z) at (z nx + x) ny + y. */
+static void relayout(void *dst, const uint8_t *src, const uint32_t n[3], uint32_t size, bool swap)
+{
+	uint8_t *out = dst;
+	for (uint64_t z = 0; z < n[2]; z++)
+		for (uint64_t y = 0; y < n[1]; y++)
+			for (uint64_t x = 0; x < n[0]; x++, src += size) {
+				uint8_t *d = out + ((z * n[0] + x) * n[1] + y) * size;
+				if (!swap) {
+					memcpy(d, src, size);
+				} else {
+					for (uint32_t b = 0; b < size; b++)
+						d[b] = src[size - 1 - b];
+				}
+			}
+}
+
+/* The arguments' sizes and spacing; the sample bytes in *bytes. */
+static int check_shape(struct client *c, const struct proto_display_create_volume_args *a, uint64_t *bytes)
+{
+	const uint32_t n[3] = { a->nx, a->ny, a->nz };
+	const float s[3] = { a->sx, a->sy, a->sz };
+	uint32_t size = sample_bytes(a->type);
+	if (!size)
+		return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: type %u", a->type);
+	uint64_t samples = 1;
+	for (int i = 0; i < 3; i++) {
+		if (n[i] < 1 || n[i] > VOLUME_MAX_SIZE)
+			return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: size %u (1 to %d)", n[i],
+					   VOLUME_MAX_SIZE);
+		if (!(isfinite(s[i]) && s[i] > 0.0f))
+			return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: spacing %g", (double)s[i]);
+		samples *= n[i];
+	}
+	if (samples > VOLUME_MAX_SAMPLES)
+		return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: %llu samples (at most 2^31)",
+				   (unsigned long long)samples);
+	*bytes = samples * size;
+	return 0;
+}
+
+int objects_create_volume(struct client *c, const struct proto_display_create_volume_args *a)
+{
+	uint64_t bytes = 0;
+	int r = check_shape(c, a, &bytes);
+	if (r < 0)
+		return r;
+	const struct buffer *b = objects_buffer(c, 1, a->buffer, "create_volume");
+	if (!b)
+		return -EPROTO;
+	if (a->offset > b->size || bytes > b->size - a->offset)
+		return client_fail(c, 1, PROTO_ERR_VALUE,
+				   "create_volume: %llu bytes from offset %llu, buffer %u has %llu",
+				   (unsigned long long)bytes, (unsigned long long)a->offset, a->buffer,
+				   (unsigned long long)b->size);
+	if ((r = objects_charge(c, bytes)) < 0)
+		return r;
+	struct volume_obj *vo = calloc(1, sizeof(*vo));
+	struct vgrid *g = calloc(1, sizeof(*g));
+	void *samples = malloc(bytes);
+	if (!vo || !g || !samples) {
+		free(vo);
+		free(g);
+		free(samples);
+		objects_uncharge(c, bytes);
+		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+	}
+	const uint32_t n[3] = { a->nx, a->ny, a->nz };
+	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
+	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && a->type != SCENE_GRID_RGBA8;
+	relayout(samples, b->map + a->offset, n, sample_bytes(a->type), swap);
+	*g = (struct vgrid){
+		.refs = 1,
+		.bytes = bytes,
+		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples },
+		.samples = samples,
+	};
+	vo->grid = g;
+	vo->base.client = c;
+	if ((r = object_register(c, &vo->base, a->id, PROTO_IFACE_VOLUME)) < 0) {
+		objects_uncharge(c, bytes);
+		vgrid_unref(g);
+		free(vo);
+	}
+	return r;
+}
+
+void volume_object_destroy(struct volume_obj *vo)
+{
+	struct client *c = vo->base.client;
+	struct vgrid *g = vo->grid;
+	g->gone = true;
+	objects_uncharge(c, g->bytes);
+	/* Drawn by a list: the scene loses it. */
+	if (g->refs > 1 && !c->dead)
+		stage_changed(c->env->stage);
+	vgrid_unref(g);
+	free(vo);
+}
+
+const struct proto_volume_requests volume_requests = {
+	.destroy = objects_destroy_req,
+};
+
+int volumes_list_draw(void *target, const struct proto_list_draw_volume_args *a)
+{
+	struct list *l = target;
+	struct client *c = l->base.client;
+	struct volume_obj *vo = idmap_get(&c->objects, a->volume);
+	if (!vo || vo->base.type != PROTO_IFACE_VOLUME)
+		return client_fail(c, l->base.id, PROTO_ERR_OBJECT, "draw_volume: %u is not a volume", a->volume);
+	if (a->sampling > SCENE_TRILINEAR)
+		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw_volume: sampling %u", a->sampling);
+	if (!isfinite(a->threshold) || !isfinite(a->window_center) ||
+	    !(isfinite(a->window_width) && a->window_width > 0))
+		return client_fail(c, l->base.id, PROTO_ERR_VALUE,
+				   "draw_volume: threshold %g, window %g/%g (finite, width above 0)",
+				   (double)a->threshold, (double)a->window_center, (double)a->window_width);
+	float lo = a->window_center - a->window_width / 2, hi = a->window_center + a->window_width / 2;
+	if (!(hi > lo)) /* a width too small for the centre's precision */
+		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "draw_volume: window %g/%g is empty",
+				   (double)a->window_center, (double)a->window_width);
+	struct vdata *v = calloc(1, sizeof(*v));
+	uint8_t *lut = l->lut_count ? malloc((size_t)l->lut_count * 3) : NULL;
+	if (!v || (l->lut_count && !lut)) {
+		free(v);
+		free(lut);
+		return client_fail(c, l->base.id, PROTO_ERR_NO_MEMORY, "out of memory");
+	}
+	if (lut)
+		memcpy(lut, l->lut, (size_t)l->lut_count * 3);
+	*v = (struct vdata){
+		.refs = 1,
+		.prim = SCENE_GRID,
+		.count = 1 + l->lut_count, /* its weight against max-vertices */
+		.grid = vgrid_ref(vo->grid),
+		.transfer = { a->threshold, lo, hi, a->sampling, lut, lut ? l->lut_count : 0 },
+	};
+	return objects_list_append(l, v);
+}
+
+int volumes_list_set_lut(void *target, const struct proto_list_set_volume_lut_args *a)
+{
+	struct list *l = target;
+	struct client *c = l->base.client;
+	const struct buffer *b = objects_buffer(c, l->base.id, a->buffer, "set_volume_lut");
+	if (!b)
+		return -EPROTO;
+	if (a->count == 0) {
+		free(l->lut);
+		l->lut = NULL;
+		l->lut_count = 0;
+		return 0;
+	}
+	if (a->count < 2 || a->count > VOLUME_MAX_LUT)
+		return client_fail(c, l->base.id, PROTO_ERR_VALUE, "set_volume_lut: %u entries (2 to %d)", a->count,
+				   VOLUME_MAX_LUT);
+	uint64_t bytes = 4ull * a->count;
+	if (a->offset > b->size || bytes > b->size - a->offset)
+		return client_fail(c, l->base.id, PROTO_ERR_VALUE,
+				   "set_volume_lut: %u entries from offset %llu, "
+				   "buffer %u has %llu bytes",
+				   a->count, (unsigned long long)a->offset, a->buffer, (unsigned long long)b->size);
+	uint8_t *lut = malloc((size_t)a->count * 3);
+	if (!lut)
+		return client_fail(c, l->base.id, PROTO_ERR_NO_MEMORY, "out of memory");
+	const uint8_t *src = b->map + a->offset;
+	for (uint32_t i = 0; i < a->count; i++)
+		for (int ch = 0; ch < 3; ch++) /* alpha applied, as for colours */
+			lut[3 * i + ch] = (uint8_t)((src[4 * i + ch] * src[4 * i + 3] + 127) / 255);
+	free(l->lut);
+	l->lut = lut;
+	l->lut_count = a->count;
+	return 0;
+}
