@@ -9,6 +9,8 @@
  * what its lists and buffers hold; vertices pending and committed at most
  * twice the quota), and that no fd is left open after the input.
  *
+ * Volumes (protocol 6) count their copied samples as buffer bytes.
+ *
  * Input: v: u8 (version 1 + (v & 15) % PROTO_VERSION; exclusive layers
  * policy (v >> 4) % 3: none, admin (the fuzzer's user is), any), then
  * requests until the
@@ -50,6 +52,9 @@ enum op {
 	OP_RAW,           /* object id, opcode u8, len u8, len bytes: any message */
 	OP_LAYER_STATE,   /* layer, what u8 % 4: visible num, transform matrix,
 			   * priority (int32_t)num, exclusive num */
+	OP_VOLUME,        /* id, buffer, offset num64, type num, sizes 3 x u8, spacing 3 floats */
+	OP_DRAW_VOLUME,   /* list, volume, sampling num, threshold, centre, width: floats */
+	OP_VOLUME_LUT,    /* list, buffer, offset num64, count num */
 	OPS
 };
 
@@ -223,6 +228,38 @@ static int op_layer_state(struct lists *s, struct fuzz_input *in)
 	}
 }
 
+/* Volumes (protocol 6): sizes of a byte each, so that most fit the
+ * buffers the input makes. */
+static int op_volume(struct lists *s, struct fuzz_input *in)
+{
+	struct proto_display_create_volume_args a;
+	a.id = read_id(in);
+	a.buffer = read_id(in);
+	a.offset = fuzz_num64(in);
+	a.type = fuzz_num(in);
+	a.nx = fuzz_u8(in);
+	a.ny = fuzz_u8(in);
+	a.nz = fuzz_u8(in);
+	a.sx = read_float(in);
+	a.sy = read_float(in);
+	a.sz = read_float(in);
+	return proto_req_display_create_volume(s->conn, 1, &a);
+}
+
+static int op_draw_volume(struct lists *s, struct fuzz_input *in)
+{
+	uint32_t list = read_id(in), volume = read_id(in), sampling = fuzz_num(in);
+	float threshold = read_float(in), centre = read_float(in), width = read_float(in);
+	return proto_req_list_draw_volume(s->conn, list, volume, sampling, threshold, centre, width);
+}
+
+static int op_volume_lut(struct lists *s, struct fuzz_input *in)
+{
+	uint32_t list = read_id(in), buffer = read_id(in);
+	uint64_t offset = fuzz_num64(in);
+	return proto_req_list_set_volume_lut(s->conn, list, buffer, offset, fuzz_num(in));
+}
+
 static int op_raw(struct lists *s, struct fuzz_input *in)
 {
 	struct proto_writer w;
@@ -286,6 +323,12 @@ static int send_op(struct lists *s, struct fuzz_input *in)
 		return proto_req_display_commit(s->conn, 1);
 	case OP_LAYER_STATE:
 		return op_layer_state(s, in);
+	case OP_VOLUME:
+		return op_volume(s, in);
+	case OP_DRAW_VOLUME:
+		return op_draw_volume(s, in);
+	case OP_VOLUME_LUT:
+		return op_volume_lut(s, in);
 	case OP_RAW:
 	case OPS:
 		break;
@@ -330,7 +373,7 @@ static void check_client(const struct client *c, const struct config *cfg)
 		uint64_t v = 0, p = 0;
 		for (uint32_t i = 0; i < l->pending.count; i++) {
 			const struct vdata *d = l->pending.items[i].data;
-			if (!d->count || !d->prims)
+			if (d->prim == SCENE_GRID ? !d->grid || !d->count || d->prims : !d->count || !d->prims)
 				fuzz_fail("list %u: an empty draw", l->base.id);
 			v += d->count;
 			p += d->prims;
@@ -350,6 +393,8 @@ static void check_client(const struct client *c, const struct config *cfg)
 			fuzz_fail("object %u: registered as %u", c->objects.slots[i].id, o->id);
 		if (o->type == PROTO_IFACE_BUFFER)
 			bytes += ((const struct buffer *)o)->size;
+		if (o->type == PROTO_IFACE_VOLUME)
+			bytes += ((const struct volume_obj *)o)->grid->bytes;
 	}
 	if (vertices != c->vertices || vertices > cfg->max_vertices)
 		fuzz_fail("client: %llu vertices counted, %llu held, quota %llu", (unsigned long long)c->vertices,

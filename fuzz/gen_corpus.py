@@ -201,7 +201,7 @@ def session_seeds():
 
 (OP_BUFFER, OP_BUFFER_INLINE, OP_LIST, OP_DESTROY, OP_CLEAR, OP_COLOR, OP_TRANSFORM, OP_DRAW,
  OP_DRAW_INDEXED, OP_FORMAT, OP_POINT_SIZE, OP_PUSH, OP_POP, OP_MULTIPLY, OP_LAYER, OP_COMMIT,
- OP_RAW, OP_LAYER_STATE) = range(18)
+ OP_RAW, OP_LAYER_STATE, OP_VOLUME, OP_DRAW_VOLUME, OP_VOLUME_LUT) = range(21)
 POLICY_NONE, POLICY_ADMIN, POLICY_ANY = range(3)
 
 
@@ -317,6 +317,22 @@ def lists_seeds():
                         + op_matrix(OP_TRANSFORM, 3, 2, (2, 2, 2)) + op_draw(3, 2, 2, 0, 3) + show(3))
     s["error-quota"] = v1 + op_buffer(2, AXIS) + bytes([OP_LIST]) + oid(3) + op_draw(3, 0, 2, 0, 2, 1)
     s["error-raw"] = v1 + bytes([OP_LIST]) + oid(3) + bytes([OP_RAW, 3, 9, 4, 1, 2, 3, 4])
+    # Volumes (protocol 6): a 4x4x4 uint8 volume from an inline buffer,
+    # drawn through a two-entry table and shown, then destroyed while
+    # shown; floats are read_float() bytes ((b - 124) / 16).
+    v6 = start(6, POLICY_ANY)
+
+    def fl(x):
+        return bytes([int(round(x * 16)) + 124])
+    ramp = bytes(range(0, 256, 4))
+    volume = bytes([OP_VOLUME]) + oid(3) + oid(2) + num64(0) + num(1) + bytes([4, 4, 4]) + fl(0.25) * 3
+    draw = (bytes([OP_DRAW_VOLUME]) + oid(4) + oid(3) + num(1) + fl(1) + fl(4) + fl(7))
+    lut = bytes([OP_VOLUME_LUT]) + oid(4) + oid(5) + num64(0) + num(2)
+    s["v6-volume"] = (v6 + op_inline(2, ramp) + volume + op_inline(5, bytes([255, 0, 0, 255, 0, 255, 0, 128]))
+                      + bytes([OP_LIST]) + oid(4) + draw + lut + draw + layer(6, 4) + bytes([OP_COMMIT])
+                      + bytes([OP_DESTROY]) + oid(3) + bytes([OP_COMMIT]))
+    s["v6-volume-errors"] = (v6 + op_inline(2, ramp) + bytes([OP_VOLUME]) + oid(3) + oid(2) + num64(1) + num(1)
+                             + bytes([4, 4, 4]) + fl(0.25) * 3)
     return s
 
 
