@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "grid.h"
 #include "model.h"
 #include "rng.h"
 #include "shapes.h"
@@ -19,8 +20,9 @@ struct scene_data {
 	struct model *model;
 	struct bench_orbit *orbits; /* S4: one per draw */
 	double volume_s;            /* seconds per volume, for the animation */
-	int16_t *samples;           /* S5: the grid's samples, */
-	struct scene_grid grid;     /* and the grid */
+	int16_t *samples;           /* S5: the grid's samples, its lines' maxima */
+	float *line_max;
+	struct scene_grid grid; /* and the grid */
 };
 
 struct bench_scene_impl {
@@ -264,7 +266,12 @@ static int build_grid(struct bench_scene *s, struct scene_data *d, const struct 
 				d->samples[((size_t)k * n + i) * n + j] = phantom_value(x, y, z);
 			}
 	float sp = 1.0f / (float)n;
-	d->grid = (struct scene_grid){ SCENE_GRID_I16, { n, n, n }, { sp, sp, sp }, d->samples };
+	d->line_max = malloc((size_t)n * n * sizeof(*d->line_max));
+	if (!d->line_max)
+		return -ENOMEM;
+	d->grid = (struct scene_grid){ SCENE_GRID_I16, { n, n, n }, { sp, sp, sp }, d->samples, NULL };
+	grid_line_max(&d->grid, d->line_max);
+	d->grid.line_max = d->line_max;
 	struct scene_draw *dr = &s->draws[0];
 	set_draw(dr, SCENE_GRID, NULL, 0, colours[6]);
 	dr->grid = &d->grid;
@@ -375,6 +382,7 @@ void bench_scene_free(struct bench_scene *s)
 		model_destroy(d->model);
 		free(d->orbits);
 		free(d->samples);
+		free(d->line_max);
 		free(d);
 	}
 	free(s->draws);

@@ -19,9 +19,10 @@
 struct vgrid {
 	unsigned refs;
 	bool gone;
-	uint64_t bytes; /* of samples */
+	uint64_t bytes; /* of samples and line maxima, counted against the budgets */
 	struct scene_grid grid;
-	void *samples; /* grid.data */
+	void *samples;   /* grid.data */
+	float *line_max; /* grid.line_max */
 };
 
 struct vgrid *vgrid_ref(struct vgrid *g);

@@ -33,6 +33,10 @@ struct scene_grid {
 	uint32_t n[3];    /* samples along i, j, k, each >= 1 */
 	float spacing[3]; /* sx, sy, sz: model units between centres, > 0 */
 	const void *data; /* n[0] n[1] n[2] samples, host byte order */
+	/* NULL, or per line (i, k) the largest of its samples (RGBA8: alpha),
+	 * NaN left out, at line_max[k * n[0] + i] (grid_line_max()): a
+	 * renderer skips what stays below a threshold. */
+	const float *line_max;
 };
 
 enum scene_sampling {

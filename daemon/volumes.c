@@ -12,6 +12,7 @@
 
 #include "client.h"
 #include "draw.h"
+#include "grid.h"
 #include "stage.h"
 
 #define VOLUME_MAX_SIZE 4096
@@ -71,7 +72,8 @@ static int check_shape(struct client *c, const struct proto_display_create_volum
 	if (samples > VOLUME_MAX_SAMPLES)
 		return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: %llu samples (at most 2^31)",
 				   (unsigned long long)samples);
-	*bytes = samples * size;
+	/* The samples, and the maximum of each vertical line of them. */
+	*bytes = samples * size + (uint64_t)n[0] * n[2] * sizeof(float);
 	return 0;
 }
 
@@ -84,20 +86,24 @@ int objects_create_volume(struct client *c, const struct proto_display_create_vo
 	const struct buffer *b = objects_buffer(c, 1, a->buffer, "create_volume");
 	if (!b)
 		return -EPROTO;
-	if (a->offset > b->size || bytes > b->size - a->offset)
+	uint64_t need = (uint64_t)a->nx * a->ny * a->nz * sample_bytes(a->type);
+	if (a->offset > b->size || need > b->size - a->offset)
 		return client_fail(c, 1, PROTO_ERR_VALUE,
 				   "create_volume: %llu bytes from offset %llu, buffer %u has %llu",
-				   (unsigned long long)bytes, (unsigned long long)a->offset, a->buffer,
+				   (unsigned long long)need, (unsigned long long)a->offset, a->buffer,
 				   (unsigned long long)b->size);
 	if ((r = objects_charge(c, bytes)) < 0)
 		return r;
 	struct volume_obj *vo = calloc(1, sizeof(*vo));
 	struct vgrid *g = calloc(1, sizeof(*g));
-	void *samples = malloc(bytes);
-	if (!vo || !g || !samples) {
+	uint64_t lines = (uint64_t)a->nx * a->nz;
+	void *samples = malloc(bytes - lines * sizeof(float));
+	float *line_max = malloc(lines * sizeof(float));
+	if (!vo || !g || !samples || !line_max) {
 		free(vo);
 		free(g);
 		free(samples);
+		free(line_max);
 		objects_uncharge(c, bytes);
 		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
 	}
@@ -108,9 +114,11 @@ int objects_create_volume(struct client *c, const struct proto_display_create_vo
 	*g = (struct vgrid){
 		.refs = 1,
 		.bytes = bytes,
-		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples },
+		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, line_max },
 		.samples = samples,
+		.line_max = line_max,
 	};
+	grid_line_max(&g->grid, line_max);
 	vo->grid = g;
 	vo->base.client = c;
 	if ((r = object_register(c, &vo->base, a->id, PROTO_IFACE_VOLUME)) < 0) {

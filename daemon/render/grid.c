@@ -6,6 +6,13 @@
 #include "brightness.h"
 #include "geometry.h"
 
+/* Whether the grid's up axis is the display's: f_x and f_z do not change
+ * along a pixel column, nor f_y along a row. */
+static bool upright(const struct grid_job *job)
+{
+	return job->lin[0][1] == 0.0 && job->lin[2][1] == 0.0 && job->lin[1][0] == 0.0 && job->lin[1][2] == 0.0;
+}
+
 bool grid_prepare(struct grid_job *job, const struct scene_draw *d)
 {
 	const float *m = d->transform;
@@ -41,6 +48,8 @@ bool grid_prepare(struct grid_job *job, const struct scene_draw *d)
 		if (!isfinite(job->off[r]))
 			return false;
 	}
+	job->upright = upright(job);
+	job->reference = false;
 	return true;
 }
 
@@ -107,11 +116,11 @@ static float sample_at(const struct scene_draw *d, const double f[3], float rgba
 	return v;
 }
 
-bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3])
+/* The colour of sample value v (and rgba, for an RGBA8 grid) by d's
+ * transfer. false: dark. */
+static bool transfer(const struct scene_draw *d, float v, const float rgba[4], uint8_t out[3])
 {
 	const struct scene_transfer *tf = &d->transfer;
-	float rgba[4] = { 0 };
-	float v = sample_at(d, f, rgba);
 	if (!(v >= tf->threshold))
 		return false;
 	if (d->grid->type == SCENE_GRID_RGBA8) {
@@ -129,6 +138,26 @@ bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3])
 		}
 	}
 	return out[0] | out[1] | out[2];
+}
+
+bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3])
+{
+	float rgba[4] = { 0 };
+	float v = sample_at(d, f, rgba);
+	return transfer(d, v, rgba, out);
+}
+
+void grid_line_max(const struct scene_grid *g, float *out)
+{
+	for (uint32_t k = 0; k < g->n[2]; k++)
+		for (uint32_t i = 0; i < g->n[0]; i++) {
+			float mx = -INFINITY, rgba[4];
+			for (uint32_t j = 0; j < g->n[1]; j++) {
+				float v = value_at(g, i, j, k, rgba);
+				mx = v > mx ? v : mx; /* NaN never wins: it lights nothing */
+			}
+			out[(size_t)k * g->n[0] + i] = mx;
+		}
 }
 
 /* The columns of row v (plane point base + s dirs) whose centres may lie in
@@ -157,6 +186,144 @@ static bool columns_of(const struct grid_job *job, const double base[3], const d
 	return *u0 <= *u1;
 }
 
+/* One pixel column of an upright grid: the one line (nearest) or four
+ * lines (trilinear) of samples it reads, with what sample_at() works out
+ * per axis for x and z, done once. */
+struct column {
+	uint32_t i[2], k[2]; /* sample indices (clamped), the second of each pair for trilinear */
+	float tx, tz;        /* trilinear weights along x and z */
+	size_t line[4];      /* trilinear: where line (i[b & 1], k[b >> 1]) starts */
+};
+
+static void column_setup(struct column *col, const struct scene_grid *gr, double fx, double fz, bool tri)
+{
+	if (!tri) {
+		col->i[0] = clamp_index((int64_t)floor(fx + 0.5), gr->n[0]);
+		col->k[0] = clamp_index((int64_t)floor(fz + 0.5), gr->n[2]);
+		return;
+	}
+	double lx = floor(fx), lz = floor(fz);
+	col->tx = (float)(fx - lx);
+	col->tz = (float)(fz - lz);
+	for (int b = 0; b < 2; b++) {
+		col->i[b] = clamp_index((int64_t)lx + b, gr->n[0]);
+		col->k[b] = clamp_index((int64_t)lz + b, gr->n[2]);
+	}
+	for (int b = 0; b < 4; b++)
+		col->line[b] = ((size_t)col->k[b >> 1] * gr->n[0] + col->i[b & 1]) * gr->n[1];
+}
+
+/* Whether every sample the column reads is below the threshold, from the
+ * lines' maxima (NULL: not known). Trilinear mixes may round a hair above
+ * their largest sample: a margin of 1e-5 of it. */
+static bool column_dark(const struct column *col, const struct scene_grid *gr, const struct scene_transfer *tf,
+			bool tri)
+{
+	if (!gr->line_max)
+		return false;
+	float mx = -INFINITY;
+	for (int b = 0; b < (tri ? 4 : 1); b++) {
+		float v = gr->line_max[(size_t)col->k[b >> 1] * gr->n[0] + col->i[b & 1]];
+		mx = v > mx ? v : mx;
+	}
+	return (double)mx + fabs((double)mx) * 1e-5 < tf->threshold;
+}
+
+/* Sample at of a scalar grid, as a number. */
+static inline float scalar_at(uint32_t type, const void *data, size_t at)
+{
+	switch (type) {
+	case SCENE_GRID_U8:
+		return ((const uint8_t *)data)[at];
+	case SCENE_GRID_U16:
+		return ((const uint16_t *)data)[at];
+	case SCENE_GRID_I16:
+		return ((const int16_t *)data)[at];
+	default:
+		return ((const float *)data)[at];
+	}
+}
+
+/* sample_at() for the point at f_y on the column: the same operations in
+ * the same order, so the same value; a scalar grid's samples read straight
+ * from its lines (the colour sums of RGBA8 left out: they stay 0). */
+static float column_sample(const struct column *col, const struct scene_grid *gr, double fy, bool tri, float rgba[4])
+{
+	if (!tri)
+		return value_at(gr, col->i[0], clamp_index((int64_t)floor(fy + 0.5), gr->n[1]), col->k[0], rgba);
+	double ly = floor(fy);
+	float t[3] = { col->tx, (float)(fy - ly), col->tz };
+	uint32_t j[2] = { clamp_index((int64_t)ly, gr->n[1]), clamp_index((int64_t)ly + 1, gr->n[1]) };
+	float v = 0.0f;
+	if (gr->type != SCENE_GRID_RGBA8) {
+		for (int corner = 0; corner < 8; corner++) {
+			float w = 1.0f;
+			for (int a = 0; a < 3; a++)
+				w *= (corner >> a) & 1 ? t[a] : 1.0f - t[a];
+			size_t at = col->line[(corner & 1) | (corner >> 2) << 1] + j[(corner >> 1) & 1];
+			v += w * scalar_at(gr->type, gr->data, at);
+		}
+		return v;
+	}
+	float acc[4] = { 0 };
+	for (int corner = 0; corner < 8; corner++) {
+		float w = 1.0f, c4[4] = { 0 };
+		for (int a = 0; a < 3; a++)
+			w *= (corner >> a) & 1 ? t[a] : 1.0f - t[a];
+		v += w * value_at(gr, col->i[corner & 1], j[(corner >> 1) & 1], col->k[corner >> 2], c4);
+		for (int ch = 0; ch < 4; ch++)
+			acc[ch] += w * c4[ch];
+	}
+	memcpy(rgba, acc, sizeof(acc));
+	return v;
+}
+
+/* Lights pixel (out, v) with rgb, weighted by m where it is active. */
+static void light(struct section_canvas *c, const struct brightness_map *m, uint32_t out, uint32_t v, uint8_t rgb[3])
+{
+	if (m) { /* a solid fills every slice: weighted as a crossing surface */
+		struct brightness_weight w = { m->rate, m->wall, 1.0f };
+		for (int i = 0; i < 3; i++)
+			rgb[i] = brightness_apply(m, &w, out, rgb[i]);
+	}
+	section_pixel(c, out, v, rgb);
+}
+
+/* An upright grid, column by column: each column's x and z once, its
+ * samples down one run of memory per line, and columns whose lines stay
+ * below the threshold skipped. The same pixels and colours as the
+ * reference loop below, which computes every pixel's f the same way. */
+static void draw_upright(struct section_canvas *c, const struct grid_job *job, const double dir[3], const double up[3],
+			 bool mirror, const struct brightness_map *m)
+{
+	const struct geometry *g = &c->geom;
+	const struct scene_draw *d = job->draw;
+	const struct scene_grid *gr = d->grid;
+	bool tri = d->transfer.sampling == SCENE_TRILINEAR;
+	double h = g->half_height, y0 = h - 0.5 * 2.0 * h / g->height;
+	/* up[0] = up[2] = 0: every row's base for x and z is row 0's. */
+	double bx = job->off[0] + y0 * up[0], bz = job->off[2] + y0 * up[2];
+	for (uint32_t u = 0; u < g->width; u++) {
+		double s = (u + 0.5) * 2.0 / g->width - 1.0, fx = bx + s * dir[0], fz = bz + s * dir[2];
+		if (!(fx >= -0.5 && fx < gr->n[0] - 0.5 && fz >= -0.5 && fz < gr->n[2] - 0.5))
+			continue;
+		struct column col = { 0 };
+		column_setup(&col, gr, fx, fz, tri);
+		if (column_dark(&col, gr, &d->transfer, tri))
+			continue;
+		uint32_t out = mirror ? g->width - 1 - u : u;
+		for (uint32_t v = 0; v < g->height; v++) {
+			double y = h - (v + 0.5) * 2.0 * h / g->height, fy = (job->off[1] + y * up[1]) + s * dir[1];
+			if (!(fy >= -0.5 && fy < gr->n[1] - 0.5))
+				continue;
+			float rgba[4] = { 0 };
+			uint8_t rgb[3];
+			if (transfer(d, column_sample(&col, gr, fy, tri, rgba), rgba, rgb))
+				light(c, m, out, v, rgb);
+		}
+	}
+}
+
 void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint32_t src, bool mirror)
 {
 	const struct geometry *g = &c->geom;
@@ -169,6 +336,10 @@ void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint3
 		up[a] = job->lin[a][1];
 	}
 	const struct brightness_map *m = c->bright && brightness_active(c->bright) ? c->bright : NULL;
+	if (job->upright && !job->reference) {
+		draw_upright(c, job, dir, up, mirror, m);
+		return;
+	}
 	double h = g->half_height;
 	for (uint32_t v = 0; v < g->height; v++) {
 		double y = h - (v + 0.5) * 2.0 * h / g->height, base[3];
@@ -185,15 +356,8 @@ void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint3
 				inside &= f[a] >= -0.5 && f[a] < gr->n[a] - 0.5;
 			}
 			uint8_t rgb[3];
-			if (!inside || !grid_sample(job->draw, f, rgb))
-				continue;
-			uint32_t out = mirror ? g->width - 1 - u : u;
-			if (m) { /* a solid fills every slice: weighted as a crossing surface */
-				struct brightness_weight w = { m->rate, m->wall, 1.0f };
-				for (int i = 0; i < 3; i++)
-					rgb[i] = brightness_apply(m, &w, out, rgb[i]);
-			}
-			section_pixel(c, out, v, rgb);
+			if (inside && grid_sample(job->draw, f, rgb))
+				light(c, m, mirror ? g->width - 1 - u : u, v, rgb);
 		}
 	}
 }

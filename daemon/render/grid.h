@@ -20,6 +20,8 @@
 struct grid_job {
 	const struct scene_draw *draw;
 	double lin[3][3], off[3];
+	bool upright;   /* the grid's up axis is the display's: column by column */
+	bool reference; /* draw by the reference loop anyway (tests) */
 };
 
 /* Prepares d (SCENE_GRID). false: its transform cannot be inverted (or
@@ -35,5 +37,10 @@ void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint3
 /* The colour of the grid's sample at voxel coordinates f (inside the box:
  * -0.5 <= f[a] < n[a] - 0.5), by the draw's transfer. false: dark. */
 bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3]);
+
+/* The largest sample (RGBA8: alpha) of each line of g along its up axis,
+ * out[k * n[0] + i]; NaN samples left out (-inf for a line of them):
+ * scene_grid.line_max, which lets the renderer skip dark columns. */
+void grid_line_max(const struct scene_grid *g, float *out);
 
 #endif

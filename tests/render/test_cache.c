@@ -72,7 +72,7 @@ struct world {
 /* The grid that grid draws show (scene.h, SCENE_GRID): random values, a
  * window that leaves most of them between dark and full. */
 static uint8_t grid_values[6 * 5 * 4];
-static const struct scene_grid test_grid = { SCENE_GRID_U8, { 6, 5, 4 }, { 0.1f, 0.12f, 0.09f }, grid_values };
+static const struct scene_grid test_grid = { SCENE_GRID_U8, { 6, 5, 4 }, { 0.1f, 0.12f, 0.09f }, grid_values, NULL };
 static const struct scene_transfer test_transfer = { .threshold = 40, .lo = 0, .hi = 255 };
 
 static bool with_grids = true; /* not on GL: a scene with a grid goes whole to the CPU */

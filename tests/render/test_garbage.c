@@ -48,7 +48,7 @@ static void check_not_finite(const struct geometry *g)
 	struct scene_draw seg = rtest_draw(SCENE_LINES, &good, 255, 255, 255);
 	/* Grids with no grid, a NaN or infinite transform: nothing. */
 	static const uint8_t one = 255;
-	static const struct scene_grid tiny = { SCENE_GRID_U8, { 1, 1, 1 }, { 0.5f, 0.5f, 0.5f }, &one };
+	static const struct scene_grid tiny = { SCENE_GRID_U8, { 1, 1, 1 }, { 0.5f, 0.5f, 0.5f }, &one, NULL };
 	struct scene_draw grid = { .prim = SCENE_GRID, .rgb = { 255, 255, 255 }, .transfer = { 1, 0, 255 } };
 	rtest_identity(grid.transform);
 	struct scene_draw d[8] = {
