@@ -2,7 +2,8 @@
 volumetric display daemon (spindled).
 
 A client connects, creates buffers (vertex data), display lists (retained
-drawing commands) and layers (a list's placement in the shared volume), and
+drawing commands), layers (a list's placement in the shared volume) and
+volumes (3-D grids of samples, such as a CT scan, that lists draw), and
 commits: everything set since the last commit shows together::
 
     import numpy as np
@@ -26,7 +27,7 @@ The package loads libspindle.so.0 through ctypes: ``$SPINDLE_LIBRARY`` (or
 :func:`load_library`) names another, such as a build tree's.
 """
 from . import transform
-from ._core import (INLINE_MAX, Batch, Buffer, Connection, FrameRequest, Layer, List, connect, library_version,
+from ._core import (INLINE_MAX, Batch, Buffer, Connection, FrameRequest, Layer, List, Volume, connect, library_version,
                     load_library)
 from .capture import Capture
 from .errors import (CaptureError, CommitRefused, ConnectionLost, Error, LibraryError, NotConnected, NotSupported,
@@ -35,14 +36,15 @@ from .protocol_errors import (BadFdError, InvalidMessageError, InvalidMethodErro
                               InvalidValueError, NoMemoryError, QuotaError, RefusedBusy, RefusedDenied,
                               RefusedOutOfRange, RefusedQuota, TooManyClientsError, VersionError)
 from .types import (Calibration, CalibrationKey, Composition, DeviceInfo, Frame, IndexType, Limits, Mode, Refusal,
-                    Service, State, Status, VertexFormat)
+                    Sampling, Service, State, Status, VertexFormat, VolumeType)
 
 #: Default socket path, used when neither a path nor SPINDLE_SOCKET is given.
 DEFAULT_SOCKET = '/run/spindle/spindle.sock'
 
 __all__ = [
-    'connect', 'load_library', 'library_version', 'Connection', 'Buffer', 'List', 'Layer', 'FrameRequest', 'Batch',
-    'Capture', 'transform', 'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'DeviceInfo', 'State',
+    'connect', 'load_library', 'library_version', 'Connection', 'Buffer', 'List', 'Layer', 'Volume', 'FrameRequest',
+    'Batch', 'Capture', 'transform', 'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'VolumeType',
+    'Sampling', 'DeviceInfo', 'State',
     'Frame', 'Status', 'Limits', 'Service', 'Composition', 'Calibration', 'Error', 'LibraryError', 'NotConnected',
     'ConnectionLost', 'ProtocolError', 'CommitRefused', 'NotSupported', 'CaptureError', 'Timeout',
     'InvalidObjectError', 'InvalidMethodError', 'InvalidMessageError', 'InvalidValueError', 'BadFdError',

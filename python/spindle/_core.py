@@ -1,4 +1,4 @@
-"""The connection and its objects: Connection, Buffer, List, Layer, FrameRequest."""
+"""The connection and its objects: Connection, Buffer, List, Layer, Volume, FrameRequest."""
 import contextlib
 import ctypes
 import errno
@@ -16,13 +16,19 @@ from .errors import (CaptureError, CommitRefused, ConnectionLost, Error, NotConn
                      Timeout)
 from .protocol_errors import ERRORS, REFUSALS, RefusedDenied, RefusedOutOfRange
 from .transform import from_column_major, identity, to_column_major
-from .types import (Calibration, CalibrationKey, DeviceInfo, Frame, IndexType, Mode, Refusal, State, Status,
-                    VertexFormat)
+from .types import (Calibration, CalibrationKey, DeviceInfo, Frame, IndexType, Mode, Refusal, Sampling, State,
+                    Status, VertexFormat, VolumeType)
 
 _log = logging.getLogger('spindle')
 
 #: The most bytes a buffer sent inline may hold (SPINDLE_INLINE_MAX).
 INLINE_MAX = 65516
+
+#: The most samples along each axis of a volume, and in all (docs/volumes.md).
+VOLUME_MAX_SIZE = 4096
+VOLUME_MAX_SAMPLES = 2**31
+#: The most entries of a volume's lookup table (at least 2).
+VOLUME_MAX_LUT = 4096
 
 
 def load_library(path=None):
@@ -154,6 +160,123 @@ def _uint(value, what, top=0xffffffff):
 
 _PER_PRIMITIVE = {Mode.POINTS: 1, Mode.LINES: 2, Mode.TRIANGLES: 3}
 
+# (dtype kind, itemsize): the volume type of samples of that dtype (either byte order).
+_VOLUME_TYPES = {
+    ('u', 1): VolumeType.U8,
+    ('u', 2): VolumeType.U16,
+    ('i', 2): VolumeType.I16,
+    ('f', 4): VolumeType.F32
+}
+
+
+def _volume_samples(samples):
+    """(VolumeType, (nx, ny, nz), the samples as a C-contiguous
+    little-endian array) of a volume given as a 3-D array [z, y, x] of
+    uint8, uint16, int16 or float32, or a 4-D uint8 array [z, y, x, 4]
+    (RGBA8)."""
+    try:
+        a = np.asarray(samples)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f'volume: not an array of samples: {e}') from None
+    vtype = _VOLUME_TYPES.get((a.dtype.kind, a.dtype.itemsize))
+    if vtype is None or a.dtype.fields is not None:
+        raise TypeError(f'volume: samples of uint8, uint16, int16 or float32 (or uint8 RGBA), not {a.dtype}: convert '
+                        'them with astype()')
+    if a.ndim == 4:
+        if vtype != VolumeType.U8 or a.shape[3] != 4:
+            raise ValueError(f'volume: a 4-D array is RGBA, uint8 [z, y, x, 4], not {a.dtype} of shape {a.shape}')
+        vtype = VolumeType.RGBA8
+    elif a.ndim != 3:
+        raise ValueError(f'volume: expected a 3-D array [z, y, x] (or uint8 [z, y, x, 4] for RGBA), '
+                         f'not shape {a.shape}')
+    nz, ny, nx = (int(n) for n in a.shape[:3])
+    for n, axis in ((nx, 'x'), (ny, 'y'), (nz, 'z')):
+        if not 1 <= n <= VOLUME_MAX_SIZE:
+            raise ValueError(f'volume: {n} samples along {axis} (1 to {VOLUME_MAX_SIZE}), shape {a.shape}')
+    if nx * ny * nz > VOLUME_MAX_SAMPLES:
+        raise ValueError(f'volume: {nx * ny * nz} samples (at most 2^31), shape {a.shape}')
+    return vtype, (nx, ny, nz), np.ascontiguousarray(a, dtype=a.dtype.newbyteorder('<'))
+
+
+def _volume_spacing(spacing):
+    """The spacing (sx, sy, sz) as 3 float32, finite and above 0: 3 numbers or one for all."""
+    try:
+        s = np.asarray(spacing, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(f'spacing: 3 numbers (x, y, z), not {spacing!r}') from None
+    if s.ndim == 0:
+        s = np.repeat(s, 3)
+    if s.shape != (3, ):
+        raise ValueError(f'spacing: 3 numbers (x, y, z) or one for all, not shape {s.shape}')
+    with np.errstate(over='ignore'):
+        f = s.astype(np.float32)
+    if not (np.all(np.isfinite(f)) and np.all(f > 0)):
+        raise ValueError(f'spacing: finite and above 0, not {s.tolist()}')
+    return f
+
+
+def _float32(value, what):
+    """value as a finite float32 (a Python float)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise TypeError(f'{what}: a number, not {type(value).__name__}')
+    with np.errstate(over='ignore'):
+        f = np.float32(value)
+    if not np.isfinite(f):
+        raise ValueError(f'{what}: {value} is not a finite float32')
+    return float(f)
+
+
+#: The window of each volume type when draw_volume is given none: its whole range (0..1 for float32).
+_DEFAULT_WINDOW = {
+    VolumeType.U8: (127.5, 255.0),
+    VolumeType.U16: (32767.5, 65535.0),
+    VolumeType.I16: (-0.5, 65535.0),
+    VolumeType.F32: (0.5, 1.0),
+    VolumeType.RGBA8: (127.5, 255.0),
+}
+
+
+def _window(window, vtype):
+    """(center, width, low end) of a draw_volume window, as the daemon computes them in float32."""
+    if window is None:
+        window = _DEFAULT_WINDOW[vtype]
+    try:
+        center, width = window
+    except (TypeError, ValueError):
+        raise TypeError(f'window: (center, width), not {window!r}') from None
+    center, width = _float32(center, 'window center'), _float32(width, 'window width')
+    if not width > 0:
+        raise ValueError(f'window: the width is above 0, not {width}')
+    c, half = np.float32(center), np.float32(width) / np.float32(2)
+    lo, hi = c - half, c + half
+    if not hi > lo:
+        raise ValueError(f'window: {center}/{width} is empty at float32 precision')
+    return center, width, float(lo)
+
+
+def _lut(colors):
+    """A lookup table as an N x 4 uint8 array (N = 0: none): K x 3 or K x 4
+    colours, integers 0..255 or floats 0..1."""
+    if colors is None:
+        return np.zeros((0, 4), dtype=np.uint8)
+    try:
+        a = np.asarray(colors)
+    except (TypeError, ValueError) as e:
+        raise TypeError(f'lookup table: not an array of colours: {e}') from None
+    if a.size == 0 and a.ndim <= 2:
+        return np.zeros((0, 4), dtype=np.uint8)
+    if a.ndim != 2 and not (a.ndim == 1 and a.shape[0] in (3, 4)):
+        raise ValueError(f'lookup table: expected an N x 4 (RGBA) or N x 3 (RGB) array, not shape {a.shape}')
+    c, fmt = _color_array(a, 'lookup table')
+    if fmt == VertexFormat.XYZ_RGBA_FLOAT:
+        if not np.all((c >= 0) & (c <= 1)):
+            raise ValueError('lookup table: float colours are 0 to 1 (integers 0 to 255)')
+        c = np.round(c * 255).astype(np.uint8)
+    if not 2 <= len(c) <= VOLUME_MAX_LUT:
+        raise ValueError(f'lookup table: {len(c)} entries (2 to {VOLUME_MAX_LUT}; None or an empty table: the '
+                         'list\'s colour again)')
+    return np.ascontiguousarray(c, dtype=np.uint8)
+
 
 def _check_count(mode, count):
     if mode == Mode.LINES and count % 2:
@@ -269,6 +392,11 @@ class List(_Object):
     0..255). An array is sent in a buffer made for the draw and destroyed
     right after it.
 
+    Volumes (protocol version 6): :meth:`draw_volume` draws a
+    :class:`Volume`, through the lookup table of :meth:`set_volume_lut` if
+    one is set; the list holds on to the volumes it draws until
+    :meth:`clear`.
+
     Dropping every reference to a list that no layer shows destroys it;
     :meth:`destroy` does it at once.
     """
@@ -279,6 +407,7 @@ class List(_Object):
         super().__init__(conn, handle)
         self._format = VertexFormat.XYZ
         self._stack = []
+        self._volumes = set()  # drawn: alive while the list draws them
 
     def __del__(self):
         self._collect()
@@ -291,6 +420,7 @@ class List(_Object):
         self._call('spindle_list_clear')
         self._format = VertexFormat.XYZ
         self._stack = []
+        self._volumes = set()
         return self
 
     def set_color(self, *color):
@@ -488,6 +618,70 @@ class List(_Object):
         Protocol version 2."""
         return self.draw_indexed(Mode.TRIANGLES, vertices, triangles, colors)
 
+    def destroy(self):
+        """Destroys the list (the daemon forgets it; layers showing it show
+        nothing). Doing it twice, or after the connection was closed, does
+        nothing."""
+        self._volumes = set()
+        super().destroy()
+
+    def draw_volume(self, volume, sampling='trilinear', threshold=None, window=None):
+        """Draws a :class:`Volume` (:meth:`Connection.volume`) with the
+        list's transform (from the volume's model units: its box is
+        ``(0, 0, 0)`` to ``volume.extent``, y up) and colour. Protocol
+        version 6.
+
+        Every pixel whose centre lies in the volume's box shows the sample
+        there, read by sampling: ``'trilinear'`` (the default: smooth) or
+        ``'nearest'`` (blocks), or a :class:`Sampling`. A sample below
+        threshold (for RGBA8: an alpha below it), or NaN, is dark; the
+        others are mapped through window, (center, width): the fraction
+        ``g = (value - (center - width / 2)) / width``, clamped to 0..1,
+        scales the list's colour, or picks entry ``round(g (N - 1))`` of the
+        lookup table (:meth:`set_volume_lut`). An RGBA8 sample is its own
+        colour times its alpha (the window does not apply).
+
+        window None: the type's whole range (uint8 0..255, uint16 0..65535,
+        int16 -32768..32767, float32 0..1). threshold None: the window's low
+        end, so that what is below the window is dark. A window of width 0
+        or less, a value that is not a finite float32, an unknown sampling,
+        or a volume of another connection raise ValueError or TypeError
+        before anything is sent; NotSupported below protocol version 6."""
+        if not isinstance(volume, Volume):
+            raise TypeError(f'draw_volume: a spindle.Volume, not {type(volume).__name__}')
+        if volume._conn is not self._conn:
+            raise ValueError('draw_volume: the volume belongs to another connection')
+        try:
+            sampling = Sampling(sampling)
+        except ValueError:
+            raise ValueError(f"draw_volume: sampling is 'nearest', 'trilinear' or a spindle.Sampling, not "
+                             f'{sampling!r}') from None
+        center, width, low = _window(window, volume.type)
+        threshold = low if threshold is None else _float32(threshold, 'threshold')
+        self._conn._need_v6('spindle_list_draw_volume', 'draw_volume')
+        self._call('spindle_list_draw_volume', volume._h(), int(sampling), threshold, center, width,
+                   what='draw_volume')
+        self._volumes.add(volume)
+        return self
+
+    def set_volume_lut(self, colors):
+        """The lookup table of the :meth:`draw_volume` calls that follow:
+        an N x 4 (RGBA) or N x 3 (RGB, opaque) array of colours, integers
+        0..255 (uint8) or floats 0..1, N from 2 to 4096; alpha scales each
+        entry. Entry 0 is the window's low end, entry N - 1 its high end.
+        None (or an empty table): the list's colour again. Not saved by
+        :meth:`push`; :meth:`clear` resets it. Protocol version 6
+        (NotSupported below it); a table of the wrong shape or size raises
+        ValueError before anything is sent."""
+        table = _lut(colors)
+        self._conn._need_v6('spindle_list_set_volume_lut', 'set_volume_lut')
+        buf = Buffer(self._conn, self._conn._create(table, False, 'set_volume_lut'), table.nbytes)
+        try:
+            self._call('spindle_list_set_volume_lut', buf._h(), 0, len(table), what='set_volume_lut')
+        finally:
+            buf.destroy()
+        return self
+
 
 class Layer(_Object):
     """A layer: shows a :class:`List` in the shared volume
@@ -567,6 +761,54 @@ class Layer(_Object):
     exclusive = property(lambda self: self._exclusive, set_exclusive, doc='Whether the layer asks to show alone.')
 
 
+class Volume(_Object):
+    """A volume: a 3-D grid of samples, such as a CT scan, held by the
+    daemon (:meth:`Connection.volume`, protocol version 6) and drawn by
+    lists (:meth:`List.draw_volume`).
+
+    Its model space: sample (x, y, z) is centred at
+    ``((x + 0.5) sx, (y + 0.5) sy, (z + 0.5) sz)``, so the volume fills the
+    box from (0, 0, 0) to ``extent``; y is its up axis (the display's
+    rotation axis once drawn without rotation).
+
+    Attributes: ``type`` (:class:`VolumeType`), ``size`` (nx, ny, nz:
+    samples along x, y, z), ``spacing`` (sx, sy, sz in model units).
+
+    Its samples count against the client's max-buffer-bytes and the
+    daemon's memory budget while it lives. :meth:`destroy` (or a ``with``
+    block) gives them back at once: a list that still draws it shows
+    nothing of it from the next volume shown on. Otherwise it lives while
+    referenced, by the program or by a list drawing it (until the list's
+    clear()).
+    """
+    _destroy_fn = 'spindle_volume_destroy'
+    _kind = 'volume'
+
+    def __init__(self, conn, handle, type, size, spacing):
+        super().__init__(conn, handle)
+        self.type = type
+        self.size = size
+        self.spacing = spacing
+
+    def __del__(self):
+        self._collect()
+
+    def __repr__(self):
+        nx, ny, nz = self.size
+        return f'<spindle.Volume {nx}x{ny}x{nz} {self.type.name}{", destroyed" if self.destroyed else ""}>'
+
+    @property
+    def extent(self):
+        """The size of its box in model units: (nx sx, ny sy, nz sz)."""
+        return tuple(n * s for n, s in zip(self.size, self.spacing))
+
+    @property
+    def nbytes(self):
+        """Bytes of samples it holds in the daemon."""
+        nx, ny, nz = self.size
+        return nx * ny * nz * self.type.size
+
+
 class FrameRequest:
     """A frame callback asked for with :meth:`Connection.request_frame`: it
     fires once the state of the next commit is first shown.
@@ -623,8 +865,8 @@ class Connection:
     Use it as a context manager, or close() it: closing disconnects and
     frees every object made with it (they raise NotConnected afterwards).
     Objects: :meth:`create_buffer` (vertices), :meth:`create_index_buffer`,
-    :meth:`create_list`, :meth:`create_layer`; everything set since the last
-    commit shows together at :meth:`commit`.
+    :meth:`create_list`, :meth:`create_layer`, :meth:`volume`; everything
+    set since the last commit shows together at :meth:`commit`.
 
     Events (frame callbacks, the state and refused listeners) are handled by
     :meth:`dispatch` and while the blocking calls wait. A connection and its
@@ -999,6 +1241,49 @@ class Connection:
         if lst is not None:
             layer.set_list(lst)
         return layer
+
+    def volume(self, samples, spacing=(1, 1, 1)):
+        """A :class:`Volume` of samples (protocol version 6): a 3-D numpy
+        array indexed [z, y, x] (so that its C order has x fastest, as the
+        daemon takes it) of uint8, uint16, int16 or float32, or a 4-D uint8
+        array [z, y, x, 4] of RGBA colours. y is the volume's up axis: a
+        stack of axial CT slices indexed [slice, row, column] shows lying on
+        its side; ``np.transpose`` it to stand it up (docs/volumes.md, "The
+        display's convention"). 1 to 4096 samples along each axis, at most
+        2^31 in all. Other byte orders and layouts are converted.
+
+        spacing: (sx, sy, sz), the distance between sample centres along x,
+        y and z in model units (millimetres, say), finite and above 0; one
+        number for all three.
+
+        One call sends the samples in a buffer, makes the volume from it and
+        destroys the buffer: the daemon keeps its own copy. Another dtype
+        (int32, float64: convert with ``astype()``) raises TypeError, another
+        shape ValueError, before anything is sent; NotSupported below
+        protocol version 6."""
+        vtype, size, arr = _volume_samples(samples)
+        spacing = _volume_spacing(spacing)
+        self._enter()
+        create = self._need_v6('spindle_volume_create', 'volume')
+        buf = Buffer(self, self._create(arr.reshape(-1).view(np.uint8), False, 'volume'), arr.nbytes)
+        try:
+            h = self._new(
+                create(self._sp, buf._h(), 0, int(vtype), (ctypes.c_uint32 * 3)(*size),
+                       (ctypes.c_float * 3)(*spacing.tolist())), 'volume')
+        finally:
+            buf.destroy()
+        return Volume(self, h, vtype, size, tuple(float(s) for s in spacing))
+
+    def _need_v6(self, name, what):
+        """libspindle's function name, refusing (NotSupported) a libspindle or a connection older than protocol 6."""
+        fn = getattr(self._lib, name, None)  # OPTIONAL: missing from a libspindle older than SPINDLE_0.4
+        if fn is None:
+            raise NotSupported(f'{what}: {name} is not in this libspindle ({_lib.loaded_path()}): it is older than '
+                               'protocol version 6', errno.EPROTONOSUPPORT)
+        if self.version < 6:
+            raise NotSupported(f'{what}: needs protocol version 6, this connection\'s is {self.version}',
+                               errno.EPROTONOSUPPORT)
+        return fn
 
     # ---- commits and frames ----
 

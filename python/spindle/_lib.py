@@ -204,10 +204,17 @@ PROTOTYPES = {
     'spindle_capture': (c_int, [_h, POINTER(c_int), POINTER(c_size_t)]),
     'spindle_get_calibration': (c_int, [_h, POINTER(Calibration)]),
     'spindle_calibrate': (c_int, [_h, c_int, c_float, POINTER(Calibration)]),
+    'spindle_volume_create': (_h, [_h, _h, c_uint64, c_int, POINTER(c_uint32), POINTER(c_float)]),
+    'spindle_volume_destroy': (None, [_h]),
+    'spindle_list_draw_volume': (c_int, [_h, _h, c_int, c_float, c_float, c_float]),
+    'spindle_list_set_volume_lut': (c_int, [_h, _h, c_uint64, c_uint32]),
 }
 
 # Added after SPINDLE_0.1: a library without them still loads.
-OPTIONAL = {'spindle_library_version', 'spindle_get_calibration', 'spindle_calibrate'}
+OPTIONAL = {
+    'spindle_library_version', 'spindle_get_calibration', 'spindle_calibrate', 'spindle_volume_create',
+    'spindle_volume_destroy', 'spindle_list_draw_volume', 'spindle_list_set_volume_lut'
+}
 
 _lock = threading.Lock()
 _lib = None

@@ -106,7 +106,9 @@ class CommitRefused(Error):
 
 class NotSupported(Error):
     """The request needs a newer protocol version than the connection's
-    (:attr:`spindle.Connection.version`): ENOTSUP."""
+    (:attr:`spindle.Connection.version`): ENOTSUP (version 2 at 1), or
+    EPROTONOSUPPORT (calibration and volumes, version 6, before it or with a
+    libspindle that predates them)."""
 
     def __init__(self, message, errno=_errno.ENOTSUP):
         super().__init__(message, errno)

@@ -6,8 +6,8 @@ import enum
 from typing import Optional
 
 __all__ = [
-    'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'DeviceInfo', 'State', 'Frame', 'Limits',
-    'Service', 'Composition', 'Status', 'Calibration'
+    'Mode', 'VertexFormat', 'IndexType', 'Refusal', 'CalibrationKey', 'VolumeType', 'Sampling', 'DeviceInfo', 'State',
+    'Frame', 'Limits', 'Service', 'Composition', 'Status', 'Calibration'
 ]
 
 
@@ -65,6 +65,37 @@ class CalibrationKey(enum.IntEnum):
         for key in cls:
             if value == key.config_name:
                 return key
+        return None
+
+
+class VolumeType(enum.IntEnum):
+    """Sample types of volumes (enum spindle_volume_type, protocol version
+    6): :meth:`spindle.Connection.volume` picks it from the array's dtype."""
+    U8 = 1  #: uint8
+    U16 = 2  #: uint16
+    I16 = 3  #: int16 (Hounsfield units of a CT, for one)
+    F32 = 4  #: float32 (NaN is dark)
+    RGBA8 = 5  #: 4 uint8 per sample, each its own colour, alpha scaling it
+
+    @property
+    def size(self):
+        """Bytes per sample."""
+        return (1, 2, 2, 4, 4)[self - 1]
+
+
+class Sampling(enum.IntEnum):
+    """How :meth:`spindle.List.draw_volume` reads a volume between its
+    samples (enum spindle_sampling, protocol version 6).
+    ``Sampling('trilinear')`` takes the lower-case name too."""
+    NEAREST = 0  #: the nearest sample: blocks, one per sample
+    TRILINEAR = 1  #: the 8 samples around, weighted: smooth
+
+    @classmethod
+    def _missing_(cls, value):
+        if isinstance(value, str):
+            for s in cls:
+                if value == s.name.lower():
+                    return s
         return None
 
 

@@ -109,5 +109,14 @@ int main(void)
 	printf("enum.size %zu\n", sizeof(enum spindle_mode));
 	printf("SPINDLE_INLINE_MAX %d\n", SPINDLE_INLINE_MAX);
 	printf("SPINDLE_PROTOCOL_VERSION %d\n", SPINDLE_PROTOCOL_VERSION);
+	printf("enum.volume_type.size %zu\n", sizeof(enum spindle_volume_type));
+	printf("enum.sampling.size %zu\n", sizeof(enum spindle_sampling));
+	printf("SPINDLE_VOLUME_U8 %d\n", SPINDLE_VOLUME_U8);
+	printf("SPINDLE_VOLUME_U16 %d\n", SPINDLE_VOLUME_U16);
+	printf("SPINDLE_VOLUME_I16 %d\n", SPINDLE_VOLUME_I16);
+	printf("SPINDLE_VOLUME_F32 %d\n", SPINDLE_VOLUME_F32);
+	printf("SPINDLE_VOLUME_RGBA8 %d\n", SPINDLE_VOLUME_RGBA8);
+	printf("SPINDLE_NEAREST %d\n", SPINDLE_NEAREST);
+	printf("SPINDLE_TRILINEAR %d\n", SPINDLE_TRILINEAR);
 	return 0;
 }

@@ -58,13 +58,17 @@ def test_constants_match_the_header():
     c = c_layout()
     assert c['enum.size'] == (ctypes.sizeof(ctypes.c_int), )
     assert c['SPINDLE_INLINE_MAX'] == (spindle.INLINE_MAX, )
+    assert c['enum.volume_type.size'] == c['enum.sampling.size'] == (ctypes.sizeof(ctypes.c_int), )
+    for t in spindle.VolumeType:
+        assert c[f'SPINDLE_VOLUME_{t.name}'] == (t.value, ), t
+    for s in spindle.Sampling:
+        assert c[f'SPINDLE_{s.name}'] == (s.value, ), s
 
 
 # Exported by libspindle but not (yet) bound: the protocol 5 watchers.
 NOT_BOUND = {
     'spindle_get_watch_stats', 'spindle_watch_create', 'spindle_watch_destroy', 'spindle_watch_get_error',
-    'spindle_watch_release', 'spindle_volume_create', 'spindle_volume_destroy', 'spindle_list_draw_volume',
-    'spindle_list_set_volume_lut'
+    'spindle_watch_release'
 }
 
 
