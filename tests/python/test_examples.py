@@ -17,13 +17,13 @@ def run(name, *args, timeout=60):
                           timeout=timeout)
 
 
-@pytest.mark.parametrize('name', ['rotating_cloud.py', 'surface.py'])
+@pytest.mark.parametrize('name', ['rotating_cloud.py', 'surface.py', 'breathing.py'])
 def test_help(name):
     p = run(name, '--help')
     assert p.returncode == 0 and 'usage:' in p.stdout and '--socket' in p.stdout and '--seconds' in p.stdout
 
 
-@pytest.mark.parametrize('name', ['rotating_cloud.py', 'surface.py'])
+@pytest.mark.parametrize('name', ['rotating_cloud.py', 'surface.py', 'breathing.py'])
 def test_no_daemon(name, tmp_path):
     p = run(name, '--socket', str(tmp_path / 'none.sock'), '--seconds', '1')
     assert p.returncode == 1 and 'cannot connect' in p.stderr
@@ -34,6 +34,15 @@ def test_rotating_cloud(daemon):
     assert p.returncode == 0, p.stdout + p.stderr
     frames = int(p.stdout.split('rotating_cloud: ')[-1].split()[0])
     assert frames >= 3, p.stdout  # about 60 a second here; a loaded (or ASan) machine does fewer
+
+
+def test_breathing(daemon):
+    """Ten phases sent once, then cycled: each shown volume is a phase."""
+    p = run('breathing.py', '--socket', daemon.sock, '--seconds', '1', '--size', '24')
+    assert p.returncode == 0, p.stdout + p.stderr
+    assert 'breathing: 10 phases of 24^3 int16 sent' in p.stdout, p.stdout
+    shown = int(p.stdout.split('breathing: ')[-1].split()[0])
+    assert shown >= 3, p.stdout  # about 60 a second at the small profile; a loaded (or ASan) machine does fewer
 
 
 def test_surface(daemon):
