@@ -228,6 +228,12 @@ const struct buffer *objects_buffer(struct client *c, uint32_t blame, uint32_t i
  * failed with the quota error. objects_uncharge() gives them back. */
 int objects_charge(struct client *c, uint64_t bytes);
 void objects_uncharge(struct client *c, uint64_t bytes);
+/* The parts of those: room for bytes more under memory-budget (else c
+ * failed, quota), and bytes and mappings counted (negative: given back). */
+int objects_budget_room(struct client *c, uint64_t bytes);
+void objects_account_buffer(struct client *c, int64_t bytes, int mappings);
+/* Frees a buffer and gives its bytes and mapping back (buffers.c). */
+void buffers_destroy(struct buffer *b);
 /* Appends a draw of v (its reference taken over) to l's pending draws with
  * l's state, its count against max-vertices and memory-budget: 0, or l's
  * client failed (v released). */

@@ -1,13 +1,9 @@
 /* Buffers, display lists and layers: their requests, and commit. */
 #include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include "client.h"
 #include "config.h"
@@ -42,7 +38,7 @@ static uint64_t budget_used(const struct client_totals *t)
 }
 
 /* Room for bytes more under memory-budget; else c is failed (quota). */
-static int budget_room(struct client *c, uint64_t bytes)
+int objects_budget_room(struct client *c, uint64_t bytes)
 {
 	struct client_totals *t = c->env->totals;
 	uint64_t budget = c->env->cfg->memory_budget, used = budget_used(t);
@@ -60,7 +56,7 @@ static uint64_t budget_vertices(const struct client *c)
 	return used < budget ? (budget - used) / CLIENT_VERTEX_BYTES : 0;
 }
 
-static void account_buffer(struct client *c, int64_t bytes, int mappings)
+void objects_account_buffer(struct client *c, int64_t bytes, int mappings)
 {
 	c->buffer_bytes += (uint64_t)bytes;
 	c->env->totals->buffer_bytes += (uint64_t)bytes;
@@ -78,113 +74,15 @@ int objects_charge(struct client *c, uint64_t bytes)
 	if (bytes > c->env->cfg->max_buffer_bytes - c->buffer_bytes)
 		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers and volumes over %llu bytes",
 				   (unsigned long long)c->env->cfg->max_buffer_bytes);
-	if (budget_room(c, bytes) < 0)
+	if (objects_budget_room(c, bytes) < 0)
 		return -EPROTO;
-	account_buffer(c, (int64_t)bytes, 0);
+	objects_account_buffer(c, (int64_t)bytes, 0);
 	return 0;
 }
 
 void objects_uncharge(struct client *c, uint64_t bytes)
 {
-	account_buffer(c, -(int64_t)bytes, 0);
-}
-
-/* ---- buffers ---- */
-
-static void buffer_destroy(struct buffer *b)
-{
-	if (b->inline_data)
-		free((void *)b->map);
-	else if (b->map)
-		munmap((void *)b->map, b->size ? b->size : 1);
-	account_buffer(b->base.client, -(int64_t)b->size, b->map && !b->inline_data ? -1 : 0);
-	free(b);
-}
-
-/* The fd must be a memfd sealed against shrinking, at least size bytes. */
-static int check_memfd(struct client *c, int fd, uint64_t size)
-{
-	int seals = fcntl(fd, F_GET_SEALS);
-	if (seals < 0)
-		return client_fail(c, 1, PROTO_ERR_FD, "buffer fd is not a memfd");
-	if (!(seals & F_SEAL_SHRINK))
-		return client_fail(c, 1, PROTO_ERR_FD, "buffer memfd is not sealed against shrinking");
-	struct stat st;
-	if (fstat(fd, &st) < 0 || (uint64_t)st.st_size < size)
-		return client_fail(c, 1, PROTO_ERR_FD, "buffer memfd smaller than its declared size %llu",
-				   (unsigned long long)size);
-	return 0;
-}
-
-int objects_create_buffer(struct client *c, uint32_t id, uint64_t size, int fd)
-{
-	int r = check_memfd(c, fd, size);
-	if (r < 0)
-		goto out_close;
-	if (size > c->env->cfg->max_buffer_bytes - c->buffer_bytes || size > SIZE_MAX / 2) {
-		r = client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
-				(unsigned long long)c->env->cfg->max_buffer_bytes);
-		goto out_close;
-	}
-	if ((r = budget_room(c, size)) < 0)
-		goto out_close;
-	if (size && c->env->totals->mappings >= c->env->cfg->max_mappings) {
-		c->env->totals->refused_mappings++;
-		r = client_fail(c, 1, PROTO_ERR_QUOTA, "the daemon maps as many buffers as it may (%u)",
-				c->env->cfg->max_mappings);
-		goto out_close;
-	}
-	struct buffer *b = calloc(1, sizeof(*b));
-	if (!b) {
-		r = client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
-		goto out_close;
-	}
-	if (size) {
-		void *map = mmap(NULL, size, PROT_READ, MAP_SHARED, fd, 0);
-		if (map == MAP_FAILED) {
-			free(b);
-			r = client_fail(c, 1, PROTO_ERR_FD, "cannot map buffer: %s", strerror(errno));
-			goto out_close;
-		}
-		b->map = map;
-	}
-	b->size = size;
-	b->base.client = c;
-	account_buffer(c, (int64_t)size, size ? 1 : 0);
-	r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
-	if (r < 0)
-		buffer_destroy(b);
-out_close:
-	close(fd);
-	return r;
-}
-
-/* Inline data is copied: the message's bytes go with the message. */
-int objects_create_buffer_inline(struct client *c, uint32_t id, const void *data, uint32_t size)
-{
-	if (size > c->env->cfg->max_buffer_bytes - c->buffer_bytes)
-		return client_fail(c, 1, PROTO_ERR_QUOTA, "buffers over %llu bytes",
-				   (unsigned long long)c->env->cfg->max_buffer_bytes);
-	if (budget_room(c, size) < 0)
-		return -EPROTO;
-	struct buffer *b = calloc(1, sizeof(*b));
-	void *copy = malloc(size ? size : 1);
-	if (!b || !copy) {
-		free(b);
-		free(copy);
-		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
-	}
-	if (size)
-		memcpy(copy, data, size);
-	b->map = copy;
-	b->inline_data = true;
-	b->size = size;
-	b->base.client = c;
-	account_buffer(c, size, 0);
-	int r = object_register(c, &b->base, id, PROTO_IFACE_BUFFER);
-	if (r < 0)
-		buffer_destroy(b);
-	return r;
+	objects_account_buffer(c, -(int64_t)bytes, 0);
 }
 
 int objects_destroy_req(void *target)
@@ -192,10 +90,6 @@ int objects_destroy_req(void *target)
 	object_destroy(target);
 	return 0;
 }
-
-const struct proto_buffer_requests buffer_requests = {
-	.destroy = objects_destroy_req,
-};
 
 /* ---- lists ---- */
 
@@ -775,7 +669,7 @@ void object_destroy(struct object *obj)
 	idmap_remove(&c->objects, obj->id);
 	switch (obj->type) {
 	case PROTO_IFACE_BUFFER:
-		buffer_destroy((struct buffer *)obj);
+		buffers_destroy((struct buffer *)obj);
 		break;
 	case PROTO_IFACE_LIST:
 		list_unref((struct list *)obj);
