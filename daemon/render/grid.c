@@ -50,6 +50,7 @@ bool grid_prepare(struct grid_job *job, const struct scene_draw *d)
 	}
 	job->upright = upright(job);
 	job->reference = false;
+	job->colours = NULL;
 	return true;
 }
 
@@ -147,6 +148,28 @@ bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3])
 	return transfer(d, v, rgba, out);
 }
 
+size_t grid_colours_size(const struct scene_draw *d)
+{
+	if (d->transfer.sampling != SCENE_NEAREST)
+		return 0;
+	switch (d->grid->type) {
+	case SCENE_GRID_U8:
+		return 256;
+	case SCENE_GRID_U16:
+	case SCENE_GRID_I16:
+		return 65536;
+	}
+	return 0;
+}
+
+void grid_colours(const struct scene_draw *d, uint8_t *out)
+{
+	size_t n = grid_colours_size(d);
+	float base = d->grid->type == SCENE_GRID_I16 ? -32768.0f : 0.0f, none[4] = { 0 };
+	for (size_t i = 0; i < n; i++, out += 4)
+		out[3] = transfer(d, base + (float)i, none, out);
+}
+
 void grid_line_max(const struct scene_grid *g, float *out)
 {
 	for (uint32_t k = 0; k < g->n[2]; k++)
@@ -227,6 +250,19 @@ static bool column_dark(const struct column *col, const struct scene_grid *gr, c
 		mx = v > mx ? v : mx;
 	}
 	return (double)mx + fabs((double)mx) * 1e-5 < tf->threshold;
+}
+
+/* Sample at of a u8, u16 or i16 grid as an index of its colour table. */
+static inline size_t sample_index(const struct scene_grid *gr, size_t at)
+{
+	switch (gr->type) {
+	case SCENE_GRID_U8:
+		return ((const uint8_t *)gr->data)[at];
+	case SCENE_GRID_U16:
+		return ((const uint16_t *)gr->data)[at];
+	default:
+		return (size_t)(((const int16_t *)gr->data)[at] + 32768);
+	}
 }
 
 /* Sample at of a scalar grid, as a number. */
@@ -316,6 +352,16 @@ static void draw_upright(struct section_canvas *c, const struct grid_job *job, c
 			double y = h - (v + 0.5) * 2.0 * h / g->height, fy = (job->off[1] + y * up[1]) + s * dir[1];
 			if (!(fy >= -0.5 && fy < gr->n[1] - 0.5))
 				continue;
+			if (job->colours) { /* nearest: the value's colour, looked up */
+				size_t at = ((size_t)col.k[0] * gr->n[0] + col.i[0]) * gr->n[1] +
+					    clamp_index((int64_t)floor(fy + 0.5), gr->n[1]);
+				const uint8_t *e = job->colours + 4 * sample_index(gr, at);
+				if (e[3]) {
+					uint8_t rgb[3] = { e[0], e[1], e[2] };
+					light(c, m, out, v, rgb);
+				}
+				continue;
+			}
 			float rgba[4] = { 0 };
 			uint8_t rgb[3];
 			if (transfer(d, column_sample(&col, gr, fy, tri, rgba), rgba, rgb))

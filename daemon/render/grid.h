@@ -22,6 +22,10 @@ struct grid_job {
 	double lin[3][3], off[3];
 	bool upright;   /* the grid's up axis is the display's: column by column */
 	bool reference; /* draw by the reference loop anyway (tests) */
+	/* NULL, or (nearest sampling of u8, u16 or i16 samples) each value's
+	 * colour by the transfer, 4 bytes R, G, B, lit; at value + 32768 for
+	 * i16 (grid_colours()). Not owned. */
+	const uint8_t *colours;
 };
 
 /* Prepares d (SCENE_GRID). false: its transform cannot be inverted (or
@@ -42,5 +46,11 @@ bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3]);
  * out[k * n[0] + i]; NaN samples left out (-inf for a line of them):
  * scene_grid.line_max, which lets the renderer skip dark columns. */
 void grid_line_max(const struct scene_grid *g, float *out);
+
+/* Entries of d's colour table (65536 for u16 and i16, 256 for u8), or 0
+ * when it has none (trilinear, f32, RGBA8); and the table: what the
+ * transfer gives each value, so looked up it lights what sampling does. */
+size_t grid_colours_size(const struct scene_draw *d);
+void grid_colours(const struct scene_draw *d, uint8_t *out);
 
 #endif

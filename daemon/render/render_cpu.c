@@ -43,6 +43,7 @@ struct render_cpu {
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
+	uint8_t **colours; /* per grid job: its colour table (grid_colours()), or NULL */
 	struct volume *out;
 	struct rle_volume *canvas_out; /* render_canvas(): canvases, not packed images */
 	atomic_uint next_image;
@@ -116,6 +117,14 @@ static void light_point(struct section_canvas *c, const struct bin_point *p)
 
 /* Draws image k's points and primitives on the canvas; returns how many
  * (0: the canvas is untouched). */
+static void free_colour_tables(struct render_cpu *r)
+{
+	for (uint32_t i = 0; r->colours && i < r->grid_count; i++)
+		free(r->colours[i]);
+	free(r->colours);
+	r->colours = NULL;
+}
+
 static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
@@ -157,9 +166,31 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	return drawn;
 }
 
+/* The grid jobs' colour tables, where they have one. 0 or -ENOMEM. */
+static int make_colour_tables(struct render_cpu *r)
+{
+	free_colour_tables(r);
+	if (!r->grid_count)
+		return 0;
+	r->colours = calloc(r->grid_count, sizeof(*r->colours));
+	if (!r->colours)
+		return -ENOMEM;
+	for (uint32_t i = 0; i < r->grid_count; i++) {
+		size_t n = grid_colours_size(r->grids[i].draw);
+		if (!n)
+			continue;
+		if (!(r->colours[i] = malloc(4 * n)))
+			return -ENOMEM;
+		grid_colours(r->grids[i].draw, r->colours[i]);
+		r->grids[i].colours = r->colours[i];
+	}
+	return 0;
+}
+
 /* The scene's grid draws that can be drawn, prepared. 0 or -ENOMEM. */
 static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 {
+	free_colour_tables(r);
 	r->grid_count = 0;
 	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
 		const struct scene_draw *d = &scene->draws[i];
@@ -175,7 +206,7 @@ static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 		}
 		r->grid_count += grid_prepare(&r->grids[r->grid_count], d);
 	}
-	return 0;
+	return make_colour_tables(r);
 }
 
 /* Images are handed out one at a time; each image's result depends on
@@ -316,6 +347,7 @@ static void cpu_destroy(struct renderer *base)
 	}
 	free(r->stage);
 	free(r->wedges);
+	free_colour_tables(r);
 	free(r->grids);
 	brightness_tables_finish(&r->thr);
 	brightness_map_finish(&r->bright);

@@ -17,7 +17,8 @@
  * 5. Threads: 1 and 3 give the same volume; a singular transform lights
  *    nothing; the even brightness model thins only inside r0.
  * 7. The upright path (the grid's up axis the display's: column by column,
- *    dark columns skipped by the lines' maxima) lights the same canvas as
+ *    dark columns skipped by the lines' maxima, nearest integer samples
+ *    coloured through a table of their values) lights the same canvas as
  *    the reference loop, byte for byte, for every sample type, both
  *    samplings, thresholds that skip most columns or none, mirrored too.
  * 6. GL (EGL, OSMesa where a context can be made): a scene with a grid
@@ -407,9 +408,18 @@ static void check_upright(const char *name, const struct geometry *g)
 								      (uint32_t)sampling,     NULL,        0 };
 				struct grid_job job;
 				CHECK(grid_prepare(&job, &d) && job.upright);
+				/* Nearest on u8, u16, i16: the colours looked up. */
+				size_t entries = grid_colours_size(&d);
+				uint8_t *colours = entries ? malloc(4 * entries) : NULL;
+				CHECK(!entries || colours);
+				if (colours)
+					grid_colours(&d, colours);
+				CHECK((entries != 0) == (sampling == SCENE_NEAREST && kinds[t].type <= SCENE_GRID_I16));
 				for (uint32_t k = 0; k < images_of(g); k += 3)
 					for (int mirror = 0; mirror < 2; mirror++) {
+						job.colours = NULL;
 						draw_canvas(&ref, &job, k, mirror, true);
+						job.colours = colours;
 						draw_canvas(&fast, &job, k, mirror, false);
 						CHECK_MSG(
 							!memcmp(ref.rgb, fast.rgb, tiles * HALFTONE_TILE_BYTES) &&
@@ -421,6 +431,7 @@ static void check_upright(const char *name, const struct geometry *g)
 						for (size_t i = 0; i < tiles; i++)
 							pixels += __builtin_popcount(ref.rows[i]);
 					}
+				free(colours);
 			}
 	section_canvas_finish(&ref);
 	section_canvas_finish(&fast);
