@@ -43,17 +43,6 @@ void vgrid_unref(struct vgrid *g)
 	free(g);
 }
 
-void mat4_mul(float out[16], const float a[16], const float b[16])
-{
-	for (int c = 0; c < 4; c++)
-		for (int r = 0; r < 4; r++) {
-			float s = 0;
-			for (int k = 0; k < 4; k++)
-				s += a[k * 4 + r] * b[c * 4 + k];
-			out[c * 4 + r] = s;
-		}
-}
-
 uint32_t draw_format_size(uint32_t format)
 {
 	switch (format) {

@@ -61,9 +61,6 @@ enum draw_mode {
 	DRAW_LINE_STRIP = 3,
 };
 
-/* out = a * b, column-major 4x4 (out may not alias a or b). */
-void mat4_mul(float out[16], const float a[16], const float b[16]);
-
 /* Bytes of one vertex of a format (0: unknown format). */
 uint32_t draw_format_size(uint32_t format);
 

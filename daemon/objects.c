@@ -8,6 +8,7 @@
 #include "client.h"
 #include "config.h"
 #include "geometry.h"
+#include "mat4.h"
 #include "stage.h"
 #include "turn.h"
 

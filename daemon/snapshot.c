@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "draw.h"
+#include "mat4.h"
 #include "stage.h"
 
 static int snapshot_grow(struct snapshot *snap)
@@ -66,11 +67,8 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 		 * (layer.h): the renderer shifts images instead of turning
 		 * vertices, and the cache reuses what it rendered. */
 		mat4_mul(sd->transform, turns ? y->base : y->transform, d->transform);
-		if (pre) {
-			float placed[16];
-			memcpy(placed, sd->transform, sizeof(placed));
-			mat4_mul(sd->transform, pre, placed);
-		}
+		if (pre)
+			mat4_mul(sd->transform, pre, sd->transform);
 		sd->turn = turns ? (uint16_t)y->turn : 0;
 		for (int c = 0; c < 3; c++)
 			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "mat4.h"
+
 #define OUTLINE_SEGMENTS 96
 
 static const char vertex_src[] =
@@ -179,20 +181,6 @@ void view_gl_upload(struct view_gl *v, const struct view_points *pts)
 		make_outline(v, pts->half_height);
 }
 
-/* out = a * b, column-major 4x4. */
-static void mat_mul(float out[16], const float a[16], const float b[16])
-{
-	float r[16];
-	for (int c = 0; c < 4; c++)
-		for (int row = 0; row < 4; row++) {
-			float s = 0;
-			for (int k = 0; k < 4; k++)
-				s += a[k * 4 + row] * b[c * 4 + k];
-			r[c * 4 + row] = s;
-		}
-	memcpy(out, r, sizeof(r));
-}
-
 static void camera_matrix(const struct view_camera *cam, float aspect, float out[16])
 {
 	/* view = translate(0, 0, -distance) * rotate_x(pitch) * rotate_y(-yaw) * translate(-pan) */
@@ -207,10 +195,10 @@ static void camera_matrix(const struct view_camera *cam, float aspect, float out
 		ax, 0, 0, 0, 0, ay, 0, 0, 0, 0, (fa + n) / (n - fa), -1, 0, 0, 2 * fa * n / (n - fa), 0
 	};
 	float m[16];
-	mat_mul(m, ry, tp);
-	mat_mul(m, rx, m);
-	mat_mul(m, td, m);
-	mat_mul(out, proj, m);
+	mat4_mul(m, ry, tp);
+	mat4_mul(m, rx, m);
+	mat4_mul(m, td, m);
+	mat4_mul(out, proj, m);
 }
 
 void view_gl_draw(struct view_gl *v, const struct view_camera *cam, int width, int height, bool slices)
