@@ -17,12 +17,10 @@
 
 #include <spindle/spindle.h>
 
-#include "calibration.h"
-#include "config_edit.h"
+#include "ctl.h"
 #include "model.h"
 #include "patterns.h"
 #include "preview.h"
-#include "status_json.h"
 #include "svol.h"
 
 #ifndef SPINDLE_VERSION
@@ -30,31 +28,6 @@
 #endif
 
 #define FIT_MARGIN 0.95f
-
-/* Exit statuses (spindlectl(1), EXIT STATUS). */
-enum {
-	CTL_OK = 0,
-	CTL_FAILED = 1,  /* a request failed, the connection broke, an output file could not be written */
-	CTL_USAGE = 2,   /* bad command line */
-	CTL_CONNECT = 3, /* no daemon at the socket, or no common protocol version */
-	CTL_REFUSED = 4, /* the daemon refused: capture not allowed, a commit over quota or policy */
-	CTL_INPUT = 5,   /* an input file that cannot be read or used: a model, an .svol */
-};
-
-struct ctl_args {
-	const char *socket; /* NULL: libspindle's default */
-	const char *command;
-	const char *operand[2];
-	int operand_count;
-	bool no_fit;
-	bool has_color;
-	uint8_t color[3];
-	bool has_size;
-	uint32_t size;
-	bool json;
-	bool save;          /* calibrate: write the value into the config file */
-	const char *config; /* its path; NULL: /etc/spindle/spindled.conf */
-};
 
 static const char usage_text[] =
 	"usage: spindlectl [--socket PATH] COMMAND [ARGS]\n"
@@ -86,7 +59,7 @@ static const char usage_text[] =
 	"  -h, --help          this help\n"
 	"  -V, --version       version\n";
 
-static int usage_error(const char *fmt, const char *arg)
+int ctl_usage_error(const char *fmt, const char *arg)
 {
 	fprintf(stderr, "spindlectl: ");
 	fprintf(stderr, fmt, arg);
@@ -95,7 +68,7 @@ static int usage_error(const char *fmt, const char *arg)
 }
 
 /* The path libspindle will use, for messages. */
-static const char *socket_path(const struct ctl_args *a)
+const char *ctl_socket_path(const struct ctl_args *a)
 {
 	const char *env = getenv("SPINDLE_SOCKET");
 	if (a->socket)
@@ -103,233 +76,21 @@ static const char *socket_path(const struct ctl_args *a)
 	return env && *env ? env : SPINDLE_DEFAULT_SOCKET;
 }
 
-static struct spindle *connect_daemon(const struct ctl_args *a)
+struct spindle *ctl_connect(const struct ctl_args *a)
 {
 	struct spindle *sp = spindle_connect(a->socket);
 	if (!sp) {
 		int e = errno;
-		fprintf(stderr, "spindlectl: cannot connect to spindled at %s: %s\n", socket_path(a),
+		fprintf(stderr, "spindlectl: cannot connect to spindled at %s: %s\n", ctl_socket_path(a),
 			e == EPROTO ? "no common protocol version" : strerror(e));
 	}
 	return sp;
 }
 
-static void report_failure(struct spindle *sp, const char *what, int ret)
+void ctl_report_failure(struct spindle *sp, const char *what, int ret)
 {
 	const char *why = sp ? spindle_get_error(sp) : NULL;
 	fprintf(stderr, "spindlectl: %s: %s\n", what, why ? why : strerror(-ret));
-}
-
-/* ---- status ---- */
-
-static void print_device(const struct spindle_device_info *info)
-{
-	printf("device: %s\n", info->name);
-	printf("width: %u\n", info->width);
-	printf("height: %u\n", info->height);
-	printf("images per revolution: %u\n", info->images_per_rev);
-	printf("mirrored: %s\n", info->mirrored ? "yes" : "no");
-	printf("half height: %g\n", info->half_height);
-	printf("nominal rpm: %g\n", info->rpm);
-}
-
-static void print_status(const struct spindle_status *st)
-{
-	printf("measured rpm: %.1f\n", st->rpm);
-	printf("locked: %s\n", st->locked ? "yes" : "no");
-	printf("period jitter: %.1f us\n", st->jitter_us);
-	printf("index prediction error: %.1f us\n", st->index_error_us);
-	printf("missed or glitch pulses: %llu\n", (unsigned long long)st->missed_pulses);
-	if (st->angle_error_p99 >= 0)
-		printf("slice angle error: p99 %.3f, max %.3f slices\n", st->angle_error_p99, st->angle_error_max);
-	else
-		printf("slice angle error: unknown\n");
-	printf("blanked: %s\n", st->blanked ? "yes" : "no");
-	printf("projector present: %s\n", st->projector_present ? "yes" : "no");
-	printf("volumes shown: %llu\n", (unsigned long long)st->volumes_shown);
-	printf("underruns: %llu\n", (unsigned long long)st->underruns);
-	printf("volumes rendered: %llu\n", (unsigned long long)st->volumes_rendered);
-	printf("volumes skipped: %llu\n", (unsigned long long)st->volumes_skipped);
-	printf("bytes uploaded: %llu\n", (unsigned long long)st->bytes_uploaded);
-	printf("upload rate: %llu bytes/s\n", (unsigned long long)st->upload_rate);
-	printf("render time: %.3f ms\n", st->render_us / 1e3);
-	printf("clients: %u\n", st->clients);
-}
-
-static void print_limits(const struct spindle_limits *l)
-{
-	printf("clients in handshake: %u\n", l->clients_in_handshake);
-	printf("refused clients: %llu over max-clients, %llu over max-clients-per-user, %llu over "
-	       "max-incomplete-clients\n",
-	       (unsigned long long)l->refused_clients, (unsigned long long)l->refused_per_user,
-	       (unsigned long long)l->refused_incomplete);
-	printf("handshake timeouts: %llu\n", (unsigned long long)l->handshake_timeouts);
-	printf("file descriptors: %u of %u; accepting paused %llu times\n", l->fds, l->fd_limit,
-	       (unsigned long long)l->accept_pauses);
-	printf("memory: %llu of %llu bytes; %llu clients refused over it\n", (unsigned long long)l->memory_used,
-	       (unsigned long long)l->memory_budget, (unsigned long long)l->refused_memory);
-	printf("mappings: %u of %u; %llu clients refused over it\n", l->mappings, l->mapping_budget,
-	       (unsigned long long)l->refused_mappings);
-}
-
-static void print_service(const struct spindle_service *s)
-{
-	printf("client fds: at most %u each; %llu clients disconnected over it\n", s->max_client_fds,
-	       (unsigned long long)s->refused_fds);
-	if (s->watchdog_ms)
-		printf("watchdog: %u ms, fed %llu times, withheld %llu times\n", s->watchdog_ms,
-		       (unsigned long long)s->watchdog_fed, (unsigned long long)s->watchdog_withheld);
-	else
-		printf("watchdog: none\n");
-}
-
-static void print_composition(const struct spindle_composition *c)
-{
-	if (!c->cache) {
-		printf("object cache: off\n");
-		return;
-	}
-	printf("object cache: %u objects, %u cached, %llu of %llu bytes\n", c->objects, c->cached,
-	       (unsigned long long)c->cache_bytes, (unsigned long long)c->cache_budget);
-	printf("cache hits: %llu, misses: %llu, volumes cached: %llu, invalidated: %llu, evicted: %llu\n",
-	       (unsigned long long)c->hits, (unsigned long long)c->misses, (unsigned long long)c->creates,
-	       (unsigned long long)c->invalidations, (unsigned long long)c->evictions);
-	printf("last volume: %u objects rendered in %.3f ms, %u reused, composed in %.3f ms\n", c->objects_rendered,
-	       c->render_us / 1e3, c->objects_reused, c->compose_us / 1e3);
-}
-
-static void print_calibration(const struct spindle_calibration *c)
-{
-	printf("calibration: phase-offset %g deg, axis-offset-u %d px, axis-offset-v %d px, vertical-scale %g, "
-	       "vertical-offset %g\n",
-	       (double)c->phase_offset, c->axis_offset_u, c->axis_offset_v, (double)c->vertical_scale,
-	       (double)c->vertical_offset);
-}
-
-static int cmd_status(const struct ctl_args *a)
-{
-	struct spindle_status st;
-	struct spindle *sp = connect_daemon(a);
-	if (!sp)
-		return CTL_CONNECT;
-	int ret = spindle_get_status(sp, &st);
-	struct spindle_watch_stats ws;
-	bool watch_known = false;
-	if (ret == 0 && spindle_get_version(sp) >= 5) { /* protocol 5 */
-		ret = spindle_get_watch_stats(sp, &ws);
-		watch_known = ret == 0;
-	}
-	struct spindle_calibration cal;
-	bool cal_known = false;
-	if (ret == 0 && spindle_get_version(sp) >= 6) { /* protocol 6 */
-		ret = spindle_get_calibration(sp, &cal);
-		cal_known = ret == 0;
-	}
-	if (ret < 0) {
-		report_failure(sp, "status", ret);
-		spindle_disconnect(sp);
-		return CTL_FAILED;
-	}
-	if (a->json) {
-		status_print_json(stdout, socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st,
-				  watch_known ? &ws : NULL, cal_known ? &cal : NULL);
-		spindle_disconnect(sp);
-		return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
-	}
-	printf("socket: %s\n", socket_path(a));
-	printf("protocol version: %u\n", spindle_get_version(sp));
-	print_device(spindle_get_device_info(sp));
-	print_status(&st);
-	if (st.limits_known) /* protocol 3 */
-		print_limits(&st.limits);
-	if (st.composition_known) { /* protocol 4 */
-		print_service(&st.service);
-		print_composition(&st.composition);
-	}
-	if (watch_known)
-		printf("watchers: %u of %u (at most %u/s each), %llu volumes sent (%llu bytes), %llu skipped, %llu "
-		       "refused, %llu denied\n",
-		       ws.watchers, ws.max_watchers, ws.max_rate_hz, (unsigned long long)ws.volumes_sent,
-		       (unsigned long long)ws.bytes_sent, (unsigned long long)ws.volumes_skipped,
-		       (unsigned long long)ws.refused, (unsigned long long)ws.denied);
-	if (cal_known)
-		print_calibration(&cal);
-	spindle_disconnect(sp);
-	return fflush(stdout) == 0 ? 0 : 1;
-}
-
-/* ---- calibrate ---- */
-
-#define CONFIG_PATH "/etc/spindle/spindled.conf"
-
-/* Checks KEY VALUE here first, for a usage error rather than a refusal. */
-static int parse_calibration(const struct ctl_args *a, int *key, struct calibration *cal)
-{
-	calibration_identity(cal);
-	*key = calibration_key_from_name(a->operand[0]);
-	if (*key < 0)
-		return usage_error("unknown calibration key '%s' (phase-offset, axis-offset-u, axis-offset-v, "
-				   "vertical-scale, vertical-offset)",
-				   a->operand[0]);
-	if (calibration_set_text(cal, (unsigned)*key, a->operand[1]) < 0)
-		return usage_error("bad value '%s' (phase-offset: -180..180 degrees; axis offsets: whole pixels; "
-				   "vertical-scale: 0.5..2; vertical-offset: -0.5..0.5)",
-				   a->operand[1]);
-	return -1;
-}
-
-/* The value set, into the config file the daemon reads at start. */
-static int save_calibration(const struct ctl_args *a, const struct calibration *cal, int key)
-{
-	char value[32], err[600];
-	calibration_format(cal, (unsigned)key, value, sizeof(value));
-	const char *path = a->config ? a->config : CONFIG_PATH;
-	if (config_edit_set(path, calibration_key_name((unsigned)key), value, err, sizeof(err)) < 0) {
-		fprintf(stderr, "spindlectl: --save: %s\n", err);
-		return CTL_FAILED;
-	}
-	printf("saved %s = %s in %s\n", calibration_key_name((unsigned)key), value, path);
-	return CTL_OK;
-}
-
-static int cmd_calibrate(const struct ctl_args *a)
-{
-	int key = -1, status;
-	struct calibration want;
-	if (a->operand_count == 2 && (status = parse_calibration(a, &key, &want)) >= 0)
-		return status;
-	if (a->operand_count == 0 && (a->save || a->config))
-		return usage_error("%s", "--save and --config go with 'calibrate KEY VALUE'");
-	if (a->config && !a->save)
-		return usage_error("%s", "--config goes with --save");
-	struct spindle *sp = connect_daemon(a);
-	if (!sp)
-		return CTL_CONNECT;
-	struct spindle_calibration cal;
-	int r = key < 0 ? spindle_get_calibration(sp, &cal)
-			: spindle_calibrate(sp, (enum spindle_calibration_key)key,
-					    (float)calibration_get(&want, (unsigned)key), &cal);
-	status = CTL_OK;
-	if (r == -EPROTONOSUPPORT) {
-		fprintf(stderr, "spindlectl: calibrate: spindled speaks protocol %u; calibration needs 6\n",
-			spindle_get_version(sp));
-		status = CTL_FAILED;
-	} else if (r == -EACCES || r == -ERANGE) {
-		fprintf(stderr, "spindlectl: calibrate: refused: %s\n",
-			r == -EACCES ? "only root and the daemon's user may calibrate"
-				     : "value out of range for this display");
-		status = CTL_REFUSED;
-	} else if (r < 0) {
-		report_failure(sp, "calibrate", r);
-		status = CTL_FAILED;
-	}
-	spindle_disconnect(sp);
-	if (status != CTL_OK)
-		return status;
-	print_calibration(&cal);
-	if (a->save)
-		status = save_calibration(a, &want, key);
-	return fflush(stdout) == 0 ? status : CTL_FAILED;
 }
 
 /* ---- show ---- */
@@ -456,7 +217,7 @@ static int hold_until_signal(struct spindle *sp, int sfd)
 		if (poll(fds, 2, -1) < 0) {
 			if (errno == EINTR)
 				continue;
-			report_failure(NULL, "poll", -errno);
+			ctl_report_failure(NULL, "poll", -errno);
 			return CTL_FAILED;
 		}
 		if (fds[1].revents & POLLIN)
@@ -464,7 +225,7 @@ static int hold_until_signal(struct spindle *sp, int sfd)
 		if (fds[0].revents) {
 			int ret = spindle_dispatch(sp);
 			if (ret < 0 || (fds[0].revents & (POLLHUP | POLLERR))) {
-				report_failure(sp, "connection to spindled lost", ret < 0 ? ret : -EPIPE);
+				ctl_report_failure(sp, "connection to spindled lost", ret < 0 ? ret : -EPIPE);
 				return CTL_FAILED;
 			}
 		}
@@ -489,7 +250,7 @@ static int announce_and_hold(struct spindle *sp, uint64_t seq)
 {
 	int sfd = open_signalfd();
 	if (sfd < 0) {
-		report_failure(NULL, "signalfd", sfd);
+		ctl_report_failure(NULL, "signalfd", sfd);
 		return CTL_FAILED;
 	}
 	printf("shown %llu\n", (unsigned long long)seq);
@@ -522,7 +283,7 @@ static int show_model(struct spindle *sp, struct model *m, const struct ctl_args
 		status = CTL_REFUSED;
 		goto out_destroy;
 	} else if (ret < 0) {
-		report_failure(sp, "show", ret);
+		ctl_report_failure(sp, "show", ret);
 		goto out_destroy;
 	}
 	status = announce_and_hold(sp, frame.volume_seq);
@@ -544,7 +305,7 @@ static int cmd_show(const struct ctl_args *a)
 		fprintf(stderr, "spindlectl: %s\n", err);
 		return CTL_INPUT;
 	}
-	struct spindle *sp = connect_daemon(a);
+	struct spindle *sp = ctl_connect(a);
 	status = sp ? CTL_FAILED : CTL_CONNECT;
 	if (sp) {
 		status = show_model(sp, m, a);
@@ -562,10 +323,10 @@ static int cmd_pattern(const struct ctl_args *a)
 	if (!probe && errno == EINVAL) {
 		char msg[256];
 		snprintf(msg, sizeof(msg), "unknown pattern '%.64s' (one of: %s)", a->operand[0], pattern_names);
-		return usage_error("%s", msg);
+		return ctl_usage_error("%s", msg);
 	}
 	model_destroy(probe);
-	struct spindle *sp = connect_daemon(a);
+	struct spindle *sp = ctl_connect(a);
 	if (!sp)
 		return CTL_CONNECT;
 	/* In volume space as it is: made for this display's half height. */
@@ -574,7 +335,7 @@ static int cmd_pattern(const struct ctl_args *a)
 	as_is.no_fit = true;
 	int status = m ? show_model(sp, m, &as_is) : CTL_FAILED;
 	if (!m)
-		report_failure(NULL, "pattern", -errno);
+		ctl_report_failure(NULL, "pattern", -errno);
 	model_destroy(m);
 	spindle_disconnect(sp);
 	return status;
@@ -637,7 +398,7 @@ static int cmd_capture(const struct ctl_args *a)
 	struct svol_header hdr;
 	size_t size = 0;
 	int fd = -1, status = 1;
-	struct spindle *sp = connect_daemon(a);
+	struct spindle *sp = ctl_connect(a);
 	if (!sp)
 		return CTL_CONNECT;
 	int ret = spindle_capture(sp, &fd, &size);
@@ -647,7 +408,7 @@ static int cmd_capture(const struct ctl_args *a)
 		status = CTL_REFUSED;
 		goto out_disconnect;
 	} else if (ret < 0) {
-		report_failure(sp, "capture", ret);
+		ctl_report_failure(sp, "capture", ret);
 		goto out_disconnect;
 	}
 	if (check_capture(fd, size, &hdr) < 0) {
@@ -757,10 +518,12 @@ static int parse_option(int c, struct ctl_args *a)
 		return -1;
 	case OPT_COLOR:
 		a->has_color = true;
-		return parse_color(optarg, a->color) < 0 ? usage_error("bad colour '%s' (want RRGGBB)", optarg) : -1;
+		return parse_color(optarg, a->color) < 0 ? ctl_usage_error("bad colour '%s' (want RRGGBB)", optarg)
+							 : -1;
 	case OPT_SIZE:
 		a->has_size = true;
-		return parse_size(optarg, &a->size) < 0 ? usage_error("bad size '%s' (want 16..16384)", optarg) : -1;
+		return parse_size(optarg, &a->size) < 0 ? ctl_usage_error("bad size '%s' (want 16..16384)", optarg)
+							: -1;
 	case OPT_JSON:
 		a->json = true;
 		return -1;
@@ -801,17 +564,17 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 			cmd = &commands[i];
 	*status = CTL_USAGE;
 	if (!cmd)
-		usage_error("unknown command '%s'", a->command);
+		ctl_usage_error("unknown command '%s'", a->command);
 	else if (a->operand_count != cmd->operands && (!cmd->or_operands || a->operand_count != cmd->or_operands))
-		usage_error("wrong number of arguments for '%s'", cmd->name);
+		ctl_usage_error("wrong number of arguments for '%s'", cmd->name);
 	else if ((a->no_fit || a->has_color) && !cmd->show_opts)
-		usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
+		ctl_usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
 	else if (a->has_size && !cmd->preview_opts)
-		usage_error("--size goes with 'preview', not '%s'", cmd->name);
+		ctl_usage_error("--size goes with 'preview', not '%s'", cmd->name);
 	else if (a->json && !cmd->status_opts)
-		usage_error("--json goes with 'status', not '%s'", cmd->name);
+		ctl_usage_error("--json goes with 'status', not '%s'", cmd->name);
 	else if ((a->save || a->config) && cmd->run != cmd_calibrate)
-		usage_error("--save and --config go with 'calibrate', not '%s'", cmd->name);
+		ctl_usage_error("--save and --config go with 'calibrate', not '%s'", cmd->name);
 	else
 		return cmd;
 	return NULL;
@@ -863,11 +626,11 @@ static int parse_command_line(int argc, char **argv, struct ctl_args *a)
 			return status;
 	}
 	if (optind >= argc)
-		return usage_error("%s", "no command given");
+		return ctl_usage_error("%s", "no command given");
 	a->command = argv[optind++];
 	for (; optind < argc; optind++) {
 		if (a->operand_count == 2)
-			return usage_error("too many arguments for '%s'", a->command);
+			return ctl_usage_error("too many arguments for '%s'", a->command);
 		a->operand[a->operand_count++] = argv[optind];
 	}
 	return -1;
