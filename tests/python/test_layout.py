@@ -80,4 +80,4 @@ def test_every_exported_function_is_bound():
     assert not bound - exported, f'bound but not exported: {sorted(bound - exported)}'
     new = exported - bound - NOT_BOUND
     assert not new, (f'libspindle exports {sorted(new)}: bind them in python/spindle/_lib.py (PROTOTYPES) and '
-                     '_core.py, or list them in NOT_BOUND here')
+                     '_core.py or _objects.py, or list them in NOT_BOUND here')
