@@ -604,6 +604,65 @@ static int run_window(const struct view_args *a)
 }
 
 /* The command line into *a-> Returns -1 to go on, else the exit status. */
+/* One option of the command line into a. Returns -1 to go on, else the
+ * exit status (help, bad usage). */
+static int parse_option(int c, struct view_args *a)
+{
+	uint32_t mp;
+	switch (c) {
+	case 's':
+		a->socket = optarg;
+		return -1;
+	case 'r':
+		if (!parse_u32(optarg, 1, 1000, &a->rate))
+			return usage_error("--rate takes 1 to 1000");
+		return -1;
+	case 'i':
+		a->input = optarg;
+		return -1;
+	case 't':
+		a->turntable = optarg;
+		return -1;
+	case 'n':
+		if (!parse_u32(optarg, 1, 360, &a->frames))
+			return usage_error("--frames takes 1 to 360");
+		return -1;
+	case 'z':
+		if (!parse_u32(optarg, 16, 4096, &a->size))
+			return usage_error("--size takes 16 to 4096");
+		return -1;
+	case 'o':
+		a->snapshot = optarg;
+		return -1;
+	case 'x':
+		if (!parse_u32(optarg, 1, UINT32_MAX, &a->exit_after))
+			return usage_error("--exit-after takes a count of volumes");
+		return -1;
+	case 'g':
+		if (sscanf(optarg, "%ux%u", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
+		    a->width > 8192 || a->height > 8192)
+			return usage_error("--geometry takes WxH");
+		return -1;
+	case 'm':
+		if (!parse_u32(optarg, 1000, UINT32_MAX, &mp))
+			return usage_error("--max-points takes 1000 or more");
+		a->max_points = mp;
+		a->adapt = false;
+		return -1;
+	case 'S':
+		a->slices = true;
+		return -1;
+	case 'v':
+		a->stats = true;
+		return -1;
+	case 'h':
+		fputs(usage_text, stdout);
+		return VIEW_OK;
+	default:
+		return usage_error("bad option");
+	}
+}
+
 static int parse_args(int argc, char **argv, struct view_args *a)
 {
 	*a = (struct view_args){ .frames = 12,
@@ -622,60 +681,10 @@ static int parse_args(int argc, char **argv, struct view_args *a)
 		{ "help", no_argument, NULL, 'h' },           { NULL, 0, NULL, 0 },
 	};
 	int c;
-	uint32_t mp;
 	while ((c = getopt_long(argc, argv, "s:r:i:t:n:z:o:x:g:m:Svh", opts, NULL)) != -1) {
-		switch (c) {
-		case 's':
-			a->socket = optarg;
-			break;
-		case 'r':
-			if (!parse_u32(optarg, 1, 1000, &a->rate))
-				return usage_error("--rate takes 1 to 1000");
-			break;
-		case 'i':
-			a->input = optarg;
-			break;
-		case 't':
-			a->turntable = optarg;
-			break;
-		case 'n':
-			if (!parse_u32(optarg, 1, 360, &a->frames))
-				return usage_error("--frames takes 1 to 360");
-			break;
-		case 'z':
-			if (!parse_u32(optarg, 16, 4096, &a->size))
-				return usage_error("--size takes 16 to 4096");
-			break;
-		case 'o':
-			a->snapshot = optarg;
-			break;
-		case 'x':
-			if (!parse_u32(optarg, 1, UINT32_MAX, &a->exit_after))
-				return usage_error("--exit-after takes a count of volumes");
-			break;
-		case 'g':
-			if (sscanf(optarg, "%ux%u", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
-			    a->width > 8192 || a->height > 8192)
-				return usage_error("--geometry takes WxH");
-			break;
-		case 'm':
-			if (!parse_u32(optarg, 1000, UINT32_MAX, &mp))
-				return usage_error("--max-points takes 1000 or more");
-			a->max_points = mp;
-			a->adapt = false;
-			break;
-		case 'S':
-			a->slices = true;
-			break;
-		case 'v':
-			a->stats = true;
-			break;
-		case 'h':
-			fputs(usage_text, stdout);
-			return VIEW_OK;
-		default:
-			return usage_error("bad option");
-		}
+		int r = parse_option(c, a);
+		if (r >= 0)
+			return r;
 	}
 	if (optind < argc)
 		return usage_error("unexpected argument");
