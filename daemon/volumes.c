@@ -77,6 +77,35 @@ static int check_shape(struct client *c, const struct proto_display_create_volum
 	return 0;
 }
 
+/* The grid of a's samples, read from src: laid out for the renderers and
+ * its lines' maxima made (bytes: both together). NULL when out of memory. */
+static struct vgrid *vgrid_build(const struct proto_display_create_volume_args *a, const uint8_t *src, uint64_t bytes)
+{
+	struct vgrid *g = calloc(1, sizeof(*g));
+	uint64_t lines = (uint64_t)a->nx * a->nz;
+	void *samples = malloc(bytes - lines * sizeof(float));
+	float *line_max = malloc(lines * sizeof(float));
+	if (!g || !samples || !line_max) {
+		free(g);
+		free(samples);
+		free(line_max);
+		return NULL;
+	}
+	const uint32_t n[3] = { a->nx, a->ny, a->nz };
+	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
+	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && a->type != SCENE_GRID_RGBA8;
+	relayout(samples, src, n, sample_bytes(a->type), swap);
+	*g = (struct vgrid){
+		.refs = 1,
+		.bytes = bytes,
+		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, line_max },
+		.samples = samples,
+		.line_max = line_max,
+	};
+	grid_line_max(&g->grid, line_max);
+	return g;
+}
+
 int objects_create_volume(struct client *c, const struct proto_display_create_volume_args *a)
 {
 	uint64_t bytes = 0;
@@ -95,30 +124,12 @@ int objects_create_volume(struct client *c, const struct proto_display_create_vo
 	if ((r = objects_charge(c, bytes)) < 0)
 		return r;
 	struct volume_obj *vo = calloc(1, sizeof(*vo));
-	struct vgrid *g = calloc(1, sizeof(*g));
-	uint64_t lines = (uint64_t)a->nx * a->nz;
-	void *samples = malloc(bytes - lines * sizeof(float));
-	float *line_max = malloc(lines * sizeof(float));
-	if (!vo || !g || !samples || !line_max) {
+	struct vgrid *g = vo ? vgrid_build(a, b->map + a->offset, bytes) : NULL;
+	if (!g) {
 		free(vo);
-		free(g);
-		free(samples);
-		free(line_max);
 		objects_uncharge(c, bytes);
 		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
 	}
-	const uint32_t n[3] = { a->nx, a->ny, a->nz };
-	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
-	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && a->type != SCENE_GRID_RGBA8;
-	relayout(samples, b->map + a->offset, n, sample_bytes(a->type), swap);
-	*g = (struct vgrid){
-		.refs = 1,
-		.bytes = bytes,
-		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, line_max },
-		.samples = samples,
-		.line_max = line_max,
-	};
-	grid_line_max(&g->grid, line_max);
 	vo->grid = g;
 	vo->base.client = c;
 	if ((r = object_register(c, &vo->base, a->id, PROTO_IFACE_VOLUME)) < 0) {
