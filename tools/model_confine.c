@@ -1,11 +1,13 @@
-/* Confining the model loader child (model_sandbox.h): no fds but its own,
- * no privileges, resource limits, and a seccomp filter, a raw BPF program
- * (no libseccomp): the architecture checked, then an allow list. What
- * assimp needs once the file is open: memory (brk, mmap, mremap, munmap,
- * madvise; never executable), reading the model's fd, writing the result
- * pipe and stderr, futex, signals to itself (abort), clocks, its ids,
- * exit. Every other call fails with EPERM: open, socket, execve, ptrace,
- * kill of another process, clone... */
+/* Confining the model loader child (model_sandbox.h), and the scan
+ * loader's (tools/scan_loader.c): no fds but its own, no privileges,
+ * resource limits, and a seccomp filter, a raw BPF program (no
+ * libseccomp): the architecture checked, then an allow list. What assimp
+ * or a scan reader needs once the files are open: memory (brk, mmap,
+ * mremap, munmap, madvise; never executable), reading the input fds (one
+ * for a model; for a scan, a DICOM directory's files, a contiguous
+ * range), writing the result pipe and stderr, futex, signals to itself
+ * (abort), clocks, its ids, exit. Every other call fails with EPERM: open,
+ * socket, execve, ptrace, kill of another process, clone... */
 #include "model_sandbox.h"
 
 #include <errno.h>
@@ -83,20 +85,31 @@ static void close_between(unsigned first, unsigned last)
 		close((int)fd);
 }
 
-/* stdin and stdout on /dev/null, everything closed but stderr and ours
- * (moved to 3 and up first). */
-static int keep_fds(int *in_fd, int *out_fd)
+/* stdin and stdout on /dev/null; the count input fds moved to 3, 4, ...
+ * in their order and the result pipe after them (through copies above
+ * every fd involved, so that no move overwrites one still to be moved);
+ * everything else closed but stderr. */
+static int keep_fds(int *in_fds, unsigned count, int *out_fd)
 {
-	int in = fcntl(*in_fd, F_DUPFD, 3), out = fcntl(*out_fd, F_DUPFD, 3);
+	int base = *out_fd, copies[MODEL_CONFINE_MAX_INPUTS + 1];
+	for (unsigned n = 0; n < count; n++)
+		base = in_fds[n] > base ? in_fds[n] : base;
+	base = base > (int)count + 3 ? base + 1 : (int)count + 4;
+	for (unsigned n = 0; n <= count; n++) {
+		copies[n] = fcntl(n < count ? in_fds[n] : *out_fd, F_DUPFD, base);
+		if (copies[n] < 0)
+			return -errno;
+	}
 	int null = open("/dev/null", O_RDWR);
-	if (in < 0 || out < 0 || null < 0 || dup2(null, 0) < 0 || dup2(null, 1) < 0)
+	if (null < 0 || dup2(null, 0) < 0 || dup2(null, 1) < 0)
 		return -errno;
-	unsigned lo = (unsigned)(in < out ? in : out), hi = (unsigned)(in < out ? out : in);
-	close_between(3, lo - 1);
-	close_between(lo + 1, hi - 1);
-	close_between(hi + 1, ~0u);
-	*in_fd = in;
-	*out_fd = out;
+	for (unsigned n = 0; n <= count; n++)
+		if (dup2(copies[n], 3 + (int)n) < 0)
+			return -errno;
+	close_between(4 + count, ~0u);
+	for (unsigned n = 0; n < count; n++)
+		in_fds[n] = 3 + (int)n;
+	*out_fd = 3 + (int)count;
 	return 0;
 }
 
@@ -200,6 +213,18 @@ static void allow_arg(struct filter *f, long nr, unsigned arg, uint32_t a, uint3
 	emit(f, RET(SECCOMP_RET_ALLOW));
 }
 
+/* nr only when its argument arg (low 32 bits) lies in lo..hi. */
+static void allow_range(struct filter *f, long nr, unsigned arg, uint32_t lo, uint32_t hi)
+{
+	emit(f, LOAD(offsetof(struct seccomp_data, nr)));
+	emit(f, JEQ((uint32_t)nr, 0, 5));
+	emit(f, LOAD(ARG_LO(arg)));
+	emit(f, JUMP(BPF_JMP | BPF_JGE | BPF_K, lo, 0, 2));
+	emit(f, JUMP(BPF_JMP | BPF_JGT | BPF_K, hi, 1, 0));
+	emit(f, RET(SECCOMP_RET_ALLOW));
+	emit(f, RET(DENY));
+}
+
 /* nr only when none of the bits of mask is set in argument arg. */
 static void allow_without(struct filter *f, long nr, unsigned arg, uint32_t mask)
 {
@@ -224,17 +249,19 @@ static void allow_memory(struct filter *f)
 	allow_without(f, SYS_mprotect, 2, PROT_EXEC);
 }
 
-static void allow_io(struct filter *f, uint32_t in, uint32_t out)
+/* Reading the inputs (fds first_in to last_in), writing the result pipe
+ * and stderr. */
+static void allow_io(struct filter *f, uint32_t first_in, uint32_t last_in, uint32_t out)
 {
-	allow_arg(f, SYS_read, 0, in, in);
-	allow_arg(f, SYS_pread64, 0, in, in);
-	allow_arg(f, SYS_readv, 0, in, in);
-	allow_arg(f, SYS_lseek, 0, in, in);
+	allow_range(f, SYS_read, 0, first_in, last_in);
+	allow_range(f, SYS_pread64, 0, first_in, last_in);
+	allow_range(f, SYS_readv, 0, first_in, last_in);
+	allow_range(f, SYS_lseek, 0, first_in, last_in);
 #ifdef SYS__llseek
-	allow_arg(f, SYS__llseek, 0, in, in);
+	allow_range(f, SYS__llseek, 0, first_in, last_in);
 #endif
 #ifdef SYS_fstat
-	allow_arg(f, SYS_fstat, 0, in, in);
+	allow_range(f, SYS_fstat, 0, first_in, last_in);
 #endif
 	allow_arg(f, SYS_write, 0, out, STDERR_FILENO);
 	allow_arg(f, SYS_writev, 0, out, STDERR_FILENO);
@@ -275,7 +302,7 @@ static void allow_process(struct filter *f, uint32_t self)
 	allow_arg(f, SYS_tkill, 0, self, self);
 }
 
-static int install_filter(int in, int out, char *why, size_t why_size)
+static int install_filter(int first_in, int last_in, int out, char *why, size_t why_size)
 {
 #ifndef FILTER_ARCH
 	return fail(why, why_size, "no seccomp filter for this architecture", ENOSYS);
@@ -291,7 +318,7 @@ static int install_filter(int in, int out, char *why, size_t why_size)
 	emit(&f, RET(DENY));
 #endif
 	allow_memory(&f);
-	allow_io(&f, (uint32_t)in, (uint32_t)out);
+	allow_io(&f, (uint32_t)first_in, (uint32_t)last_in, (uint32_t)out);
 	allow_process(&f, (uint32_t)getpid());
 	emit(&f, RET(DENY));
 	if (f.len > MAX_FILTER)
@@ -303,10 +330,13 @@ static int install_filter(int in, int out, char *why, size_t why_size)
 #endif
 }
 
-int model_confine_child(const struct model_confine *c, int *in_fd, int *out_fd, char *why, size_t why_size)
+int model_confine_child_fds(const struct model_confine *c, int *in_fds, unsigned count, int *out_fd, char *why,
+			    size_t why_size)
 {
 	default_signals();
-	int ret = keep_fds(in_fd, out_fd);
+	if (count < 1 || count > MODEL_CONFINE_MAX_INPUTS)
+		return fail(why, why_size, "cannot set up the loader's fds", EINVAL);
+	int ret = keep_fds(in_fds, count, out_fd);
 	if (ret < 0)
 		return fail(why, why_size, "cannot set up the loader's fds", -ret);
 	ret = drop_user(c, why, why_size);
@@ -320,5 +350,10 @@ int model_confine_child(const struct model_confine *c, int *in_fd, int *out_fd, 
 		return fail(why, why_size, "prctl", errno);
 	if (getppid() != c->parent)
 		return fail(why, why_size, "the parent is gone", ESRCH);
-	return install_filter(*in_fd, *out_fd, why, why_size);
+	return install_filter(in_fds[0], in_fds[count - 1], *out_fd, why, why_size);
+}
+
+int model_confine_child(const struct model_confine *c, int *in_fd, int *out_fd, char *why, size_t why_size)
+{
+	return model_confine_child_fds(c, in_fd, 1, out_fd, why, why_size);
 }

@@ -1,4 +1,4 @@
-/* Test hooks of the model loader (model_sandbox.h), built only into the
+/* Test hooks of the model and scan loaders (model_sandbox.h), built only into the
  * tests' copy of the tools library (-DSPINDLE_MODEL_TEST_HOOKS): spindlectl
  * and everything installed never read these variables.
  *
@@ -14,6 +14,8 @@
  *   garbage, short, extra, index, nan
  *                      send a bad result: not a header, a mesh cut short,
  *                      bytes after it, an index out of range, a NaN vertex
+ *                      (to the scan loader's parent all but garbage are cut
+ *                      short; its own lies are in scan_loader.c)
  * $SPINDLE_MODEL_TEST_TIMEOUT_MS and $SPINDLE_MODEL_TEST_CPU_S set the
  * limits. */
 #include <errno.h>
@@ -40,11 +42,14 @@ void model_test_limits(int *timeout_ms, struct model_confine *c)
 		c->cpu_s = (unsigned)atoi(cpu);
 }
 
+/* How the loader at hand sends an error: the model's wire, or the scan's. */
+static model_test_send_error send_error = model_wire_send_error;
+
 static __attribute__((noreturn)) void report(int out_fd, const char *hook, int result)
 {
 	char text[256];
 	snprintf(text, sizeof(text), "test hook %s: %s", hook, result < 0 ? strerror(errno) : "allowed");
-	model_wire_send_error(out_fd, EINVAL, text);
+	send_error(out_fd, EINVAL, text);
 	_exit(0);
 }
 
@@ -53,7 +58,7 @@ static __attribute__((noreturn)) void send_ids(int out_fd)
 	char text[256];
 	snprintf(text, sizeof(text), "test hook ids: uid %u euid %u gid %u egid %u groups %d", (unsigned)getuid(),
 		 (unsigned)geteuid(), (unsigned)getgid(), (unsigned)getegid(), getgroups(0, NULL));
-	model_wire_send_error(out_fd, EINVAL, text);
+	send_error(out_fd, EINVAL, text);
 	_exit(0);
 }
 
@@ -67,8 +72,11 @@ static __attribute__((noreturn)) void send_lie(int out_fd, const char *hook)
 		idx[2] = 7;
 	if (strcmp(hook, "nan") == 0)
 		v[4] = NAN;
-	if (strcmp(hook, "garbage") == 0)
-		memset(&h, 0xab, sizeof(h));
+	if (strcmp(hook, "garbage") == 0) {
+		uint8_t junk[1024]; /* longer than any loader's header */
+		memset(junk, 0xab, sizeof(junk));
+		_exit(write(out_fd, junk, sizeof(junk)) > 0 ? 0 : 1);
+	}
 	ssize_t n = write(out_fd, &h, sizeof(h));
 	n += write(out_fd, v, sizeof(v));
 	if (strcmp(hook, "short") != 0)
@@ -102,9 +110,10 @@ static void try_forbidden(int out_fd, const char *hook)
 		report(out_fd, hook, (int)write(STDOUT_FILENO, "x", 1));
 }
 
-void model_test_hook(int in_fd, int out_fd)
+void model_test_hook(int in_fd, int out_fd, model_test_send_error send)
 {
 	const char *hook = getenv("SPINDLE_MODEL_TEST_HOOK");
+	send_error = send;
 	static int never;
 	if (!hook || !*hook)
 		return;

@@ -32,7 +32,60 @@ void model_sandbox_set_progress(FILE *f);
 int model_sandbox_load(int fd, uint64_t size, const char *path, const struct model_companions *comp, struct model **out,
 		       char *reason, size_t reason_size);
 
+/* ---- the loader child, whatever it reads (model_sandbox.c) ----
+ *
+ * What model_sandbox_load() and the scan loader (tools/scan_loader.c)
+ * share: a child forked (not executed) that confines itself and writes
+ * its result into a pipe, which the parent reads within a deadline,
+ * saying every second or two that a slow load goes on; the child is
+ * always reaped (killed when the exchange failed), and what went wrong
+ * with it becomes a reason naming the loader ("the scan loader crashed
+ * (signal 6)"). */
+
+struct sandbox {
+	const char *name; /* "model loader", "scan loader": for reasons */
+	const char *path; /* for progress lines */
+	int timeout_ms;   /* wall time; then the child is killed */
+	unsigned cpu_s;   /* its RLIMIT_CPU, for the reason */
+	/* set by sandbox_start() and the calls after it */
+	pid_t pid;
+	int rfd; /* the read end of the result pipe */
+	int64_t start_ms, note_ms, deadline_ms;
+	int wstatus;
+	bool timed_out;
+};
+
+/* The child's side: runs in the child with the write end of the result
+ * pipe; must not return (it leaves with _exit()). */
+typedef void (*sandbox_child_fn)(void *arg, int out_fd);
+
+/* Forks the child running fn(arg, out_fd). 0, or -errno. */
+int sandbox_start(struct sandbox *sb, sandbox_child_fn fn, void *arg);
+/* Exactly len bytes of the result before the deadline: 0, -ETIMEDOUT,
+ * -EPIPE (the pipe ended first) or -errno. */
+int sandbox_read(struct sandbox *sb, void *buf, size_t len);
+/* The end of the pipe, now: 0, -EPROTO (more bytes: why filled) or as
+ * sandbox_read(). */
+int sandbox_read_end(struct sandbox *sb, char *why, size_t why_size);
+/* Reaps the child: waits for it until the deadline, then kills it; with
+ * kill_now, kills it first. Closes the pipe. */
+void sandbox_reap(struct sandbox *sb, bool kill_now);
+/* After sandbox_reap(), given the result of the exchange rx (0, -EPIPE
+ * for a result that ended where it should, else what sandbox_read() or
+ * the caller's checks gave, -EPROTO with why), what went wrong with the
+ * child itself: 0 (nothing: its message stands), or -EINVAL (-ENOMEM for
+ * rx -ENOMEM) with reason filled. */
+int sandbox_failure(const struct sandbox *sb, int rx, const char *why, char *reason, size_t reason_size);
+/* Where sandboxed loads that take over a second say that they go on
+ * (every 2 s), or NULL (the default): spindlectl passes stderr. */
+void sandbox_set_progress(FILE *f);
+/* The progress stream (NULL: none), for the "read in N s" line. */
+FILE *sandbox_progress(void);
+
 /* ---- model_confine.c ---- */
+
+/* At most this many input fds (a DICOM directory's files). */
+#define MODEL_CONFINE_MAX_INPUTS 8192u
 
 struct model_confine {
 	bool drop_user; /* started as root: become uid/gid, no groups */
@@ -53,6 +106,11 @@ void model_confine_prepare(struct model_confine *c);
  * dumpable, killed with the parent; the seccomp filter. 0, or -errno with
  * why filled. */
 int model_confine_child(const struct model_confine *c, int *in_fd, int *out_fd, char *why, size_t why_size);
+/* The same with count input fds (1 to MODEL_CONFINE_MAX_INPUTS): moved to
+ * 3, 4, ... in their order (in_fds gets the new numbers), the pipe after
+ * them; the filter allows reading any of them. */
+int model_confine_child_fds(const struct model_confine *c, int *in_fds, unsigned count, int *out_fd, char *why,
+			    size_t why_size);
 
 /* ---- model_hooks.c: only in the tests' build (SPINDLE_MODEL_TEST_HOOKS) ---- */
 
@@ -61,7 +119,10 @@ int model_confine_child(const struct model_confine *c, int *in_fd, int *out_fd, 
  * instead of loading: crash, hang, spin, try what the filter forbids and
  * report the result, or send a lying result (see model_hooks.c). */
 void model_test_limits(int *timeout_ms, struct model_confine *c);
-/* Called in the confined child; returns only when no hook is set. */
-void model_test_hook(int in_fd, int out_fd);
+/* Called in the confined child, with how its loader sends an error
+ * message (model_wire_send_error(), or the scan loader's); returns only
+ * when no hook is set. */
+typedef int (*model_test_send_error)(int fd, int status, const char *text);
+void model_test_hook(int in_fd, int out_fd, model_test_send_error send);
 
 #endif

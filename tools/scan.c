@@ -2,6 +2,7 @@
  * is, the raw reader, and the checks that every reader's result passes. */
 #include "scan.h"
 
+#include <dirent.h>
 #include <errno.h>
 #include <fcntl.h>
 #include <inttypes.h>
@@ -10,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -118,20 +120,28 @@ static bool ras_ok(const struct scan *s)
 	return fabs(det3(s->to_ras)) > 1e-6 * s->spacing[0] * s->spacing[1] * s->spacing[2];
 }
 
-int scan_check(const struct scan *s, const char *path, char *err, size_t err_size)
+int scan_check_geometry(const struct scan *s, const char *path, char *err, size_t err_size)
 {
 	uint64_t voxels;
+	if (scan_type_size(s->type) == 0)
+		return scan_fail(err, err_size, -EINVAL, path, "unknown voxel type %d", (int)s->type);
 	int ret = scan_check_dims(path, s->dims, &voxels, err, err_size);
 	if (ret == 0)
 		ret = scan_check_spacing(path, s->spacing, err, err_size);
+	if (ret == 0 && !ras_ok(s))
+		ret = scan_fail(err, err_size, -EINVAL, path,
+				"the voxel to patient transform is not finite or is singular");
+	return ret;
+}
+
+int scan_check(const struct scan *s, const char *path, char *err, size_t err_size)
+{
+	int ret = scan_check_geometry(s, path, err, err_size);
 	if (ret != 0)
 		return ret;
-	size_t per = scan_type_size(s->type);
-	if (per == 0 || !s->data || s->size != voxels * per)
+	size_t bytes = (size_t)s->dims[0] * s->dims[1] * s->dims[2] * scan_type_size(s->type);
+	if (!s->data || s->size != bytes)
 		return scan_fail(err, err_size, -EINVAL, path, "a volume without the data its size says");
-	if (!ras_ok(s))
-		return scan_fail(err, err_size, -EINVAL, path,
-				 "the voxel to patient transform is not finite or is singular");
 	return 0;
 }
 
@@ -192,46 +202,36 @@ static int pread_all(int fd, void *buf, size_t len, uint64_t offset)
 }
 
 /* The layout's own checks, and that the file holds the bytes it needs. */
-static int raw_check(const char *path, const struct scan_raw *raw, int fd, size_t *size, char *err, size_t err_size)
+static int raw_check(const struct scan_input *in, const struct scan_raw *raw, size_t *size, char *err, size_t err_size)
 {
 	uint64_t voxels;
-	struct stat st;
 	size_t per = scan_type_size(raw->type);
 	if (per == 0)
-		return scan_fail(err, err_size, -EINVAL, path, "unknown voxel type %d", (int)raw->type);
-	int ret = scan_check_dims(path, raw->dims, &voxels, err, err_size);
+		return scan_fail(err, err_size, -EINVAL, in->path, "unknown voxel type %d", (int)raw->type);
+	int ret = scan_check_dims(in->path, raw->dims, &voxels, err, err_size);
 	if (ret == 0)
-		ret = scan_check_spacing(path, raw->spacing, err, err_size);
+		ret = scan_check_spacing(in->path, raw->spacing, err, err_size);
 	if (ret != 0)
 		return ret;
-	if (fstat(fd, &st) != 0)
-		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
-	if (!S_ISREG(st.st_mode))
-		return scan_fail(err, err_size, -EINVAL, path, "not a regular file");
 	*size = (size_t)(voxels * per);
-	uint64_t have = (uint64_t)st.st_size;
-	if (raw->offset > have || have - raw->offset < *size)
-		return scan_fail(err, err_size, -EINVAL, path,
+	if (raw->offset > in->size || in->size - raw->offset < *size)
+		return scan_fail(err, err_size, -EINVAL, in->path,
 				 "holds %" PRIu64 " bytes; %" PRIu32 "x%" PRIu32 "x%" PRIu32
 				 " %s voxels need %zu from offset %" PRIu64,
-				 have, raw->dims[0], raw->dims[1], raw->dims[2], scan_type_name(raw->type), *size,
+				 in->size, raw->dims[0], raw->dims[1], raw->dims[2], scan_type_name(raw->type), *size,
 				 raw->offset);
 	return 0;
 }
 
-int scan_read_raw(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+int scan_read_raw(const struct scan_input *in, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
 {
 	size_t size = 0;
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
-	if (fd < 0)
-		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
-	int ret = raw_check(path, raw, fd, &size, err, err_size);
+	int ret = raw_check(in, raw, &size, err, err_size);
 	void *buf = ret == 0 ? malloc(size) : NULL;
 	if (ret == 0 && !buf)
-		ret = scan_fail(err, err_size, -ENOMEM, path, "out of memory for %zu bytes", size);
-	if (ret == 0 && (ret = pread_all(fd, buf, size, raw->offset)) != 0)
-		scan_fail(err, err_size, ret, path, "%s", ret == -EINVAL ? "the file ended early" : strerror(-ret));
-	close(fd);
+		ret = scan_fail(err, err_size, -ENOMEM, in->path, "out of memory for %zu bytes", size);
+	if (ret == 0 && (ret = pread_all(in->fd, buf, size, raw->offset)) != 0)
+		scan_fail(err, err_size, ret, in->path, "%s", ret == -EINVAL ? "the file ended early" : strerror(-ret));
 	if (ret != 0) {
 		free(buf);
 		return ret;
@@ -242,13 +242,13 @@ int scan_read_raw(const char *path, const struct scan_raw *raw, struct scan *out
 	memcpy(out->dims, raw->dims, sizeof(out->dims));
 	memcpy(out->spacing, raw->spacing, sizeof(out->spacing));
 	scan_set_diagonal(out);
-	ret = scan_finish(out, raw_stored(raw->type), buf, NULL, 0, path, err, err_size);
+	ret = scan_finish(out, raw_stored(raw->type), buf, NULL, 0, in->path, err, err_size);
 	if (ret == 0)
 		scan_describe(out, "raw", raw->big_endian ? "big-endian" : NULL);
 	return ret;
 }
 
-/* ---- dispatch ---- */
+/* ---- opening ---- */
 
 static bool ends_with(const char *s, const char *suffix)
 {
@@ -256,32 +256,254 @@ static bool ends_with(const char *s, const char *suffix)
 	return n >= m && strcasecmp(s + n - m, suffix) == 0;
 }
 
-static int read_by_kind(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+/* name (under dir when dir_fd is not AT_FDCWD) opened for reading: a
+ * regular file only, so that a FIFO or a device cannot block. 0 with
+ * *fd and *size, 1 for a file that is not regular, or -errno. */
+static int open_regular(int dir_fd, const char *name, int *fd, uint64_t *size)
 {
 	struct stat st;
-	if (raw)
-		return scan_read_raw(path, raw, out, err, err_size);
+	*fd = openat(dir_fd, name, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+	if (*fd < 0)
+		return -errno;
+	int ret = fstat(*fd, &st) != 0 ? -errno : S_ISREG(st.st_mode) ? 0 : 1;
+	if (ret != 0) {
+		close(*fd);
+		*fd = -1;
+		return ret;
+	}
+	*size = (uint64_t)st.st_size;
+	return 0;
+}
+
+static int compare_names(const void *a, const void *b)
+{
+	return strcmp(*(char *const *)a, *(char *const *)b);
+}
+
+/* The names of dir's regular files not starting with '.', sorted: at
+ * most SCAN_MAX_FILES. */
+static int list_dir(int dir_fd, const char *path, char ***names, size_t *count, char *err, size_t err_size)
+{
+	int fd = dup(dir_fd);
+	DIR *d = fd < 0 ? NULL : fdopendir(fd);
+	if (!d) {
+		int e = errno;
+		if (fd >= 0)
+			close(fd);
+		return scan_fail(err, err_size, -e, path, "%s", strerror(e));
+	}
+	int ret = 0;
+	*names = calloc(SCAN_MAX_FILES + 1, sizeof(**names));
+	*count = 0;
+	if (!*names)
+		ret = scan_fail(err, err_size, -ENOMEM, path, "out of memory");
+	for (struct dirent *e; ret == 0 && (e = readdir(d));) {
+		struct stat st;
+		if (e->d_name[0] == '.' || fstatat(dir_fd, e->d_name, &st, 0) != 0 || !S_ISREG(st.st_mode))
+			continue;
+		if (*count == SCAN_MAX_FILES)
+			ret = scan_fail(err, err_size, -E2BIG, path,
+					"more than %u files: not read as one DICOM series (at most %u slices)",
+					SCAN_MAX_FILES, SCAN_MAX_DIM);
+		else if (!((*names)[(*count)++] = strdup(e->d_name)))
+			ret = scan_fail(err, err_size, -ENOMEM, path, "out of memory");
+	}
+	closedir(d);
+	if (ret == 0)
+		qsort(*names, *count, sizeof(**names), compare_names);
+	return ret;
+}
+
+/* Room for count more fds: RLIMIT_NOFILE's soft limit raised as far as the
+ * hard one when it is short. */
+static void make_room_for_fds(size_t count)
+{
+	struct rlimit rl;
+	rlim_t want = (rlim_t)count * 2 + 64; /* the loader copies them once */
+	if (getrlimit(RLIMIT_NOFILE, &rl) != 0 || rl.rlim_cur >= want)
+		return;
+	rl.rlim_cur = rl.rlim_max == RLIM_INFINITY || rl.rlim_max > want ? want : rl.rlim_max;
+	setrlimit(RLIMIT_NOFILE, &rl);
+}
+
+static int add_input(struct scan_files *f, const char *dir, const char *name, int fd, uint64_t size)
+{
+	struct scan_input *in = &f->inputs[f->count];
+	size_t len = strlen(dir) + 1 + strlen(name) + 1;
+	in->path = malloc(len);
+	if (!in->path)
+		return -ENOMEM;
+	size_t d = strlen(dir);
+	snprintf(in->path, len, "%s%s%s", dir, d > 0 && dir[d - 1] == '/' ? "" : "/", name);
+	in->fd = fd;
+	in->size = size;
+	f->count++;
+	f->bytes += size;
+	return 0;
+}
+
+/* Every listed file opened, within SCAN_MAX_FILE_BYTES. */
+static int open_dir_files(int dir_fd, const char *path, char **names, size_t count, struct scan_files *f, char *err,
+			  size_t err_size)
+{
+	make_room_for_fds(count);
+	f->inputs = calloc(count ? count : 1, sizeof(*f->inputs));
+	if (!f->inputs)
+		return scan_fail(err, err_size, -ENOMEM, path, "out of memory");
+	for (size_t n = 0; n < count; n++) {
+		int fd;
+		uint64_t size = 0;
+		int ret = open_regular(dir_fd, names[n], &fd, &size);
+		if (ret == 1)
+			continue; /* replaced since it was listed */
+		if (ret == -EMFILE || ret == -ENFILE)
+			return scan_fail(err, err_size, ret, path, "%zu files: more than this process may open at once",
+					 count);
+		if (ret < 0)
+			return scan_fail(err, err_size, ret, path, "%s: %s", names[n], strerror(-ret));
+		if (size > SCAN_MAX_FILE_BYTES - f->bytes) {
+			close(fd);
+			return scan_fail(err, err_size, -E2BIG, path,
+					 "its files hold more than %" PRIu64 " GiB: not read as one DICOM series",
+					 SCAN_MAX_FILE_BYTES >> 30);
+		}
+		if (add_input(f, path, names[n], fd, size) < 0) {
+			close(fd);
+			return scan_fail(err, err_size, -ENOMEM, path, "out of memory");
+		}
+	}
+	return 0;
+}
+
+static int open_dir(const char *path, struct scan_files *f, char *err, size_t err_size)
+{
+	char **names = NULL;
+	size_t count = 0;
+	int dir_fd = open(path, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+	if (dir_fd < 0)
+		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
+	int ret = list_dir(dir_fd, path, &names, &count, err, err_size);
+	if (ret == 0)
+		ret = open_dir_files(dir_fd, path, names, count, f, err, err_size);
+	for (size_t n = 0; names && n < count; n++)
+		free(names[n]);
+	free(names);
+	close(dir_fd);
+	return ret;
+}
+
+static int open_file(const char *path, struct scan_files *f, char *err, size_t err_size)
+{
+	int fd;
+	uint64_t size = 0;
+	int ret = open_regular(AT_FDCWD, path, &fd, &size);
+	if (ret != 0)
+		return scan_fail(err, err_size, ret < 0 ? ret : -EINVAL, path, "%s",
+				 ret < 0 ? strerror(-ret) : "not a regular file");
+	f->inputs = calloc(1, sizeof(*f->inputs));
+	if (f->inputs)
+		f->inputs[0].path = strdup(path);
+	if (!f->inputs || !f->inputs[0].path) {
+		close(fd);
+		return scan_fail(err, err_size, -ENOMEM, path, "out of memory");
+	}
+	f->inputs[0].fd = fd;
+	f->inputs[0].size = size;
+	f->count = 1;
+	f->bytes = size;
+	return 0;
+}
+
+static int open_by_kind(const char *path, const struct scan_raw *raw, struct scan_files *f, char *err, size_t err_size)
+{
+	struct stat st;
+	if (raw) {
+		f->kind = SCAN_KIND_RAW;
+		return open_file(path, f, err, err_size);
+	}
 	if (stat(path, &st) != 0)
 		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
-	if (S_ISDIR(st.st_mode))
-		return scan_read_dicom(path, out, err, err_size);
-	if (ends_with(path, ".nii") || ends_with(path, ".nii.gz"))
-		return scan_read_nifti(path, out, err, err_size);
+	if (S_ISDIR(st.st_mode)) {
+		f->kind = SCAN_KIND_DICOM;
+		return open_dir(path, f, err, err_size);
+	}
+	if (ends_with(path, ".nii") || ends_with(path, ".nii.gz")) {
+		f->kind = SCAN_KIND_NIFTI;
+		return open_file(path, f, err, err_size);
+	}
 	return scan_fail(err, err_size, -EINVAL, path,
 			 "not a .nii or .nii.gz file or a DICOM directory (a raw file needs its layout)");
 }
 
-int scan_read(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+int scan_open(const char *path, const struct scan_raw *raw, struct scan_files *out, char *err, size_t err_size)
 {
 	memset(out, 0, sizeof(*out));
 	if (err && err_size > 0)
 		err[0] = '\0';
 	if (!path)
 		return scan_fail(err, err_size, -EINVAL, path, "no path");
-	int ret = read_by_kind(path, raw, out, err, err_size);
+	out->path = path;
+	int ret = open_by_kind(path, raw, out, err, err_size);
+	if (ret != 0)
+		scan_close(out);
+	return ret;
+}
+
+void scan_close(struct scan_files *files)
+{
+	for (size_t n = 0; files->inputs && n < files->count; n++) {
+		if (files->inputs[n].fd >= 0)
+			close(files->inputs[n].fd);
+		free(files->inputs[n].path);
+	}
+	free(files->inputs);
+	memset(files, 0, sizeof(*files));
+}
+
+/* ---- reading ---- */
+
+static int read_by_kind(struct scan_files *f, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	switch (f->kind) {
+	case SCAN_KIND_RAW:
+		if (!raw || f->count != 1)
+			break;
+		return scan_read_raw(&f->inputs[0], raw, out, err, err_size);
+	case SCAN_KIND_NIFTI:
+		if (f->count != 1)
+			break;
+		return scan_read_nifti(&f->inputs[0], out, err, err_size);
+	case SCAN_KIND_DICOM:
+		return scan_read_dicom(f->path, f->inputs, f->count, out, err, err_size);
+	}
+	return scan_fail(err, err_size, -EINVAL, f->path, "no files to read");
+}
+
+int scan_read_files(struct scan_files *files, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	memset(out, 0, sizeof(*out));
+	if (err && err_size > 0)
+		err[0] = '\0';
+	int ret = read_by_kind(files, raw, out, err, err_size);
 	if (ret == 0)
-		ret = scan_check(out, path, err, err_size);
+		ret = scan_check(out, files->path, err, err_size);
 	if (ret != 0)
 		scan_free(out);
+	for (size_t n = 0; n < files->count; n++) {
+		if (files->inputs[n].fd >= 0)
+			close(files->inputs[n].fd);
+		files->inputs[n].fd = -1;
+	}
+	return ret;
+}
+
+int scan_read(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
+{
+	struct scan_files files;
+	memset(out, 0, sizeof(*out));
+	int ret = scan_open(path, raw, &files, err, err_size);
+	if (ret == 0)
+		ret = scan_read_files(&files, raw, out, err, err_size);
+	scan_close(&files);
 	return ret;
 }

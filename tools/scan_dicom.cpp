@@ -1,5 +1,6 @@
 /* DICOM series for scan.h: a directory of files, one slice each, read with
- * GDCM (the only C++ of Spindle; scan_dicom.h is its C interface). Each
+ * GDCM (the only C++ of Spindle; scan_dicom.h is its C interface) from
+ * the fds scan_open() opened (tools/scan.c lists the directory). Each
  * file's tags are read up to its pixel data and checked
  * (scan_dicom_read_slice()); the images must all belong to one series and
  * agree in size, pixel spacing, orientation and pixel format. The slices
@@ -17,14 +18,15 @@
 #include <charconv>
 #include <cmath>
 #include <cstring>
-#include <dirent.h>
 #include <exception>
-#include <fstream>
+#include <fcntl.h>
 #include <istream>
 #include <memory>
 #include <new>
+#include <streambuf>
 #include <string>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <vector>
 
 #include <gdcmDataSet.h>
@@ -37,35 +39,90 @@
 namespace
 {
 
-/* A file stream that notes a read cut short by the end of the file: GDCM
- * reads a truncated Pixel Data element, pads it with zeros and says
+/* An open file as a stream for GDCM, read with pread() (nothing is
+ * opened here: in spindlectl's loader the files come open, and open()
+ * fails), seekable. It notes a read cut short by the end of the file:
+ * GDCM reads a truncated Pixel Data element, pads it with zeros and says
  * nothing. A short read of more than 8 bytes (a value, never a tag or a
  * length), or of part of anything, is a truncated file; reading nothing
- * where the next tag would be is its normal end. */
-class truncation_buf : public std::filebuf
+ * where the next tag would be is its normal end. A read error is noted
+ * too (error), and ends the stream. */
+class fd_buf : public std::streambuf
 {
       public:
 	bool cut = false;
+	int error = 0;
+
+	fd_buf(int fd, uint64_t size) : fd_(fd), size_(static_cast<off_type>(size))
+	{
+		setg(buf_, buf_, buf_);
+	}
 
       protected:
+	int_type underflow() override
+	{
+		if (gptr() < egptr())
+			return traits_type::to_int_type(*gptr());
+		off_type at = start_ + (egptr() - eback());
+		ssize_t n;
+		do
+			n = pread(fd_, buf_, sizeof(buf_), static_cast<off_t>(at));
+		while (n < 0 && errno == EINTR);
+		start_ = at;
+		setg(buf_, buf_, buf_ + (n > 0 ? n : 0));
+		if (n < 0)
+			error = errno;
+		return n > 0 ? traits_type::to_int_type(*gptr()) : traits_type::eof();
+	}
+
 	std::streamsize xsgetn(char *s, std::streamsize n) override
 	{
-		std::streamsize got = std::filebuf::xsgetn(s, n);
+		std::streamsize got = std::streambuf::xsgetn(s, n);
 		if (got < n && (got > 0 || n > 8))
 			cut = true;
 		return got;
 	}
+
+	pos_type seekoff(off_type off, std::ios_base::seekdir dir, std::ios_base::openmode which) override
+	{
+		off_type base = dir == std::ios_base::beg   ? 0
+				: dir == std::ios_base::cur ? start_ + (gptr() - eback())
+							    : size_;
+		return seekpos(pos_type(base + off), which);
+	}
+
+	pos_type seekpos(pos_type pos, std::ios_base::openmode which) override
+	{
+		off_type at = static_cast<off_type>(pos);
+		if (!(which & std::ios_base::in) || at < 0)
+			return pos_type(off_type(-1));
+		if (at >= start_ && at <= start_ + (egptr() - eback()))
+			setg(eback(), eback() + (at - start_), egptr());
+		else {
+			start_ = at;
+			setg(buf_, buf_, buf_);
+		}
+		return pos;
+	}
+
+      private:
+	int fd_;
+	off_type size_;
+	off_type start_ = 0; /* the file offset of eback() */
+	char buf_[1 << 16];
 };
 
-/* Opens path into buf and points reader at it: 0 or -errno. */
-int open_file(const char *path, truncation_buf &buf, std::istream &is, gdcm::Reader &reader, char *err, size_t err_size)
+/* Points reader at the file through buf. */
+void use_stream(fd_buf &buf, std::istream &is, gdcm::Reader &reader)
 {
-	errno = 0;
-	if (!buf.open(path, std::ios::in | std::ios::binary))
-		return scan_fail(err, err_size, errno ? -errno : -EIO, path, "%s", strerror(errno ? errno : EIO));
 	is.rdbuf(&buf);
 	reader.SetStream(is);
-	return 0;
+}
+
+/* A read error of the file, if buf met one: -errno with a message. */
+int read_error(const fd_buf &buf, const char *path, char *err, size_t err_size)
+{
+	return buf.error ? scan_fail(err, err_size, -buf.error, path, "%s", strerror(buf.error)) : 0;
 }
 
 /* GDCM says nothing on stderr: every failure is reported here. */
@@ -293,20 +350,22 @@ int check_slice(const tags &t, scan_dicom_slice *out)
 	return ret;
 }
 
-int read_slice(const char *path, scan_dicom_slice *out, char *err, size_t err_size)
+int read_slice(const scan_input &in, scan_dicom_slice *out, char *err, size_t err_size)
 {
 	quiet();
 	gdcm::Reader reader;
-	truncation_buf buf;
+	fd_buf buf(in.fd, in.size);
 	std::istream is(nullptr);
-	int ret = open_file(path, buf, is, reader, err, err_size);
-	if (ret != 0)
+	use_stream(buf, is, reader);
+	bool ok = reader.ReadUpToTag(gdcm::Tag(0x7fe0, 0x0010));
+	if (int ret = read_error(buf, in.path, err, err_size))
 		return ret;
-	if (!reader.ReadUpToTag(gdcm::Tag(0x7fe0, 0x0010)))
-		return scan_fail(err, err_size, -EINVAL, path, "not a DICOM file (GDCM cannot read it)");
+	if (!ok)
+		return scan_fail(err, err_size, -EINVAL, in.path, "not a DICOM file (GDCM cannot read it)");
 	if (buf.cut)
-		return scan_fail(err, err_size, -EINVAL, path, "truncated (an element ends past the end of the file)");
-	return check_slice(tags{ reader.GetFile().GetDataSet(), path, err, err_size }, out);
+		return scan_fail(err, err_size, -EINVAL, in.path,
+				 "truncated (an element ends past the end of the file)");
+	return check_slice(tags{ reader.GetFile().GetDataSet(), in.path, err, err_size }, out);
 }
 
 /* GDCM's image agrees with the tags read before. */
@@ -348,27 +407,28 @@ void take_pixels(const std::vector<char> &buf, const scan_dicom_slice *s, void *
 	}
 }
 
-int read_pixels(const char *path, const scan_dicom_slice *s, void *dst, char *err, size_t err_size)
+int read_pixels(const scan_input &in, const scan_dicom_slice *s, void *dst, char *err, size_t err_size)
 {
 	quiet();
 	gdcm::ImageReader reader;
-	truncation_buf file;
+	fd_buf file(in.fd, in.size);
 	std::istream is(nullptr);
-	int ret = open_file(path, file, is, reader, err, err_size);
-	if (ret != 0)
+	use_stream(file, is, reader);
+	bool ok = reader.Read();
+	if (int ret = read_error(file, in.path, err, err_size))
 		return ret;
-	if (!reader.Read())
-		return scan_fail(err, err_size, -EINVAL, path, "GDCM cannot read the image (damaged?)");
+	if (!ok)
+		return scan_fail(err, err_size, -EINVAL, in.path, "GDCM cannot read the image (damaged?)");
 	if (file.cut)
-		return scan_fail(err, err_size, -EINVAL, path,
+		return scan_fail(err, err_size, -EINVAL, in.path,
 				 "truncated (its pixel data ends past the end of the file)");
 	const gdcm::Image &image = reader.GetImage();
 	size_t n = static_cast<size_t>(s->rows) * s->columns;
 	if (!same_image(image, s) || image.GetBufferLength() != n * (s->bits_allocated / 8))
-		return scan_fail(err, err_size, -EINVAL, path, "the image differs from what its tags said");
+		return scan_fail(err, err_size, -EINVAL, in.path, "the image differs from what its tags said");
 	std::vector<char> buf(image.GetBufferLength());
 	if (!image.GetBuffer(buf.data()))
-		return scan_fail(err, err_size, -EINVAL, path,
+		return scan_fail(err, err_size, -EINVAL, in.path,
 				 "GDCM cannot decode the pixel data (truncated or damaged?)");
 	take_pixels(buf, s, dst, n);
 	return 0;
@@ -377,30 +437,10 @@ int read_pixels(const char *path, const scan_dicom_slice *s, void *dst, char *er
 /* ---- the series ---- */
 
 struct slice_file {
-	std::string path;
+	const scan_input *in;
 	scan_dicom_slice s;
 	double along; /* the position along the slice normal */
 };
-
-/* The regular files of dir whose names do not start with '.', sorted. */
-int list_files(const char *dir, std::vector<std::string> &paths, char *err, size_t err_size)
-{
-	DIR *d = opendir(dir);
-	if (!d)
-		return scan_fail(err, err_size, -errno, dir, "%s", strerror(errno));
-	std::vector<std::string> names;
-	while (struct dirent *e = readdir(d)) {
-		struct stat st;
-		std::string p = std::string(dir) + "/" + e->d_name;
-		if (e->d_name[0] != '.' && stat(p.c_str(), &st) == 0 && S_ISREG(st.st_mode))
-			names.push_back(e->d_name);
-	}
-	closedir(d);
-	std::sort(names.begin(), names.end());
-	for (const std::string &name : names)
-		paths.push_back(std::string(dir) + "/" + name);
-	return 0;
-}
 
 /* b agrees with a in everything but its position and rescale. */
 int check_same(const slice_file &a, const slice_file &b, const char *dir, char *err, size_t err_size)
@@ -408,8 +448,8 @@ int check_same(const slice_file &a, const slice_file &b, const char *dir, char *
 	const scan_dicom_slice &x = a.s, &y = b.s;
 	if (strcmp(x.series, y.series) != 0)
 		return scan_fail(err, err_size, -EINVAL, dir,
-				 "holds more than one series (%s and %s differ in Series Instance UID)", a.path.c_str(),
-				 b.path.c_str());
+				 "holds more than one series (%s and %s differ in Series Instance UID)", a.in->path,
+				 b.in->path);
 	const char *what = nullptr;
 	if (x.rows != y.rows || x.columns != y.columns)
 		what = "Rows and Columns";
@@ -422,19 +462,18 @@ int check_same(const slice_file &a, const slice_file &b, const char *dir, char *
 	else if (scan_dicom_stored(&x) != scan_dicom_stored(&y))
 		what = "pixel format";
 	if (what)
-		return scan_fail(err, err_size, -EINVAL, dir, "%s and %s differ in %s", a.path.c_str(), b.path.c_str(),
-				 what);
+		return scan_fail(err, err_size, -EINVAL, dir, "%s and %s differ in %s", a.in->path, b.in->path, what);
 	return 0;
 }
 
 /* The images of the directory, their tags read and checked. */
-int read_series(const char *dir, std::vector<slice_file> &slices, char *err, size_t err_size)
+int read_series(const char *dir, const scan_input *files, size_t count, std::vector<slice_file> &slices, char *err,
+		size_t err_size)
 {
-	std::vector<std::string> paths;
-	int ret = list_files(dir, paths, err, err_size);
-	for (size_t n = 0; ret == 0 && n < paths.size(); n++) {
-		slice_file f{ paths[n], {}, 0 };
-		int r = read_slice(f.path.c_str(), &f.s, err, err_size);
+	int ret = 0;
+	for (size_t n = 0; ret == 0 && n < count; n++) {
+		slice_file f{ &files[n], {}, 0 };
+		int r = read_slice(files[n], &f.s, err, err_size);
 		if (r < 0)
 			return r;
 		if (r == 0 && !slices.empty())
@@ -464,7 +503,7 @@ int check_gaps(const std::vector<slice_file> &sl, double mean, const char *dir, 
 		if (gap < 1e-3 * sl[0].s.pixel_spacing[0])
 			return scan_fail(err, err_size, -EINVAL, dir,
 					 "%s and %s lie at the same position (more than one acquisition?)",
-					 sl[k - 1].path.c_str(), sl[k].path.c_str());
+					 sl[k - 1].in->path, sl[k].in->path);
 		if (std::fabs(gap - mean) > std::fabs(sl[worst].along - sl[worst - 1].along - mean))
 			worst = k;
 	}
@@ -473,7 +512,7 @@ int check_gaps(const std::vector<slice_file> &sl, double mean, const char *dir, 
 		return scan_fail(err, err_size, -EINVAL, dir,
 				 "slices are not evenly spaced: %.4g mm between %s and %s, %.4g mm on average (a "
 				 "missing slice?)",
-				 gap, sl[worst - 1].path.c_str(), sl[worst].path.c_str(), mean);
+				 gap, sl[worst - 1].in->path, sl[worst].in->path, mean);
 	return 0;
 }
 
@@ -487,7 +526,7 @@ int check_line(const std::vector<slice_file> &sl, const double *step, const char
 			d[a] = sl[k].s.position[a] - (sl[0].s.position[a] + static_cast<double>(k) * step[a]);
 		if (std::sqrt(dot(d, d)) > 0.01 * len)
 			return scan_fail(err, err_size, -EINVAL, dir, "%s lies off the line of the other slices",
-					 sl[k].path.c_str());
+					 sl[k].in->path);
 	}
 	return 0;
 }
@@ -504,7 +543,7 @@ int order(std::vector<slice_file> &sl, double *step, const char *dir, char *err,
 	if (sl.size() == 1) {
 		if (sl[0].s.thickness <= 0)
 			return scan_fail(err, err_size, -EINVAL, dir, "one slice (%s) without a Slice Thickness",
-					 sl[0].path.c_str());
+					 sl[0].in->path);
 		for (int a = 0; a < 3; a++)
 			step[a] = normal[a] * sl[0].s.thickness;
 		return 0;
@@ -550,7 +589,7 @@ int read_volume(const std::vector<slice_file> &sl, scan *out, const char *dir, c
 		return scan_fail(err, err_size, -ENOMEM, dir, "out of memory for %zu bytes", per_slice * sl.size());
 	std::vector<scan_rescale> r(sl.size());
 	for (size_t k = 0; ret == 0 && k < sl.size(); k++) {
-		ret = read_pixels(sl[k].path.c_str(), &sl[k].s, buf.get() + k * per_slice, err, err_size);
+		ret = read_pixels(*sl[k].in, &sl[k].s, buf.get() + k * per_slice, err, err_size);
 		r[k] = sl[k].s.rescale;
 	}
 	if (ret != 0)
@@ -558,11 +597,11 @@ int read_volume(const std::vector<slice_file> &sl, scan *out, const char *dir, c
 	return scan_finish(out, stored, buf.release(), r.data(), static_cast<uint32_t>(r.size()), dir, err, err_size);
 }
 
-int read_dicom(const char *dir, scan *out, char *err, size_t err_size)
+int read_dicom(const char *dir, const scan_input *files, size_t count, scan *out, char *err, size_t err_size)
 {
 	std::vector<slice_file> sl;
 	double step[3];
-	int ret = read_series(dir, sl, err, err_size);
+	int ret = read_series(dir, files, count, sl, err, err_size);
 	if (ret == 0 && sl.size() > SCAN_MAX_DIM)
 		return scan_fail(err, err_size, -E2BIG, dir, "%zu slices: at most %u are read", sl.size(),
 				 SCAN_MAX_DIM);
@@ -600,19 +639,44 @@ extern "C" enum scan_stored scan_dicom_stored(const struct scan_dicom_slice *sli
 	return slice->is_signed ? SCAN_STORED_I16 : SCAN_STORED_U16;
 }
 
+/* path opened for the calls below, which take a scan_input. */
+template <typename F> int on_file(const char *path, char *err, size_t err_size, F f)
+{
+	int fd = open(path, O_RDONLY | O_CLOEXEC | O_NOCTTY | O_NONBLOCK);
+	struct stat st;
+	if (fd < 0)
+		return scan_fail(err, err_size, -errno, path, "%s", strerror(errno));
+	int e = fstat(fd, &st) != 0 ? errno : S_ISREG(st.st_mode) ? 0 : EINVAL;
+	if (e) {
+		close(fd);
+		return scan_fail(err, err_size, -e, path, "%s", e == EINVAL ? "not a regular file" : strerror(e));
+	}
+	scan_input in{ const_cast<char *>(path), fd, static_cast<uint64_t>(st.st_size) };
+	int ret = f(in);
+	close(fd);
+	return ret;
+}
+
 extern "C" int scan_dicom_read_slice(const char *path, struct scan_dicom_slice *out, char *err, size_t err_size)
 {
 	memset(out, 0, sizeof(*out));
-	return guarded(path, err, err_size, [&] { return read_slice(path, out, err, err_size); });
+	return guarded(path, err, err_size, [&] {
+		return on_file(path, err, err_size,
+			       [&](const scan_input &in) { return read_slice(in, out, err, err_size); });
+	});
 }
 
 extern "C" int scan_dicom_read_pixels(const char *path, const struct scan_dicom_slice *slice, void *dst, char *err,
 				      size_t err_size)
 {
-	return guarded(path, err, err_size, [&] { return read_pixels(path, slice, dst, err, err_size); });
+	return guarded(path, err, err_size, [&] {
+		return on_file(path, err, err_size,
+			       [&](const scan_input &in) { return read_pixels(in, slice, dst, err, err_size); });
+	});
 }
 
-extern "C" int scan_read_dicom(const char *path, struct scan *out, char *err, size_t err_size)
+extern "C" int scan_read_dicom(const char *dir, const struct scan_input *files, size_t count, struct scan *out,
+			       char *err, size_t err_size)
 {
-	return guarded(path, err, err_size, [&] { return read_dicom(path, out, err, err_size); });
+	return guarded(dir, err, err_size, [&] { return read_dicom(dir, files, count, out, err, err_size); });
 }

@@ -3,7 +3,8 @@
  * the dimensions, the qform's quaternion and the sform as matrices); the
  * file itself is read here through zlib, which reads an uncompressed file
  * as it is. Only single-file NIfTI (magic "n+1" or "n+2") is read: the
- * .img of a header pair is never opened, and header extensions are
+ * .img of a header pair is never opened (nor anything else: the file
+ * comes open, scan_open() opened it), and header extensions are
  * skipped, not parsed. The voxel data is read into a buffer that grows
  * with what the file holds, so a header that claims more than the file
  * has costs no more memory than the file, and is an error. */
@@ -13,7 +14,6 @@
 #include <nifti2_io.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 #include <zlib.h>
 
 #include "scan_priv.h"
@@ -180,14 +180,13 @@ static int check_dims(const nifti_image *nim, uint32_t dims[3], const char *path
 	return scan_check_dims(path, dims, &voxels, err, err_size);
 }
 
-/* For an uncompressed file, whether it holds the voxels its header says,
- * checked before they are allocated. */
-static int check_file_size(gzFile z, const char *path, uint64_t offset, uint64_t bytes, char *err, size_t err_size)
+/* For an uncompressed file (of have bytes), whether it holds the voxels
+ * its header says, checked before they are allocated. */
+static int check_file_size(gzFile z, uint64_t have, const char *path, uint64_t offset, uint64_t bytes, char *err,
+			   size_t err_size)
 {
-	struct stat st;
-	if (!gzdirect(z) || stat(path, &st) != 0)
+	if (!gzdirect(z))
 		return 0;
-	uint64_t have = (uint64_t)st.st_size;
 	if (offset > have || have - offset < bytes)
 		return scan_fail(err, err_size, -EINVAL, path,
 				 "holds %" PRIu64 " bytes; its header says %" PRIu64
@@ -279,9 +278,10 @@ static const char *orientation(const nifti_image *nim, struct scan *s)
 }
 
 /* The header's checks, and the voxels read (host order) into *buf. */
-static int read_image(gzFile z, const nifti_image *nim, struct scan *out, enum scan_stored *stored, void **buf,
-		      const char *path, char *err, size_t err_size)
+static int read_image(gzFile z, const struct scan_input *in, const nifti_image *nim, struct scan *out,
+		      enum scan_stored *stored, void **buf, char *err, size_t err_size)
 {
+	const char *path = in->path;
 	int ret = check_dims(nim, out->dims, path, err, err_size);
 	if (ret == 0)
 		ret = stored_type(nim->datatype, stored, path, err, err_size);
@@ -294,7 +294,7 @@ static int read_image(gzFile z, const nifti_image *nim, struct scan *out, enum s
 	int64_t offset = nim->iname_offset;
 	if (offset < (int64_t)sizeof(nifti_1_header) || offset > INT32_MAX)
 		return scan_fail(err, err_size, -EINVAL, path, "a voxel offset of %" PRId64, offset);
-	ret = check_file_size(z, path, (uint64_t)offset, bytes, err, err_size);
+	ret = check_file_size(z, in->size, path, (uint64_t)offset, bytes, err, err_size);
 	if (ret == 0 && gzseek(z, (z_off_t)offset, SEEK_SET) != (z_off_t)offset)
 		ret = scan_fail(err, err_size, -EINVAL, path, "ends before its voxels (offset %" PRId64 ")", offset);
 	if (ret == 0)
@@ -305,12 +305,13 @@ static int read_image(gzFile z, const nifti_image *nim, struct scan *out, enum s
 }
 
 /* The volume from the decoded header and the open file. */
-static int read_volume(gzFile z, const nifti_image *nim, int version, struct scan *out, const char *path, char *err,
-		       size_t err_size)
+static int read_volume(gzFile z, const struct scan_input *in, const nifti_image *nim, int version, struct scan *out,
+		       char *err, size_t err_size)
 {
+	const char *path = in->path;
 	enum scan_stored stored = SCAN_STORED_U8;
 	void *buf = NULL;
-	int ret = read_image(z, nim, out, &stored, &buf, path, err, err_size);
+	int ret = read_image(z, in, nim, out, &stored, &buf, err, err_size);
 	if (ret != 0)
 		return ret;
 	const char *how = orientation(nim, out);
@@ -322,18 +323,20 @@ static int read_volume(gzFile z, const nifti_image *nim, int version, struct sca
 	return ret;
 }
 
-int scan_read_nifti(const char *path, struct scan *out, char *err, size_t err_size)
+int scan_read_nifti(struct scan_input *in, struct scan *out, char *err, size_t err_size)
 {
 	nifti_image *nim = NULL;
 	int version = 0;
 	nifti_set_debug_level(0);
-	gzFile z = gzopen(path, "rb");
+	errno = 0;
+	gzFile z = gzdopen(in->fd, "rb");
 	if (!z)
-		return scan_fail(err, err_size, errno ? -errno : -ENOMEM, path, "%s",
+		return scan_fail(err, err_size, errno ? -errno : -ENOMEM, in->path, "%s",
 				 errno ? strerror(errno) : "out of memory");
-	int ret = read_header(z, path, &nim, &version, err, err_size);
+	in->fd = -1; /* zlib's now: gzclose() closes it */
+	int ret = read_header(z, in->path, &nim, &version, err, err_size);
 	if (ret == 0)
-		ret = read_volume(z, nim, version, out, path, err, err_size);
+		ret = read_volume(z, in, nim, version, out, err, err_size);
 	if (nim)
 		nifti_image_free(nim);
 	gzclose(z);

@@ -50,6 +50,8 @@ int scan_check_spacing(const char *path, const double spacing[3], char *err, siz
  * a finite, invertible to_ras with (0, 0, 0, 1) as its last row, and data
  * of the size dims and type give. 0 or -EINVAL. */
 int scan_check(const struct scan *s, const char *path, char *err, size_t err_size);
+/* The same but for the data: a known type, dims, spacing, to_ras. */
+int scan_check_geometry(const struct scan *s, const char *path, char *err, size_t err_size);
 
 /* Reverses the bytes of count units of width bytes (2, 4 or 8). */
 void scan_swap_bytes(void *data, size_t count, size_t width);
@@ -70,11 +72,17 @@ void scan_describe(struct scan *s, const char *format, const char *extra);
 int scan_finish(struct scan *s, enum scan_stored stored, void *buf, const struct scan_rescale *r, uint32_t count,
 		const char *path, char *err, size_t err_size);
 
-/* The readers, called by scan_read() (scan.c) with out zeroed. Each fills
- * in everything but leaves the final checks to scan_read(). */
-int scan_read_raw(const char *path, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size);
-int scan_read_nifti(const char *path, struct scan *out, char *err, size_t err_size);
-int scan_read_dicom(const char *path, struct scan *out, char *err, size_t err_size);
+/* The readers, called by scan_read_files() (scan.c) with out zeroed, on
+ * open files: they read their fds (pread, or read and lseek), and nothing
+ * else of the file system. Each fills in everything but leaves the final
+ * checks to scan_read_files(). The NIfTI reader closes its fd (zlib's
+ * gzclose() does); the others leave them to their caller. */
+int scan_read_raw(const struct scan_input *in, const struct scan_raw *raw, struct scan *out, char *err,
+		  size_t err_size);
+int scan_read_nifti(struct scan_input *in, struct scan *out, char *err, size_t err_size);
+/* dir for messages; its files, sorted by name. */
+int scan_read_dicom(const char *dir, const struct scan_input *files, size_t count, struct scan *out, char *err,
+		    size_t err_size);
 
 #ifdef __cplusplus
 }

@@ -1,5 +1,5 @@
-/* spindlectl: status, show a model file, test patterns, calibration,
- * capture and preview volumes.
+/* spindlectl: status, show a model file or a scan, test patterns,
+ * calibration, capture and preview volumes.
  * main() parses the command line and hands over to one function per
  * command; each returns the process exit status. */
 #include <errno.h>
@@ -27,8 +27,6 @@
 #define SPINDLE_VERSION "unknown"
 #endif
 
-#define FIT_MARGIN 0.95f
-
 static const char usage_text[] =
 	"usage: spindlectl [--socket PATH] COMMAND [ARGS]\n"
 	"\n"
@@ -39,6 +37,14 @@ static const char usage_text[] =
 	"                                  show a model (STL, OBJ, PLY, ...) in its\n"
 	"                                  own colours until SIGINT/SIGTERM; prints\n"
 	"                                  \"shown SEQ\"\n"
+	"  show SCAN [--window C/W | --preset NAME] [--threshold T]\n"
+	"       [--sampling nearest|trilinear] [--color RRGGBB]\n"
+	"                                  show a scan (FILE.nii, FILE.nii.gz, a DICOM\n"
+	"                                  directory) as a volume, superior up;\n"
+	"                                  presets ct-bone, ct-soft, ct-lung, mri\n"
+	"  show FILE --dims XxYxZ --type uint8|uint16|int16|float32|rgba8\n"
+	"       --spacing SX,SY,SZ [--offset N] [--big-endian] [scan options]\n"
+	"                                  show a raw file of samples as a scan\n"
 	"  capture OUT.svol                save the next volume shown\n"
 	"  pattern NAME                    show a test pattern until SIGINT/SIGTERM:\n"
 	"                                  axis, rings, grid-cube, colour-bars,\n"
@@ -235,7 +241,7 @@ static int hold_until_signal(struct spindle *sp, int sfd)
 static int fit_to_device(struct model *m, const struct spindle_device_info *info)
 {
 	struct model_fit fit;
-	int ret = model_compute_fit(m, info->half_height, FIT_MARGIN, &fit);
+	int ret = model_compute_fit(m, info->half_height, CTL_FIT_MARGIN, &fit);
 	if (ret == 0)
 		model_apply_fit(m, &fit);
 	return ret;
@@ -259,11 +265,27 @@ static int announce_and_hold(struct spindle *sp, uint64_t seq)
 	return status;
 }
 
+int ctl_commit_and_hold(struct spindle *sp, const char *what)
+{
+	struct spindle_frame frame;
+	int ret = spindle_commit_and_wait(sp, &frame);
+	if (ret == -EDQUOT || ret == -EACCES || ret == -EBUSY) {
+		fprintf(stderr, "spindlectl: show: the daemon refused the %s: %s\n", what,
+			ret == -EDQUOT  ? "more primitives than this client may show (max-primitives)"
+			: ret == -EBUSY ? "another client's exclusive layer is showing"
+					: "not allowed by the daemon's policy");
+		return CTL_REFUSED;
+	} else if (ret < 0) {
+		ctl_report_failure(sp, "show", ret);
+		return CTL_FAILED;
+	}
+	return announce_and_hold(sp, frame.volume_seq);
+}
+
 static int show_model(struct spindle *sp, struct model *m, const struct ctl_args *a)
 {
 	struct spindle_list *list = NULL;
 	struct spindle_layer *layer = NULL;
-	struct spindle_frame frame;
 	int status = CTL_FAILED;
 
 	int ret = a->no_fit ? 0 : fit_to_device(m, spindle_get_device_info(sp));
@@ -273,21 +295,10 @@ static int show_model(struct spindle *sp, struct model *m, const struct ctl_args
 		return CTL_INPUT;
 	}
 	ret = build_scene(sp, m, a, &list, &layer);
-	if (ret == 0)
-		ret = spindle_commit_and_wait(sp, &frame);
-	if (ret == -EDQUOT || ret == -EACCES || ret == -EBUSY) {
-		fprintf(stderr, "spindlectl: show: the daemon refused the model: %s\n",
-			ret == -EDQUOT  ? "more primitives than this client may show (max-primitives)"
-			: ret == -EBUSY ? "another client's exclusive layer is showing"
-					: "not allowed by the daemon's policy");
-		status = CTL_REFUSED;
-		goto out_destroy;
-	} else if (ret < 0) {
+	if (ret < 0)
 		ctl_report_failure(sp, "show", ret);
-		goto out_destroy;
-	}
-	status = announce_and_hold(sp, frame.volume_seq);
-out_destroy:
+	else
+		status = ctl_commit_and_hold(sp, "model");
 	if (layer)
 		spindle_layer_destroy(layer);
 	if (list)
@@ -299,6 +310,12 @@ static int cmd_show(const struct ctl_args *a)
 {
 	char err[512];
 	int status = CTL_FAILED;
+	if (ctl_is_scan(a))
+		return cmd_show_scan(a);
+	if (ctl_scan_options_given(a))
+		return ctl_usage_error("%s: --window, --preset, --threshold and --sampling go with a scan (FILE.nii, "
+				       "FILE.nii.gz, a DICOM directory, or a raw file with --dims), not a model",
+				       a->operand[0]);
 	model_set_progress(stderr); /* a large model takes seconds */
 	struct model *m = model_load(a->operand[0], err, sizeof(err));
 	if (!m) {
@@ -497,6 +514,15 @@ static const struct option long_options[] = {
 	{ "json", no_argument, NULL, OPT_JSON },
 	{ "save", no_argument, NULL, OPT_SAVE },
 	{ "config", required_argument, NULL, OPT_CONFIG },
+	{ "window", required_argument, NULL, CTL_OPT_WINDOW },
+	{ "preset", required_argument, NULL, CTL_OPT_PRESET },
+	{ "threshold", required_argument, NULL, CTL_OPT_THRESHOLD },
+	{ "sampling", required_argument, NULL, CTL_OPT_SAMPLING },
+	{ "dims", required_argument, NULL, CTL_OPT_DIMS },
+	{ "type", required_argument, NULL, CTL_OPT_TYPE },
+	{ "spacing", required_argument, NULL, CTL_OPT_SPACING },
+	{ "offset", required_argument, NULL, CTL_OPT_OFFSET },
+	{ "big-endian", no_argument, NULL, CTL_OPT_BIG_ENDIAN },
 	{ NULL, 0, NULL, 0 },
 };
 
@@ -533,7 +559,10 @@ static int parse_option(int c, struct ctl_args *a)
 	case OPT_CONFIG:
 		a->config = optarg;
 		return -1;
-	default: /* getopt has said what was wrong */
+	default:
+		if (c >= CTL_OPT_WINDOW && c <= CTL_OPT_SCAN_LAST)
+			return ctl_scan_option(c, optarg, a);
+		/* getopt has said what was wrong */
 		fprintf(stderr, "Try 'spindlectl --help'.\n");
 		return CTL_USAGE;
 	}
@@ -569,6 +598,10 @@ static const struct ctl_command *check_command(const struct ctl_args *a, int *st
 		ctl_usage_error("wrong number of arguments for '%s'", cmd->name);
 	else if ((a->no_fit || a->has_color) && !cmd->show_opts)
 		ctl_usage_error("--no-fit and --color go with 'show', not '%s'", cmd->name);
+	else if (ctl_scan_options_given(a) && !cmd->show_opts)
+		ctl_usage_error("the scan options (--window, --preset, --threshold, --sampling, --dims, ...) go "
+				"with 'show', not '%s'",
+				cmd->name);
 	else if (a->has_size && !cmd->preview_opts)
 		ctl_usage_error("--size goes with 'preview', not '%s'", cmd->name);
 	else if (a->json && !cmd->status_opts)
@@ -589,10 +622,32 @@ static bool is_negative_number(const char *s)
 	return *end == '\0';
 }
 
+/* Whether arg is an option that takes the next argument as its value
+ * (-s PATH, --threshold -500; not --threshold=-500): a long option it
+ * names or abbreviates, as getopt_long() takes them. */
+static bool takes_next(const char *arg)
+{
+	if (!strcmp(arg, "-s"))
+		return true;
+	if (strncmp(arg, "--", 2) != 0 || !arg[2] || strchr(arg, '='))
+		return false;
+	for (const struct option *o = long_options; o->name; o++)
+		if (o->has_arg == required_argument && !strncmp(o->name, arg + 2, strlen(arg + 2)))
+			return true;
+	return false;
+}
+
+/* Whether argv[i] is a negative number that is an operand. */
+static bool negative_operand(char **argv, int i)
+{
+	return is_negative_number(argv[i]) && !(i > 1 && takes_next(argv[i - 1]));
+}
+
 /* A negative number (calibrate axis-offset-v -5) is an operand, not
  * options: such arguments move behind a "--" at the end, in their order,
- * so that getopt leaves them to the operands. Returns argv itself when
- * there is none or the user wrote "--", else a new array to free. */
+ * so that getopt leaves them to the operands; the value of an option
+ * (--threshold -500) stays. Returns argv itself when there is none or the
+ * user wrote "--", else a new array to free. */
 static char **negatives_last(int argc, char **argv, int *out_argc)
 {
 	*out_argc = argc;
@@ -600,18 +655,18 @@ static char **negatives_last(int argc, char **argv, int *out_argc)
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--"))
 			return argv;
-		moved += is_negative_number(argv[i]);
+		moved += negative_operand(argv, i);
 	}
 	char **out = moved ? calloc((size_t)argc + 2, sizeof(*out)) : NULL;
 	if (!out)
 		return argv;
 	int n = 0;
 	for (int i = 0; i < argc; i++)
-		if (i == 0 || !is_negative_number(argv[i]))
+		if (i == 0 || !negative_operand(argv, i))
 			out[n++] = argv[i];
 	out[n++] = "--";
 	for (int i = 1; i < argc; i++)
-		if (is_negative_number(argv[i]))
+		if (negative_operand(argv, i))
 			out[n++] = argv[i];
 	*out_argc = n;
 	return out;
