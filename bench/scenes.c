@@ -21,7 +21,7 @@ struct scene_data {
 	struct bench_orbit *orbits; /* S4: one per draw */
 	double volume_s;            /* seconds per volume, for the animation */
 	int16_t *samples;           /* S5: the grid's samples, its lines' maxima */
-	float *line_max;
+	float *brick_max;
 	struct scene_grid grid; /* and the grid */
 };
 
@@ -226,11 +226,26 @@ static int build_objects(struct bench_scene *s, struct scene_data *d, const stru
 	return 0;
 }
 
-/* S5: a head-like phantom of param^3 int16 samples in Hounsfield-like
- * units (air -1000, a skull shell 1000, brain 40, ventricles 0, two
- * denser spots 80), ellipsoids after the 3-D Shepp-Logan phantom, as one
- * grid draw filling the display (a box of side 1.3 across, 1.8 h high),
- * soft-tissue window (centre 40, width 400), air dark, trilinear. */
+/* S5: a head-like phantom of int16 samples in Hounsfield-like units (air
+ * -1000, a skull shell 1000, brain 40, ventricles 0, two denser spots 80),
+ * ellipsoids after the 3-D Shepp-Logan phantom, as one grid draw fitted to
+ * the display: a box 1.3 across (its diagonal within the cylinder) and as
+ * high as the voxels' aspect makes it, at most 1.8 h. Windows: soft tissue
+ * (centre 40, width 400, air dark) or bone (threshold 300: the skull shell
+ * alone, sparse). param: an entry of grids[]. */
+static const struct grid_scene {
+	uint32_t n[3]; /* samples along x, up, z */
+	double height; /* the box's height, in half heights h */
+	float threshold, lo, hi;
+	uint32_t sampling;
+} grids[] = {
+	{ { 128, 128, 128 }, 1.8, -500, -160, 240, SCENE_TRILINEAR },
+	{ { 256, 256, 256 }, 1.8, -500, -160, 240, SCENE_TRILINEAR },
+	/* CT-sized: 512 x 512 pixels of 0.7 mm, 300 slices of 1 mm. */
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_NEAREST },
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_TRILINEAR },
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, 300, -100, 1700, SCENE_TRILINEAR },
+};
 static const struct {
 	double c[3], r[3], value; /* centre and half axes in -1..1; the value set inside */
 } phantom[] = {
@@ -254,31 +269,37 @@ static int16_t phantom_value(double x, double y, double z)
 static int build_grid(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
 		      const struct bench_files *f, uint32_t param, char *err, size_t err_size)
 {
-	uint32_t n = param;
-	d->samples = malloc((size_t)n * n * n * sizeof(*d->samples));
+	const struct grid_scene *gs = &grids[param];
+	const uint32_t *n = gs->n;
+	d->samples = malloc((size_t)n[0] * n[1] * n[2] * sizeof(*d->samples));
 	if (!d->samples || alloc_draws(s, 1) < 0)
 		return -ENOMEM;
-	/* j (up) fastest: sample (i, j, k) at (k n + i) n + j. */
-	for (uint32_t k = 0; k < n; k++)
-		for (uint32_t i = 0; i < n; i++)
-			for (uint32_t j = 0; j < n; j++) {
-				double x = (i + 0.5) / n * 2 - 1, y = (j + 0.5) / n * 2 - 1, z = (k + 0.5) / n * 2 - 1;
-				d->samples[((size_t)k * n + i) * n + j] = phantom_value(x, y, z);
+	/* j (up) fastest: sample (i, j, k) at (k n0 + i) n1 + j. */
+	for (uint32_t k = 0; k < n[2]; k++)
+		for (uint32_t i = 0; i < n[0]; i++)
+			for (uint32_t j = 0; j < n[1]; j++) {
+				double x = (i + 0.5) / n[0] * 2 - 1, y = (j + 0.5) / n[1] * 2 - 1;
+				double z = (k + 0.5) / n[2] * 2 - 1;
+				d->samples[((size_t)k * n[0] + i) * n[1] + j] = phantom_value(x, y, z);
 			}
-	float sp = 1.0f / (float)n;
-	d->line_max = malloc((size_t)n * n * sizeof(*d->line_max));
-	if (!d->line_max)
+	/* The grid a unit cube; the transform makes it the box. */
+	const float sp[3] = { 1.0f / (float)n[0], 1.0f / (float)n[1], 1.0f / (float)n[2] };
+	d->grid =
+		(struct scene_grid){ SCENE_GRID_I16, { n[0], n[1], n[2] }, { sp[0], sp[1], sp[2] }, d->samples, NULL };
+	d->brick_max = malloc(grid_brick_count(&d->grid) * sizeof(*d->brick_max));
+	if (!d->brick_max)
 		return -ENOMEM;
-	d->grid = (struct scene_grid){ SCENE_GRID_I16, { n, n, n }, { sp, sp, sp }, d->samples, NULL };
-	grid_line_max(&d->grid, d->line_max);
-	d->grid.line_max = d->line_max;
+	grid_brick_max(&d->grid, d->brick_max);
+	d->grid.brick_max = d->brick_max;
 	struct scene_draw *dr = &s->draws[0];
 	set_draw(dr, SCENE_GRID, NULL, 0, colours[6]);
 	dr->grid = &d->grid;
-	dr->transfer = (struct scene_transfer){ .threshold = -500, .lo = -160, .hi = 240, .sampling = SCENE_TRILINEAR };
-	double h = g->half_height;
-	const float m[16] = { 1.3f, 0, 0,    0, 0,      (float)(1.8 * h),  0,      0,
-			      0,    0, 1.3f, 0, -0.65f, (float)(-0.9 * h), -0.65f, 1 };
+	dr->transfer = (struct scene_transfer){ .threshold = gs->threshold,
+						.lo = gs->lo,
+						.hi = gs->hi,
+						.sampling = gs->sampling };
+	double h = g->half_height * gs->height;
+	const float m[16] = { 1.3f, 0, 0, 0, 0, (float)h, 0, 0, 0, 0, 1.3f, 0, -0.65f, (float)(-h / 2), -0.65f, 1 };
 	memcpy(dr->transform, m, sizeof(m));
 	return 0;
 }
@@ -306,7 +327,13 @@ static const struct bench_scene_info scenes[] = {
 	  1000, &impl_objects, 1000 },
 	{ "S5-phantom-128",
 	  "a 128^3 int16 head phantom (ellipsoids) filling the display, soft-tissue window, trilinear", 0, 0, 0, 1,
-	  &impl_grid, 128 },
+	  &impl_grid, 0 },
+	{ "S5-phantom-256", "the same at 256^3", 0, 0, 0, 1, &impl_grid, 1 },
+	{ "S5-ct-nearest", "the phantom as a CT: 512 x 512 x 300 int16 (0.7 x 0.7 x 1 mm), soft tissue, nearest", 0, 0,
+	  0, 1, &impl_grid, 2 },
+	{ "S5-ct-trilinear", "the same, trilinear", 0, 0, 0, 1, &impl_grid, 3 },
+	{ "S5-ct-bone", "the same, trilinear, bone threshold (300 HU: the skull shell alone)", 0, 0, 0, 1, &impl_grid,
+	  4 },
 	{ NULL, NULL, 0, 0, 0, 0, NULL, 0 },
 };
 
@@ -382,7 +409,7 @@ void bench_scene_free(struct bench_scene *s)
 		model_destroy(d->model);
 		free(d->orbits);
 		free(d->samples);
-		free(d->line_max);
+		free(d->brick_max);
 		free(d);
 	}
 	free(s->draws);

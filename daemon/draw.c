@@ -39,7 +39,7 @@ void vgrid_unref(struct vgrid *g)
 	if (!g || --g->refs > 0)
 		return;
 	free(g->samples);
-	free(g->line_max);
+	free(g->brick_max);
 	free(g);
 }
 

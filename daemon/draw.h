@@ -19,10 +19,11 @@
 struct vgrid {
 	unsigned refs;
 	bool gone;
-	uint64_t bytes; /* of samples and line maxima, counted against the budgets */
+	uint64_t id;    /* scene_draw.grid_id: given by the first snapshot that draws it */
+	uint64_t bytes; /* of samples and brick maxima, counted against the budgets */
 	struct scene_grid grid;
-	void *samples;   /* grid.data */
-	float *line_max; /* grid.line_max */
+	void *samples;    /* grid.data */
+	float *brick_max; /* grid.brick_max */
 };
 
 struct vgrid *vgrid_ref(struct vgrid *g);

@@ -33,11 +33,20 @@ struct scene_grid {
 	uint32_t n[3];    /* samples along i, j, k, each >= 1 */
 	float spacing[3]; /* sx, sy, sz: model units between centres, > 0 */
 	const void *data; /* n[0] n[1] n[2] samples, host byte order */
-	/* NULL, or per line (i, k) the largest of its samples (RGBA8: alpha),
-	 * NaN left out, at line_max[k * n[0] + i] (grid_line_max()): a
-	 * renderer skips what stays below a threshold. */
-	const float *line_max;
+	/* NULL, or the largest sample (RGBA8: alpha) of each brick, NaN left
+	 * out: brick b of line (i, k) is samples j = b SCENE_GRID_BRICK .. (b
+	 * + 1) SCENE_GRID_BRICK - 1 (fewer at the top), its maximum at
+	 * brick_max[(k * n[0] + i) * scene_grid_bricks(n[1]) + b]
+	 * (grid_brick_max()): a renderer skips what stays below a threshold. */
+	const float *brick_max;
 };
+
+/* Samples per brick along a grid's up axis; bricks per line of n1. */
+#define SCENE_GRID_BRICK 32u
+static inline uint32_t scene_grid_bricks(uint32_t n1)
+{
+	return (n1 + SCENE_GRID_BRICK - 1) / SCENE_GRID_BRICK;
+}
 
 enum scene_sampling {
 	SCENE_NEAREST = 0,   /* the sample whose box holds the point */
@@ -45,10 +54,10 @@ enum scene_sampling {
 };
 
 /* How a grid's values become colours. Scalar value v (RGBA8: its alpha)
- * below threshold (or not a number) lights nothing; else g = (v - lo) /
- * (hi - lo) clamped to 0..1 picks the colour: the draw's rgb times g
- * (rounded to nearest), or lut entry round(g (lut_count - 1)). An RGBA8
- * sample is its own colour times its alpha. */
+ * below threshold (or not a number) lights nothing; else g = (v - lo) (1
+ * / (hi - lo)), in float, clamped to 0..1 picks the colour: the draw's rgb
+ * times g (rounded to nearest), or lut entry round(g (lut_count - 1)). An
+ * RGBA8 sample is its own colour times its alpha. */
 struct scene_transfer {
 	float threshold;
 	float lo, hi;       /* lo < hi: the window */
@@ -77,6 +86,13 @@ struct scene_draw {
 				  * immutable while the scene lives */
 	const struct scene_grid *grid;  /* SCENE_GRID: the grid, and how */
 	struct scene_transfer transfer; /* its values show */
+	/* SCENE_GRID: a number naming the grid for the daemon's life, never
+	 * reused (snapshot.c), by which a renderer keeps what it made of the
+	 * grid from one render to the next (the GL renderers' textures); 0:
+	 * none (tests, the benchmark), and the grid is known by its address,
+	 * its data's and its size, which the caller must not give another
+	 * grid while the renderer may still hold the first (render_gl.h). */
+	uint64_t grid_id;
 };
 
 /* A draw with turn m lights, in volume image k, exactly what it would light

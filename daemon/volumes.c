@@ -35,21 +35,49 @@ static uint32_t sample_bytes(uint32_t type)
 }
 
 /* Sample (x, y, z) of src (x fastest, little-endian) to the grid's layout
- * (y fastest): sample (x, y, z) at (z nx + x) ny + y. */
+ * (y fastest): sample (x, y, z) at (z nx + x) ny + y. Each z slice is a
+ * transpose, done in tiles of RELAYOUT_TILE squared samples so that both
+ * sides stay in cache; src may be unaligned (a client's offset), hence
+ * memcpy(); byte-swapped (a big-endian host) one byte at a time. */
+#define RELAYOUT_TILE 32
+#define TRANSPOSE(T)                                                                                       \
+	static void transpose_##T(T *dst, const uint8_t *src, uint32_t nx, uint32_t ny)                    \
+	{                                                                                                  \
+		for (uint32_t y0 = 0; y0 < ny; y0 += RELAYOUT_TILE)                                        \
+			for (uint32_t x0 = 0; x0 < nx; x0 += RELAYOUT_TILE) {                              \
+				uint32_t y1 = y0 + RELAYOUT_TILE < ny ? y0 + RELAYOUT_TILE : ny;           \
+				uint32_t x1 = x0 + RELAYOUT_TILE < nx ? x0 + RELAYOUT_TILE : nx;           \
+				for (uint32_t x = x0; x < x1; x++)                                         \
+					for (uint32_t y = y0; y < y1; y++)                                 \
+						memcpy(&dst[(size_t)x * ny + y],                           \
+						       src + ((size_t)y * nx + x) * sizeof(T), sizeof(T)); \
+			}                                                                                  \
+	}
+TRANSPOSE(uint8_t)
+TRANSPOSE(uint16_t)
+TRANSPOSE(uint32_t)
+#undef TRANSPOSE
+
 static void relayout(void *dst, const uint8_t *src, const uint32_t n[3], uint32_t size, bool swap)
 {
-	uint8_t *out = dst;
-	for (uint64_t z = 0; z < n[2]; z++)
-		for (uint64_t y = 0; y < n[1]; y++)
-			for (uint64_t x = 0; x < n[0]; x++, src += size) {
-				uint8_t *d = out + ((z * n[0] + x) * n[1] + y) * size;
-				if (!swap) {
-					memcpy(d, src, size);
-				} else {
+	size_t slice = (size_t)n[0] * n[1];
+	for (uint64_t z = 0; z < n[2]; z++) {
+		uint8_t *out = (uint8_t *)dst + z * slice * size;
+		const uint8_t *in = src + z * slice * size;
+		if (swap) {
+			for (uint64_t y = 0; y < n[1]; y++)
+				for (uint64_t x = 0; x < n[0]; x++)
 					for (uint32_t b = 0; b < size; b++)
-						d[b] = src[size - 1 - b];
-				}
-			}
+						out[(x * n[1] + y) * size + b] =
+							in[(y * n[0] + x) * size + size - 1 - b];
+		} else if (size == 1) {
+			transpose_uint8_t(out, in, n[0], n[1]);
+		} else if (size == 2) {
+			transpose_uint16_t((uint16_t *)(void *)out, in, n[0], n[1]);
+		} else {
+			transpose_uint32_t((uint32_t *)(void *)out, in, n[0], n[1]);
+		}
+	}
 }
 
 /* The arguments' sizes and spacing; the sample bytes in *bytes. */
@@ -72,23 +100,23 @@ static int check_shape(struct client *c, const struct proto_display_create_volum
 	if (samples > VOLUME_MAX_SAMPLES)
 		return client_fail(c, 1, PROTO_ERR_VALUE, "create_volume: %llu samples (at most 2^31)",
 				   (unsigned long long)samples);
-	/* The samples, and the maximum of each vertical line of them. */
-	*bytes = samples * size + (uint64_t)n[0] * n[2] * sizeof(float);
+	/* The samples, and the maximum of each brick of them. */
+	*bytes = samples * size + (uint64_t)n[0] * n[2] * scene_grid_bricks(n[1]) * sizeof(float);
 	return 0;
 }
 
 /* The grid of a's samples, read from src: laid out for the renderers and
- * its lines' maxima made (bytes: both together). NULL when out of memory. */
+ * its bricks' maxima made (bytes: both together). NULL when out of memory. */
 static struct vgrid *vgrid_build(const struct proto_display_create_volume_args *a, const uint8_t *src, uint64_t bytes)
 {
 	struct vgrid *g = calloc(1, sizeof(*g));
-	uint64_t lines = (uint64_t)a->nx * a->nz;
-	void *samples = malloc(bytes - lines * sizeof(float));
-	float *line_max = malloc(lines * sizeof(float));
-	if (!g || !samples || !line_max) {
+	uint64_t bricks = (uint64_t)a->nx * a->nz * scene_grid_bricks(a->ny);
+	void *samples = malloc(bytes - bricks * sizeof(float));
+	float *brick_max = malloc(bricks * sizeof(float));
+	if (!g || !samples || !brick_max) {
 		free(g);
 		free(samples);
-		free(line_max);
+		free(brick_max);
 		return NULL;
 	}
 	const uint32_t n[3] = { a->nx, a->ny, a->nz };
@@ -98,11 +126,11 @@ static struct vgrid *vgrid_build(const struct proto_display_create_volume_args *
 	*g = (struct vgrid){
 		.refs = 1,
 		.bytes = bytes,
-		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, line_max },
+		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, brick_max },
 		.samples = samples,
-		.line_max = line_max,
+		.brick_max = brick_max,
 	};
-	grid_line_max(&g->grid, line_max);
+	grid_brick_max(&g->grid, brick_max);
 	return g;
 }
 

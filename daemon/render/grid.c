@@ -1,10 +1,13 @@
 #include "grid.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "brightness.h"
 #include "geometry.h"
+#include "grid_column.h"
+#include "grid_tiles.h"
 
 /* Whether the grid's up axis is the display's: f_x and f_z do not change
  * along a pixel column, nor f_y along a row. */
@@ -50,7 +53,9 @@ bool grid_prepare(struct grid_job *job, const struct scene_draw *d)
 	}
 	job->upright = upright(job);
 	job->reference = false;
+	job->columns = false;
 	job->colours = NULL;
+	job->rows = NULL;
 	return true;
 }
 
@@ -78,9 +83,37 @@ static float value_at(const struct scene_grid *g, uint32_t i, uint32_t j, uint32
 	return NAN;
 }
 
-static uint32_t clamp_index(int64_t i, uint32_t n)
+/* Trilinear mixing, in the one order every path uses: along x, then z,
+ * at each of the two rows j[0] and j[1], then along y between them (the
+ * upright path mixes each column's lines once and reuses them for every
+ * row: the same operations on the same values, so the same result). */
+static float trilinear_scalar(const struct scene_grid *g, const uint32_t i[2], const uint32_t j[2], const uint32_t k[2],
+			      const float t[3])
 {
-	return i < 0 ? 0 : i >= (int64_t)n ? n - 1 : (uint32_t)i;
+	float c[2], rgba[4];
+	for (int b = 0; b < 2; b++) {
+		float x0 = lerp(value_at(g, i[0], j[b], k[0], rgba), value_at(g, i[1], j[b], k[0], rgba), t[0]);
+		float x1 = lerp(value_at(g, i[0], j[b], k[1], rgba), value_at(g, i[1], j[b], k[1], rgba), t[0]);
+		c[b] = lerp(x0, x1, t[2]);
+	}
+	return lerp(c[0], c[1], t[1]);
+}
+
+/* The same for each channel of an RGBA8 grid; the value is the alpha's. */
+static float trilinear_rgba(const struct scene_grid *g, const uint32_t i[2], const uint32_t j[2], const uint32_t k[2],
+			    const float t[3], float rgba[4])
+{
+	float s[2][2][2][4];
+	for (int b = 0; b < 8; b++)
+		value_at(g, i[b & 1], j[(b >> 1) & 1], k[b >> 2], s[b >> 2][(b >> 1) & 1][b & 1]);
+	for (int ch = 0; ch < 4; ch++) {
+		float c[2];
+		for (int b = 0; b < 2; b++)
+			c[b] = lerp(lerp(s[0][b][0][ch], s[0][b][1][ch], t[0]),
+				    lerp(s[1][b][0][ch], s[1][b][1][ch], t[0]), t[2]);
+		rgba[ch] = lerp(c[0], c[1], t[1]);
+	}
+	return rgba[3];
 }
 
 /* The sample at f: nearest, or trilinear with the edge samples repeated. */
@@ -90,31 +123,20 @@ static float sample_at(const struct scene_draw *d, const double f[3], float rgba
 	if (d->transfer.sampling != SCENE_TRILINEAR) {
 		uint32_t i[3];
 		for (int a = 0; a < 3; a++)
-			i[a] = clamp_index((int64_t)floor(f[a] + 0.5), g->n[a]);
+			i[a] = grid_clamp_index((int64_t)floor(f[a] + 0.5), g->n[a]);
 		return value_at(g, i[0], i[1], i[2], rgba);
 	}
-	int64_t i0[3];
+	uint32_t idx[3][2];
 	float t[3];
 	for (int a = 0; a < 3; a++) {
 		double fl = floor(f[a]);
-		i0[a] = (int64_t)fl;
 		t[a] = (float)(f[a] - fl);
+		idx[a][0] = grid_clamp_index((int64_t)fl, g->n[a]);
+		idx[a][1] = grid_clamp_index((int64_t)fl + 1, g->n[a]);
 	}
-	float v = 0.0f, acc[4] = { 0 };
-	for (int corner = 0; corner < 8; corner++) {
-		float w = 1.0f, c4[4] = { 0 };
-		uint32_t i[3];
-		for (int a = 0; a < 3; a++) {
-			int bit = (corner >> a) & 1;
-			w *= bit ? t[a] : 1.0f - t[a];
-			i[a] = clamp_index(i0[a] + bit, g->n[a]);
-		}
-		v += w * value_at(g, i[0], i[1], i[2], c4);
-		for (int c = 0; c < 4; c++)
-			acc[c] += w * c4[c];
-	}
-	memcpy(rgba, acc, sizeof(acc));
-	return v;
+	if (g->type == SCENE_GRID_RGBA8)
+		return trilinear_rgba(g, idx[0], idx[1], idx[2], t, rgba);
+	return trilinear_scalar(g, idx[0], idx[1], idx[2], t);
 }
 
 /* The colour of sample value v (and rgba, for an RGBA8 grid) by d's
@@ -128,7 +150,7 @@ static bool transfer(const struct scene_draw *d, float v, const float rgba[4], u
 		for (int c = 0; c < 3; c++)
 			out[c] = (uint8_t)(rgba[c] * rgba[3] / 255.0f + 0.5f);
 	} else {
-		float g = (v - tf->lo) / (tf->hi - tf->lo);
+		float g = (v - tf->lo) * (1.0f / (tf->hi - tf->lo)); /* scene.h: a reciprocal, as vectors do it */
 		g = g > 0.0f ? (g < 1.0f ? g : 1.0f) : 0.0f;
 		if (tf->lut) {
 			const uint8_t *e = tf->lut + 3 * (uint32_t)(g * (float)(tf->lut_count - 1) + 0.5f);
@@ -170,17 +192,85 @@ void grid_colours(const struct scene_draw *d, uint8_t *out)
 		out[3] = transfer(d, base + (float)i, none, out);
 }
 
-void grid_line_max(const struct scene_grid *g, float *out)
+void grid_brick_max(const struct scene_grid *g, float *out)
 {
-	for (uint32_t k = 0; k < g->n[2]; k++)
-		for (uint32_t i = 0; i < g->n[0]; i++) {
-			float mx = -INFINITY, rgba[4];
-			for (uint32_t j = 0; j < g->n[1]; j++) {
-				float v = value_at(g, i, j, k, rgba);
-				mx = v > mx ? v : mx; /* NaN never wins: it lights nothing */
-			}
-			out[(size_t)k * g->n[0] + i] = mx;
+	uint32_t nb = scene_grid_bricks(g->n[1]), n1 = g->n[1];
+	size_t lines = (size_t)g->n[0] * g->n[2];
+	/* Line by line, as the samples lie: NaN never wins (it lights nothing). */
+#define BRICKS(T, STEP, VALUE)                                                                                    \
+	do {                                                                                                      \
+		const T *p = (const T *)g->data;                                                                  \
+		for (size_t l = 0; l < lines; l++, p += (size_t)n1 * STEP)                                        \
+			for (uint32_t b = 0; b < nb; b++) {                                                       \
+				float mx = -INFINITY;                                                             \
+				uint32_t end = (b + 1) * SCENE_GRID_BRICK < n1 ? (b + 1) * SCENE_GRID_BRICK : n1; \
+				for (uint32_t j = b * SCENE_GRID_BRICK; j < end; j++) {                           \
+					float v = VALUE;                                                          \
+					mx = v > mx ? v : mx;                                                     \
+				}                                                                                 \
+				*out++ = mx;                                                                      \
+			}                                                                                         \
+	} while (0)
+	switch (g->type) {
+	case SCENE_GRID_U8:
+		BRICKS(uint8_t, 1, (float)p[j]);
+		break;
+	case SCENE_GRID_U16:
+		BRICKS(uint16_t, 1, (float)p[j]);
+		break;
+	case SCENE_GRID_I16:
+		BRICKS(int16_t, 1, (float)p[j]);
+		break;
+	case SCENE_GRID_F32:
+		BRICKS(float, 1, p[j]);
+		break;
+	case SCENE_GRID_RGBA8: /* the alpha */
+		BRICKS(uint8_t, 4, (float)p[4 * j + 3]);
+		break;
+	}
+#undef BRICKS
+}
+
+bool grid_prepare_rows(struct grid_job *job, const struct geometry *g)
+{
+	job->rows = NULL;
+	if (!job->upright)
+		return true;
+	struct grid_rows *r = malloc(sizeof(*r) + (size_t)g->height * sizeof(r->row[0]));
+	if (!r)
+		return false;
+	const struct scene_grid *gr = job->draw->grid;
+	bool tri = job->draw->transfer.sampling == SCENE_TRILINEAR;
+	double h = g->half_height;
+	r->v0 = g->height;
+	r->v1 = 0;
+	for (uint32_t v = 0; v < g->height; v++) {
+		/* What the reference loop computes for f_y: the row's part (the
+		 * column's, s lin[1] d, is 0 for an upright grid). */
+		double y = h - (v + 0.5) * 2.0 * h / g->height, fy = job->off[1] + y * job->lin[1][1];
+		struct grid_row *row = &r->row[v];
+		*row = (struct grid_row){ 0, 0, 0.0f };
+		if (!(fy >= -0.5 && fy < gr->n[1] - 0.5))
+			continue;
+		r->v0 = v < r->v0 ? v : r->v0;
+		r->v1 = v + 1;
+		if (!tri) {
+			row->j0 = row->j1 = grid_clamp_index((int64_t)floor(fy + 0.5), gr->n[1]);
+			continue;
 		}
+		double ly = floor(fy);
+		row->t = (float)(fy - ly);
+		row->j0 = grid_clamp_index((int64_t)ly, gr->n[1]);
+		row->j1 = grid_clamp_index((int64_t)ly + 1, gr->n[1]);
+	}
+	job->rows = r;
+	return true;
+}
+
+void grid_job_finish(struct grid_job *job)
+{
+	free(job->rows);
+	job->rows = NULL;
 }
 
 /* The columns of row v (plane point base + s dirs) whose centres may lie in
@@ -209,49 +299,6 @@ static bool columns_of(const struct grid_job *job, const double base[3], const d
 	return *u0 <= *u1;
 }
 
-/* One pixel column of an upright grid: the one line (nearest) or four
- * lines (trilinear) of samples it reads, with what sample_at() works out
- * per axis for x and z, done once. */
-struct column {
-	uint32_t i[2], k[2]; /* sample indices (clamped), the second of each pair for trilinear */
-	float tx, tz;        /* trilinear weights along x and z */
-	size_t line[4];      /* trilinear: where line (i[b & 1], k[b >> 1]) starts */
-};
-
-static void column_setup(struct column *col, const struct scene_grid *gr, double fx, double fz, bool tri)
-{
-	if (!tri) {
-		col->i[0] = clamp_index((int64_t)floor(fx + 0.5), gr->n[0]);
-		col->k[0] = clamp_index((int64_t)floor(fz + 0.5), gr->n[2]);
-		return;
-	}
-	double lx = floor(fx), lz = floor(fz);
-	col->tx = (float)(fx - lx);
-	col->tz = (float)(fz - lz);
-	for (int b = 0; b < 2; b++) {
-		col->i[b] = clamp_index((int64_t)lx + b, gr->n[0]);
-		col->k[b] = clamp_index((int64_t)lz + b, gr->n[2]);
-	}
-	for (int b = 0; b < 4; b++)
-		col->line[b] = ((size_t)col->k[b >> 1] * gr->n[0] + col->i[b & 1]) * gr->n[1];
-}
-
-/* Whether every sample the column reads is below the threshold, from the
- * lines' maxima (NULL: not known). Trilinear mixes may round a hair above
- * their largest sample: a margin of 1e-5 of it. */
-static bool column_dark(const struct column *col, const struct scene_grid *gr, const struct scene_transfer *tf,
-			bool tri)
-{
-	if (!gr->line_max)
-		return false;
-	float mx = -INFINITY;
-	for (int b = 0; b < (tri ? 4 : 1); b++) {
-		float v = gr->line_max[(size_t)col->k[b >> 1] * gr->n[0] + col->i[b & 1]];
-		mx = v > mx ? v : mx;
-	}
-	return (double)mx + fabs((double)mx) * 1e-5 < tf->threshold;
-}
-
 /* Sample at of a u8, u16 or i16 grid as an index of its colour table. */
 static inline size_t sample_index(const struct scene_grid *gr, size_t at)
 {
@@ -265,55 +312,6 @@ static inline size_t sample_index(const struct scene_grid *gr, size_t at)
 	}
 }
 
-/* Sample at of a scalar grid, as a number. */
-static inline float scalar_at(uint32_t type, const void *data, size_t at)
-{
-	switch (type) {
-	case SCENE_GRID_U8:
-		return ((const uint8_t *)data)[at];
-	case SCENE_GRID_U16:
-		return ((const uint16_t *)data)[at];
-	case SCENE_GRID_I16:
-		return ((const int16_t *)data)[at];
-	default:
-		return ((const float *)data)[at];
-	}
-}
-
-/* sample_at() for the point at f_y on the column: the same operations in
- * the same order, so the same value; a scalar grid's samples read straight
- * from its lines (the colour sums of RGBA8 left out: they stay 0). */
-static float column_sample(const struct column *col, const struct scene_grid *gr, double fy, bool tri, float rgba[4])
-{
-	if (!tri)
-		return value_at(gr, col->i[0], clamp_index((int64_t)floor(fy + 0.5), gr->n[1]), col->k[0], rgba);
-	double ly = floor(fy);
-	float t[3] = { col->tx, (float)(fy - ly), col->tz };
-	uint32_t j[2] = { clamp_index((int64_t)ly, gr->n[1]), clamp_index((int64_t)ly + 1, gr->n[1]) };
-	float v = 0.0f;
-	if (gr->type != SCENE_GRID_RGBA8) {
-		for (int corner = 0; corner < 8; corner++) {
-			float w = 1.0f;
-			for (int a = 0; a < 3; a++)
-				w *= (corner >> a) & 1 ? t[a] : 1.0f - t[a];
-			size_t at = col->line[(corner & 1) | (corner >> 2) << 1] + j[(corner >> 1) & 1];
-			v += w * scalar_at(gr->type, gr->data, at);
-		}
-		return v;
-	}
-	float acc[4] = { 0 };
-	for (int corner = 0; corner < 8; corner++) {
-		float w = 1.0f, c4[4] = { 0 };
-		for (int a = 0; a < 3; a++)
-			w *= (corner >> a) & 1 ? t[a] : 1.0f - t[a];
-		v += w * value_at(gr, col->i[corner & 1], j[(corner >> 1) & 1], col->k[corner >> 2], c4);
-		for (int ch = 0; ch < 4; ch++)
-			acc[ch] += w * c4[ch];
-	}
-	memcpy(rgba, acc, sizeof(acc));
-	return v;
-}
-
 /* Lights pixel (out, v) with rgb, weighted by m where it is active. */
 static void light(struct section_canvas *c, const struct brightness_map *m, uint32_t out, uint32_t v, uint8_t rgb[3])
 {
@@ -325,47 +323,108 @@ static void light(struct section_canvas *c, const struct brightness_map *m, uint
 	section_pixel(c, out, v, rgb);
 }
 
+/* Where pixel column u of c starts (row 0), and the step to the next
+ * tile row. */
+struct canvas_column {
+	uint8_t *base;
+	uint32_t *rows;
+	size_t tile_step;
+	uint32_t rows_step;
+};
+
+static inline void column_pixel(const struct canvas_column *cc, uint32_t v, const uint8_t rgb[3])
+{
+	uint8_t *px = cc->base + (v / VOLUME_TILE) * cc->tile_step + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES;
+	for (int i = 0; i < 3; i++)
+		if (px[i * HALFTONE_PLANE_BYTES] < rgb[i])
+			px[i * HALFTONE_PLANE_BYTES] = rgb[i];
+	cc->rows[(v / VOLUME_TILE) * cc->rows_step] |= 1u << (v % VOLUME_TILE);
+}
+
+/* Lights pixel v of column cc (u = out) with rgb, weighted by m where it
+ * is active: light() on the column. */
+static void column_light(struct section_canvas *c, const struct canvas_column *cc, const struct brightness_map *m,
+			 uint32_t out, uint32_t v, uint8_t rgb[3])
+{
+	if (m) {
+		light(c, m, out, v, rgb);
+		return;
+	}
+	column_pixel(cc, v, rgb);
+}
+
 /* An upright grid, column by column: each column's x and z once, its
- * samples down one run of memory per line, and columns whose lines stay
- * below the threshold skipped. The same pixels and colours as the
- * reference loop below, which computes every pixel's f the same way. */
-static void draw_upright(struct section_canvas *c, const struct grid_job *job, const double dir[3], const double up[3],
-			 bool mirror, const struct brightness_map *m)
+ * lines mixed along x and z once (trilinear) and then read by every row
+ * through the rows' table, bricks whose samples stay below the threshold
+ * skipped. The same pixels and colours as the reference loop below, which
+ * computes every pixel's f the same way. */
+static void draw_upright(struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror,
+			 const struct brightness_map *m)
 {
 	const struct geometry *g = &c->geom;
 	const struct scene_draw *d = job->draw;
 	const struct scene_grid *gr = d->grid;
+	const struct grid_rows *rows = job->rows;
 	bool tri = d->transfer.sampling == SCENE_TRILINEAR;
-	double h = g->half_height, y0 = h - 0.5 * 2.0 * h / g->height;
-	/* up[0] = up[2] = 0: every row's base for x and z is row 0's. */
-	double bx = job->off[0] + y0 * up[0], bz = job->off[2] + y0 * up[2];
+	if (rows->v0 >= rows->v1)
+		return;
+	/* The samples the rows read, and their bricks. */
+	uint32_t ja = rows->row[rows->v0].j0, jb = rows->row[rows->v1 - 1].j0;
+	uint32_t jlo = ja < jb ? ja : jb, jhi = rows->row[rows->v0].j1;
+	jhi = rows->row[rows->v1 - 1].j1 > jhi ? rows->row[rows->v1 - 1].j1 : jhi;
+	uint32_t b0 = jlo / SCENE_GRID_BRICK, b1 = jhi / SCENE_GRID_BRICK;
+	bool dark[4096 / SCENE_GRID_BRICK + 1];
+	float mixed[4096];
+	/* up[0] = up[2] = 0: every row's x and z are row 0's. */
+	double bx = job->off[0], bz = job->off[2];
 	for (uint32_t u = 0; u < g->width; u++) {
 		double s = (u + 0.5) * 2.0 / g->width - 1.0, fx = bx + s * dir[0], fz = bz + s * dir[2];
 		if (!(fx >= -0.5 && fx < gr->n[0] - 0.5 && fz >= -0.5 && fz < gr->n[2] - 0.5))
 			continue;
-		struct column col = { 0 };
-		column_setup(&col, gr, fx, fz, tri);
-		if (column_dark(&col, gr, &d->transfer, tri))
+		struct column col;
+		grid_column_setup(&col, gr, fx, fz, tri);
+		if (grid_column_dark(&col, gr, &d->transfer, b0, b1, dark))
 			continue;
+		if (tri && gr->type != SCENE_GRID_RGBA8) /* the bricks rows read: lit ones and their neighbours */
+			for (uint32_t b = b0; b <= b1; b++)
+				if (!dark[b] || (b > b0 && !dark[b - 1]) || (b < b1 && !dark[b + 1])) {
+					uint32_t j0 = b * SCENE_GRID_BRICK, j1 = j0 + SCENE_GRID_BRICK - 1;
+					j0 = j0 > jlo ? j0 : jlo;
+					grid_column_mix(&col, gr, j0, j1 < jhi ? j1 : jhi, mixed + j0, 1);
+				}
 		uint32_t out = mirror ? g->width - 1 - u : u;
-		for (uint32_t v = 0; v < g->height; v++) {
-			double y = h - (v + 0.5) * 2.0 * h / g->height, fy = (job->off[1] + y * up[1]) + s * dir[1];
-			if (!(fy >= -0.5 && fy < gr->n[1] - 0.5))
+		uint32_t tu = out / VOLUME_TILE;
+		struct canvas_column cc = {
+			c->rgb + (size_t)tu * HALFTONE_TILE_BYTES + halftone_pos(out % VOLUME_TILE),
+			c->rows + tu,
+			(size_t)c->tiles_x * HALFTONE_TILE_BYTES,
+			c->tiles_x,
+		};
+		for (uint32_t v = rows->v0; v < rows->v1; v++) {
+			const struct grid_row *r = &rows->row[v];
+			if (dark[r->j0 / SCENE_GRID_BRICK] && dark[r->j1 / SCENE_GRID_BRICK])
 				continue;
 			if (job->colours) { /* nearest: the value's colour, looked up */
-				size_t at = ((size_t)col.k[0] * gr->n[0] + col.i[0]) * gr->n[1] +
-					    clamp_index((int64_t)floor(fy + 0.5), gr->n[1]);
-				const uint8_t *e = job->colours + 4 * sample_index(gr, at);
+				const uint8_t *e = job->colours + 4 * sample_index(gr, col.line[0] + r->j0);
 				if (e[3]) {
 					uint8_t rgb[3] = { e[0], e[1], e[2] };
-					light(c, m, out, v, rgb);
+					column_light(c, &cc, m, out, v, rgb);
 				}
 				continue;
 			}
-			float rgba[4] = { 0 };
+			float rgba[4] = { 0 }, val;
+			if (!tri) {
+				val = value_at(gr, col.i[0], r->j0, col.k[0], rgba);
+			} else if (gr->type != SCENE_GRID_RGBA8) {
+				val = lerp(mixed[r->j0], mixed[r->j1], r->t);
+			} else {
+				col.t[1] = r->t;
+				const uint32_t j[2] = { r->j0, r->j1 };
+				val = trilinear_rgba(gr, col.i, j, col.k, col.t, rgba);
+			}
 			uint8_t rgb[3];
-			if (transfer(d, column_sample(&col, gr, fy, tri, rgba), rgba, rgb))
-				light(c, m, out, v, rgb);
+			if (transfer(d, val, rgba, rgb))
+				column_light(c, &cc, m, out, v, rgb);
 		}
 	}
 }
@@ -382,8 +441,10 @@ void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint3
 		up[a] = job->lin[a][1];
 	}
 	const struct brightness_map *m = c->bright && brightness_active(c->bright) ? c->bright : NULL;
-	if (job->upright && !job->reference) {
-		draw_upright(c, job, dir, up, mirror, m);
+	if (job->upright && job->rows && !job->reference) {
+		if (grid_draw_tiles(c, job, dir, mirror, m))
+			return;
+		draw_upright(c, job, dir, mirror, m);
 		return;
 	}
 	double h = g->half_height;

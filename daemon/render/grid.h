@@ -1,36 +1,34 @@
 /* Grids (scene.h, SCENE_GRID) on the CPU renderer: each image samples a
  * grid at the centre of every pixel whose centre lies in the grid's box,
- * where the image's slice plane crosses it (docs/rendering.md, "Grids").
- * This is the scalar reference path: a sample is the grid's value at the
- * pixel centre's place in the grid, by nearest or trilinear sampling, made
- * a colour by the draw's transfer function, weighted by the brightness
- * model as a surface crossing the slices is, and combined by MAX. */
+ * where the image's slice plane crosses it (docs/rendering.md, "Grids"):
+ * the grid's value at the pixel centre's place in the grid, by nearest or
+ * trilinear sampling, made a colour by the draw's transfer function,
+ * weighted by the brightness model as a surface crossing the slices is,
+ * and combined by MAX. Three paths light the same bytes: the reference
+ * loop (any transform, pixel by pixel); for a grid whose up axis is the
+ * display's, the column path (each pixel column's lines once, the rows
+ * through a table, bricks below the threshold skipped) and the tile path
+ * (grid_tiles.h: RGBA8 aside, 32 columns at a time, rows in vectors). */
 #ifndef SPINDLE_GRID_H
 #define SPINDLE_GRID_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "grid_column.h"
 #include "scene.h"
 #include "section.h"
-
-/* One grid draw, prepared once per render: volume space to the grid's
- * voxel coordinates (voxel (i, j, k) centred at integers), an affine map
- * f = lin p + off. */
-struct grid_job {
-	const struct scene_draw *draw;
-	double lin[3][3], off[3];
-	bool upright;   /* the grid's up axis is the display's: column by column */
-	bool reference; /* draw by the reference loop anyway (tests) */
-	/* NULL, or (nearest sampling of u8, u16 or i16 samples) each value's
-	 * colour by the transfer, 4 bytes R, G, B, lit; at value + 32768 for
-	 * i16 (grid_colours()). Not owned. */
-	const uint8_t *colours;
-};
 
 /* Prepares d (SCENE_GRID). false: its transform cannot be inverted (or
  * is not finite), and it lights nothing. */
 bool grid_prepare(struct grid_job *job, const struct scene_draw *d);
+
+/* Makes job->rows for images of geometry g when the grid is upright (the
+ * upright path needs them; without them, every image is drawn by the
+ * reference loop). false: out of memory. */
+bool grid_prepare_rows(struct grid_job *job, const struct geometry *g);
+/* Frees what grid_prepare_rows() made. */
+void grid_job_finish(struct grid_job *job);
 
 /* Lights, in c, what job's grid shows in the slice plane of volume image
  * src (its angle), columns mirrored (u -> W-1-u) when mirror: image k of a
@@ -42,10 +40,14 @@ void grid_draw_image(struct section_canvas *c, const struct grid_job *job, uint3
  * -0.5 <= f[a] < n[a] - 0.5), by the draw's transfer. false: dark. */
 bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3]);
 
-/* The largest sample (RGBA8: alpha) of each line of g along its up axis,
- * out[k * n[0] + i]; NaN samples left out (-inf for a line of them):
- * scene_grid.line_max, which lets the renderer skip dark columns. */
-void grid_line_max(const struct scene_grid *g, float *out);
+/* The largest sample (RGBA8: alpha) of each brick of g (scene.h,
+ * scene_grid.brick_max), grid_brick_count(g) of them; NaN samples left
+ * out (-inf for a brick of them). */
+void grid_brick_max(const struct scene_grid *g, float *out);
+static inline uint64_t grid_brick_count(const struct scene_grid *g)
+{
+	return (uint64_t)g->n[0] * g->n[2] * scene_grid_bricks(g->n[1]);
+}
 
 /* Entries of d's colour table (65536 for u16 and i16, 256 for u8), or 0
  * when it has none (trilinear, f32, RGBA8); and the table: what the

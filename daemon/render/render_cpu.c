@@ -125,6 +125,15 @@ static void free_colour_tables(struct render_cpu *r)
 	r->colours = NULL;
 }
 
+/* The grid jobs of the last render, and their colour tables. */
+static void free_grid_jobs(struct render_cpu *r)
+{
+	free_colour_tables(r);
+	for (uint32_t i = 0; i < r->grid_count; i++)
+		grid_job_finish(&r->grids[i]);
+	r->grid_count = 0;
+}
+
 static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
@@ -190,8 +199,7 @@ static int make_colour_tables(struct render_cpu *r)
 /* The scene's grid draws that can be drawn, prepared. 0 or -ENOMEM. */
 static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 {
-	free_colour_tables(r);
-	r->grid_count = 0;
+	free_grid_jobs(r);
 	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
 		const struct scene_draw *d = &scene->draws[i];
 		if (d->prim != SCENE_GRID || !d->grid)
@@ -204,7 +212,12 @@ static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 			r->grids = g;
 			r->grid_cap = cap;
 		}
-		r->grid_count += grid_prepare(&r->grids[r->grid_count], d);
+		struct grid_job *job = &r->grids[r->grid_count];
+		if (!grid_prepare(job, d))
+			continue;
+		r->grid_count++;
+		if (!grid_prepare_rows(job, &r->base.geom))
+			return -ENOMEM;
 	}
 	return make_colour_tables(r);
 }
@@ -347,7 +360,7 @@ static void cpu_destroy(struct renderer *base)
 	}
 	free(r->stage);
 	free(r->wedges);
-	free_colour_tables(r);
+	free_grid_jobs(r);
 	free(r->grids);
 	brightness_tables_finish(&r->thr);
 	brightness_map_finish(&r->bright);

@@ -31,6 +31,9 @@ void section_canvas_finish(struct section_canvas *c)
 	free(c->rgb);
 	free(c->rows);
 	free(c->weighted);
+	free(c->scratch);
+	c->scratch = NULL;
+	c->scratch_floats = 0;
 	c->rgb = NULL;
 	c->rows = NULL;
 	c->weighted = NULL;

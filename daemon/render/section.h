@@ -33,6 +33,8 @@ struct section_canvas {
 	const struct brightness_map *bright;
 	uint8_t *weighted;       /* 3 planes of weighted_plane bytes: a polygon's */
 	uint32_t weighted_plane; /* weighted colour per column, in canvas order */
+	float *scratch;          /* NULL, or scratch_floats floats: grid.c's, */
+	size_t scratch_floats;   /* grown as needed, freed with the canvas */
 };
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz

@@ -77,6 +77,7 @@ def main(argv=None):
         lst = sp.create_list()
         sp.create_layer(lst)
         shown = 0
+        pending = []
         start = time.monotonic()
         try:
             while args.seconds <= 0 or time.monotonic() - start < args.seconds:
@@ -85,10 +86,13 @@ def main(argv=None):
                 lst.set_transform(fit)
                 lst.set_color(255, 255, 255)
                 lst.draw_volume(volumes[shown % args.phases], 'nearest', threshold=-900, window=(-300, 700))
-                frame = sp.request_frame()
+                # Two commits in flight: the next phase is being rendered
+                # while the last one waits for its revolution.
+                pending.append(sp.request_frame())
                 sp.commit()
-                frame.wait(timeout=10)
-                shown += 1
+                if len(pending) > 1:
+                    pending.pop(0).wait(timeout=10)
+                    shown += 1
                 if args.rate > 0:
                     time.sleep(max(0.0, start + shown / args.rate - time.monotonic()))
         except KeyboardInterrupt:

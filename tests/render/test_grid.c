@@ -16,11 +16,14 @@
  *    lights in geometry_turn_source()'s image, mirrored as it says.
  * 5. Threads: 1 and 3 give the same volume; a singular transform lights
  *    nothing; the even brightness model thins only inside r0.
- * 7. The upright path (the grid's up axis the display's: column by column,
- *    dark columns skipped by the lines' maxima, nearest integer samples
- *    coloured through a table of their values) lights the same canvas as
- *    the reference loop, byte for byte, for every sample type, both
- *    samplings, thresholds that skip most columns or none, mirrored too.
+ * 7. The upright paths (the grid's up axis the display's): column by
+ *    column (dark bricks skipped by their maxima, nearest integer samples
+ *    coloured through a table of their values) and by tiles in every
+ *    vector variant this machine runs (grid_tiles.h), each light the same
+ *    canvas as the reference loop, byte for byte, for every sample type,
+ *    both samplings, thresholds that skip most bricks or none, a lookup
+ *    table, unweighted and under the even and uniform brightness models,
+ *    mirrored too.
  * 6. GL (EGL, OSMesa where a context can be made): a scene with a grid
  *    renders on the CPU fallback, equal to the CPU renderer's volume.
  *
@@ -32,6 +35,7 @@
 
 #include "check.h"
 #include "grid.h"
+#include "grid_tiles.h"
 #include "render_gl.h"
 #include "rtest.h"
 
@@ -359,11 +363,12 @@ static void draw_canvas(struct section_canvas *c, struct grid_job *job, uint32_t
 
 static void check_upright(const char *name, const struct geometry *g)
 {
-	enum { NX = 9, NY = 11, NZ = 7, S = NX * NY * NZ };
+	enum { NX = 9, NY = 75, NZ = 7, S = NX * NY * NZ };
 	static uint8_t bytes[S * 4];
 	static uint16_t u16[S];
 	static int16_t i16[S];
-	static float f32[S], line_max[NX * NZ];
+	static float f32[S], brick_max[NX * NZ * 3];
+	static const uint8_t lut[15] = { 0, 0, 0, 200, 10, 0, 0, 0, 90, 255, 255, 0, 30, 60, 120 };
 	uint32_t seed = 99;
 	for (int i = 0; i < S; i++) {
 		seed = seed * 1103515245u + 12345u;
@@ -387,57 +392,103 @@ static void check_upright(const char *name, const struct geometry *g)
 	CHECK(section_canvas_init(&ref, g) == 0 && section_canvas_init(&fast, g) == 0);
 	size_t tiles = (size_t)ref.tiles_x * ref.tiles_y;
 	uint64_t pixels = 0;
-	for (size_t t = 0; t < sizeof(kinds) / sizeof(kinds[0]); t++)
-		for (int sampling = 0; sampling < 2; sampling++)
-			for (int th = 0; th < 2; th++) {
-				struct scene_grid gr = { kinds[t].type,
-							 { NX, NY, NZ },
-							 { 0.1f, 0.13f, 0.12f },
-							 kinds[t].data,
-							 NULL };
-				grid_line_max(&gr, line_max);
-				gr.line_max = line_max;
-				/* Turned about y, scaled unevenly, moved: upright. */
-				double a = 0.4 + t + sampling;
-				const float m[16] = {
-					(float)(1.1 * cos(a)), 0, (float)(-1.1 * sin(a)), 0, 0,      0.9f,  0,      0,
-					(float)(0.8 * sin(a)), 0, (float)(0.8 * cos(a)),  0, -0.45f, -0.5f, -0.35f, 1
-				};
-				struct scene_draw d = grid_draw(&gr, m);
-				d.transfer = (struct scene_transfer){ kinds[t].threshold[th], kinds[t].lo, kinds[t].hi,
-								      (uint32_t)sampling,     NULL,        0 };
-				struct grid_job job;
-				CHECK(grid_prepare(&job, &d) && job.upright);
-				/* Nearest on u8, u16, i16: the colours looked up. */
-				size_t entries = grid_colours_size(&d);
-				uint8_t *colours = entries ? malloc(4 * entries) : NULL;
-				CHECK(!entries || colours);
-				if (colours)
-					grid_colours(&d, colours);
-				CHECK((entries != 0) == (sampling == SCENE_NEAREST && kinds[t].type <= SCENE_GRID_I16));
-				for (uint32_t k = 0; k < images_of(g); k += 3)
-					for (int mirror = 0; mirror < 2; mirror++) {
-						job.colours = NULL;
-						draw_canvas(&ref, &job, k, mirror, true);
-						job.colours = colours;
-						draw_canvas(&fast, &job, k, mirror, false);
-						CHECK_MSG(
-							!memcmp(ref.rgb, fast.rgb, tiles * HALFTONE_TILE_BYTES) &&
-								!memcmp(ref.rows, fast.rows, tiles * sizeof(*ref.rows)),
-							"%s: type %u sampling %d threshold %g image %u%s: the upright "
-							"path differs",
-							name, kinds[t].type, sampling, (double)kinds[t].threshold[th],
-							k, mirror ? " mirrored" : "");
-						for (size_t i = 0; i < tiles; i++)
-							pixels += __builtin_popcount(ref.rows[i]);
-					}
-				free(colours);
-			}
+	/* Unweighted, then under the even and uniform brightness models (a
+	 * solid grid is weighted as a crossing surface, lane by lane). */
+	struct brightness_map maps[3];
+	for (int b = 0; b < 3; b++) {
+		struct geometry gb = *g;
+		gb.brightness = b == 0   ? GEOMETRY_BRIGHTNESS_EXACT
+				: b == 1 ? GEOMETRY_BRIGHTNESS_EVEN
+					 : GEOMETRY_BRIGHTNESS_UNIFORM;
+		CHECK(brightness_map_init(&maps[b], &gb) == 0);
+	}
+	for (int model = 0; model < 3; model++)
+		for (size_t t = 0; t < sizeof(kinds) / sizeof(kinds[0]); t++)
+			for (int sampling = 0; sampling < 2; sampling++)
+				for (int th = 0; th < 4; th++) { /* thresholds 0 and 1, then with a lut */
+					struct scene_grid gr = { kinds[t].type,
+								 { NX, NY, NZ },
+								 { 0.1f, 0.13f, 0.12f },
+								 kinds[t].data,
+								 NULL };
+					grid_brick_max(&gr, brick_max);
+					gr.brick_max = brick_max;
+					/* Turned about y, scaled unevenly, moved: upright. */
+					double a = 0.4 + t + sampling;
+					const float m[16] = {
+						(float)(1.1 * cos(a)),
+						0,
+						(float)(-1.1 * sin(a)),
+						0,
+						0,
+						0.9f,
+						0,
+						0,
+						(float)(0.8 * sin(a)),
+						0,
+						(float)(0.8 * cos(a)),
+						0,
+						-0.45f,
+						-0.5f,
+						-0.35f,
+						1
+					};
+					struct scene_draw d = grid_draw(&gr, m);
+					d.transfer = (struct scene_transfer){
+						kinds[t].threshold[th & 1], kinds[t].lo,          kinds[t].hi,
+						(uint32_t)sampling,         th >= 2 ? lut : NULL, th >= 2 ? 5u : 0u
+					};
+					struct grid_job job;
+					CHECK(grid_prepare(&job, &d) && job.upright && grid_prepare_rows(&job, g) &&
+					      job.rows);
+					/* Nearest on u8, u16, i16: the colours looked up. */
+					size_t entries = grid_colours_size(&d);
+					uint8_t *colours = entries ? malloc(4 * entries) : NULL;
+					CHECK(!entries || colours);
+					if (colours)
+						grid_colours(&d, colours);
+					CHECK((entries != 0) ==
+					      (sampling == SCENE_NEAREST && kinds[t].type <= SCENE_GRID_I16));
+					ref.bright = fast.bright = model ? &maps[model] : NULL;
+					for (uint32_t k = 0; k < images_of(g); k += 3)
+						for (int mirror = 0; mirror < 2; mirror++) {
+							job.colours = NULL;
+							draw_canvas(&ref, &job, k, mirror, true);
+							job.colours = colours;
+							/* Column by column, then by tiles in each variant. */
+							for (int way = -1; way < 0 || grid_tiles_variant((unsigned)way);
+							     way++) {
+								job.columns = way < 0;
+								CHECK(way < 0 || grid_tiles_use(grid_tiles_variant(
+											 (unsigned)way)));
+								draw_canvas(&fast, &job, k, mirror, false);
+								CHECK_MSG(!memcmp(ref.rgb, fast.rgb,
+										  tiles * HALFTONE_TILE_BYTES) &&
+										  !memcmp(ref.rows, fast.rows,
+											  tiles * sizeof(*ref.rows)),
+									  "%s: model %d type %u sampling %d threshold "
+									  "%g image %u%s: "
+									  "the upright path (%s) differs",
+									  name, model, kinds[t].type, sampling,
+									  (double)kinds[t].threshold[th & 1], k,
+									  mirror ? " mirrored" : "",
+									  way < 0 ? "columns"
+										  : grid_tiles_variant((unsigned)way));
+							}
+							CHECK(grid_tiles_use(grid_tiles_variant(0)));
+							for (size_t i = 0; i < tiles; i++)
+								pixels += __builtin_popcount(ref.rows[i]);
+						}
+					free(colours);
+					grid_job_finish(&job);
+				}
 	section_canvas_finish(&ref);
 	section_canvas_finish(&fast);
+	for (int b = 0; b < 3; b++)
+		brightness_map_finish(&maps[b]);
 	CHECK(pixels > 100);
 	printf("%s: the upright path lights the reference loop's canvas byte for byte (5 types, both samplings, 2 "
-	       "thresholds, mirrored too; %llu canvas rows lit)\n",
+	       "thresholds, a lookup table, 3 brightness models, mirrored too; %llu canvas rows lit)\n",
 	       name, (unsigned long long)pixels);
 }
 
