@@ -41,8 +41,9 @@
  * Entries stay within a byte budget (cache_set_budget()): past it the
  * least recently used entries lose their volumes and canvases. The cache
  * never composes volumes of two engines (render_stats.engine): a scene a
- * GL renderer would hand to its CPU fallback is rendered whole. The cache
- * is driven from the
+ * GL renderer would hand to its CPU fallback (a turn, too many primitives)
+ * is rendered whole, and so is one where a part went to it (grids over the
+ * GL renderer's texture budget). The cache is driven from the
  * daemon's loop (cache_plan(), cache_done()) and runs its renders and
  * compositions on the render thread (cache_render()), never both at once. */
 #ifndef SPINDLE_CACHE_H

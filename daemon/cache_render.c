@@ -246,12 +246,13 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	int64_t t0 = now_ns();
 	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
 	/* Nothing from the cache; or a scene the renderer would hand to
-	 * another engine whole (a GL renderer, one with a turn or a grid, or
-	 * too large), whose parts would each stay native. */
+	 * another engine whole (a GL renderer, one with a turn, or too
+	 * large), whose parts would each stay native. GL draws grids itself
+	 * (a part whose grids exceed its budget goes to its CPU fallback, and
+	 * the parts' engines then differ: rendered whole, below). */
 	if ((!c->use_count && !c->create_count && !c->turned_count && !c->canvas_count) ||
 	    (r->native_prims && scene_prims(scene) > r->native_prims) ||
-	    (!r->impl->render_canvas &&
-	     (scene_has_turn(scene->draws, scene->draw_count) || scene_has_grid(scene->draws, scene->draw_count))))
+	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count)))
 		return render_whole(c, r, scene, out, t0);
 	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
 	int err = render_parts(c, r, scene, &p);

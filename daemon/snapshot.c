@@ -41,6 +41,11 @@ static int add_object(struct snapshot *snap, const struct stage_layer *y)
 	return 0;
 }
 
+/* The last scene_draw.grid_id given (main thread only): grids are numbered
+ * when first drawn, never twice, so that a renderer keeping what it made
+ * of a grid cannot take a new grid at a freed one's address for it. */
+static uint64_t grid_ids;
+
 static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool turns, const float *pre)
 {
 	const struct draw_array *a = y->draws;
@@ -60,8 +65,12 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 		};
 		/* A grid whose volume is gone draws nothing (grid NULL). */
 		if (d->data->grid && !d->data->grid->gone) {
-			sd->grid = &d->data->grid->grid;
+			struct vgrid *g = d->data->grid;
+			if (!g->id)
+				g->id = ++grid_ids;
+			sd->grid = &g->grid;
 			sd->transfer = d->data->transfer;
+			sd->grid_id = g->id;
 		}
 		/* With turns, the layer's base and its turn by whole images
 		 * (layer.h): the renderer shifts images instead of turning

@@ -452,4 +452,134 @@ static const char gl_pack_cs[] = GL_SHADER_VERSION
 	"		ids[s] = id;\n"
 	"}\n";
 
+/* Grids (scene.h, SCENE_GRID; gl_grid.c): per image and grid draw one
+ * quad over the pixels whose centres may lie in the grid's box, u_rect in
+ * normalised device coordinates (x0, y0, x1, y1), drawn as a triangle
+ * strip of 4 vertices. With BRIGHT the colour is weighted as a surface
+ * crossing the slices at right angles: (kw, inv_cross, line) = (wall, 1,
+ * 0), so w = min(wall, rate[u]), what grid.c's light() gives. */
+static const char gl_grid_vs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n"
+	"uniform vec4 u_rect;\n"
+	"#ifdef BRIGHT\n"
+	"flat out vec3 v_w;\n"
+	"#endif\n"
+	"void main() {\n"
+	"	int i = gl_VertexID;\n"
+	"	gl_Position = vec4((i & 1) != 0 ? u_rect.z : u_rect.x, (i & 2) != 0 ? u_rect.w : u_rect.y, 0.0, 1.0);\n"
+	"#ifdef BRIGHT\n"
+	"	v_w = vec3(u_wall.x, 1.0, 0.0);\n"
+	"#endif\n"
+	"}\n";
+
+/* The grid's sample at the pixel centre, as grid.c samples it: the pixel
+ * (u, v) of the image is the plane point s = (u + 0.5) 2 / W - 1, y = h -
+ * (v + 0.5) 2 h / H, in voxel coordinates f = (off + y up) + s dir; dark
+ * outside the box -0.5 <= f < n - 0.5; nearest (floor(f + 0.5), clamped)
+ * or trilinear (the 8 samples around f, edge samples repeated, mixed in
+ * grid.c's order); then the transfer: dark below the threshold (or not a
+ * number: a trilinear mix with a NaN sample, or an infinite one weighing
+ * 0, is NaN), g = clamp((v - lo) / (hi - lo)), the colour lut[round(g
+ * (count - 1))] or rgb g rounded; RGBA8: rgb alpha / 255 with the alpha as
+ * the value. Black is dark. The fragments do not mark their tile rows:
+ * render_gl.c marks the quads' rows before the batch (gl_grid_mark()).
+ * The samples are an unsigned integer 3-D texture of n[1] x n[0] x n[2]
+ * texels (j, the grid's up axis, fastest: its memory layout as it is):
+ * R8UI (u8), R16UI (u16, and i16 sign-extended here), R32UI (f32 as bits,
+ * so a NaN is seen as one whatever the GPU does with it), RGBA8UI (RGBA8).
+ * Lookup tables: entry e of the volume's tables at (e % 64, e / 64) of an
+ * RGBA8UI texture.
+ * u_goff: off, 2 / W; u_gdir: dir, 2 h / H; u_gup: up, h (volume image
+ * k's d_k and e_y through the inverse transform, grid.h);
+ * u_gn: n[0], n[1], n[2], type (scene_grid_type); u_gtf: threshold, lo,
+ * hi, 1 for trilinear; u_gcol: r, g, b, lut entries (0: none); u_glut:
+ * the first entry of the draw's table. */
+static const char gl_grid_fs[] = GL_SHADER_VERSION
+	"precision highp float;\n"
+	"precision highp int;\n" GL_SHADER_MARK GL_SHADER_WEIGH "uniform highp usampler3D u_grid;\n"
+	"uniform highp usampler2D u_lut;\n"
+	"uniform vec4 u_goff, u_gdir, u_gup, u_gtf;\n"
+	"uniform uvec4 u_gn, u_gcol;\n"
+	"uniform uint u_glut;\n"
+	"out vec4 o_colour;\n"
+	"/* Sample at (i, j, k): its value (RGBA8: its alpha) and, RGBA8, its\n"
+	" * colour; cls 1 for NaN, 2 for an infinity (f32). */\n"
+	"float fetch(ivec3 at, out vec4 rgba, out uint cls) {\n"
+	"	uvec4 t = texelFetch(u_grid, at.yxz, 0);\n"
+	"	rgba = vec4(t);\n"
+	"	cls = 0u;\n"
+	"	if (u_gn.w == 3u)\n"
+	"		return float(int(t.r << 16) >> 16);\n"
+	"	if (u_gn.w == 4u) {\n"
+	"		if ((t.r & 0x7f800000u) == 0x7f800000u)\n"
+	"			cls = (t.r & 0x7fffffu) != 0u ? 1u : 2u;\n"
+	"		return uintBitsToFloat(t.r);\n"
+	"	}\n"
+	"	return float(u_gn.w == 5u ? t.a : t.r);\n"
+	"}\n"
+	"void main() {\n"
+	"	uvec2 px = uvec2(gl_FragCoord.xy);\n"
+	"	float s = (float(px.x) + 0.5) * u_goff.w - 1.0;\n"
+	"	float y = u_gup.w - (float(px.y - u_tile.z * u_tile.w) + 0.5) * u_gdir.w;\n"
+	"	vec3 f = (u_goff.xyz + y * u_gup.xyz) + s * u_gdir.xyz;\n"
+	"	vec3 n = vec3(u_gn.xyz);\n"
+	"	if (any(lessThan(f, vec3(-0.5))) || any(greaterThanEqual(f, n - 0.5)))\n"
+	"		discard;\n"
+	"	ivec3 top = ivec3(u_gn.xyz) - 1;\n"
+	"	float val = 0.0;\n"
+	"	vec4 rgba = vec4(0.0);\n"
+	"	bool dark = false;\n"
+	"	if (u_gtf.w == 0.0) {\n"
+	"		uint cls;\n"
+	"		val = fetch(clamp(ivec3(floor(f + 0.5)), ivec3(0), top), rgba, cls);\n"
+	"		dark = cls == 1u;\n"
+	"	} else {\n"
+	"		vec3 fl = floor(f), t = f - fl;\n"
+	"		ivec3 i0 = ivec3(fl);\n"
+	"		bool pinf = false, ninf = false;\n"
+	"		for (int c = 0; c < 8; c++) {\n"
+	"			ivec3 b = ivec3(c & 1, (c >> 1) & 1, c >> 2);\n"
+	"			float w = 1.0;\n"
+	"			w *= b.x != 0 ? t.x : 1.0 - t.x;\n"
+	"			w *= b.y != 0 ? t.y : 1.0 - t.y;\n"
+	"			w *= b.z != 0 ? t.z : 1.0 - t.z;\n"
+	"			vec4 c4;\n"
+	"			uint cls;\n"
+	"			float x = fetch(clamp(i0 + b, ivec3(0), top), c4, cls);\n"
+	"			if (cls == 1u || (cls == 2u && w == 0.0))\n"
+	"				dark = true;\n"
+	"			else if (cls == 2u && x > 0.0)\n"
+	"				pinf = true;\n"
+	"			else if (cls == 2u)\n"
+	"				ninf = true;\n"
+	"			val += w * x;\n"
+	"			rgba += w * c4;\n"
+	"		}\n"
+	"		dark = dark || (pinf && ninf);\n"
+	"	}\n"
+	"	if (dark || !(val >= u_gtf.x))\n"
+	"		discard;\n"
+	"	uvec3 c;\n"
+	"	if (u_gn.w == 5u) {\n"
+	"		c = uvec3(rgba.rgb * rgba.a / 255.0 + 0.5);\n"
+	"	} else {\n"
+	"		float g = (val - u_gtf.y) / (u_gtf.z - u_gtf.y);\n"
+	"		g = g > 0.0 ? (g < 1.0 ? g : 1.0) : 0.0;\n"
+	"		if (u_gcol.w != 0u) {\n"
+	"			uint e = u_glut + uint(g * float(u_gcol.w - 1u) + 0.5);\n"
+	"			c = texelFetch(u_lut, ivec2(int(e & 63u), int(e >> 6)), 0).rgb;\n"
+	"		} else {\n"
+	"			c = uvec3(vec3(u_gcol.rgb) * g + 0.5);\n"
+	"		}\n"
+	"	}\n"
+	"#ifdef BRIGHT\n"
+	"	c = weigh(c);\n"
+	"#endif\n"
+	"	if (c == uvec3(0u))\n"
+	"		discard;\n"
+
+	"	o_colour = vec4(vec3(c) / 255.0, 1.0);\n"
+	"}\n";
+
 #endif

@@ -11,8 +11,11 @@
  * of primitives binned to it are drawn: faces clipped to the bow tie in the
  * fragment shader; sections with the slice plane, triangle edges and
  * segments clipped to the lobes, as lines and points; the binned points,
- * as squares of their size. Colours combine by MAX blending, and fragments
- * mark the tile rows they touch. gl_pack.c then halftones and packs the
+ * as squares of their size; grids (gl_grid.c), a quad per grid draw whose
+ * fragment shader samples the grid's 3-D texture at the pixel centres
+ * inside its box. Colours combine by MAX blending, and fragments
+ * mark the tile rows they touch (a grid quad's rows are marked from the
+ * CPU before the batch instead). gl_pack.c then halftones and packs the
  * touched tiles of the batch on the GPU and collects the non-empty ones
  * while the GPU draws the next batch. This file: set-up, upload, drawing,
  * the render and its failures. A scene with a turned draw (scene.h) is
@@ -36,6 +39,7 @@
 
 #include "bin.h"
 #include "gl_context.h"
+#include "gl_grid.h"
 #include "gl_pack.h"
 #include "gl_shaders.h"
 #include "log.h"
@@ -104,6 +108,8 @@ static int build_programs(struct render_gl *r)
 		e = draw_program(r, &r->section, gl_section_vs, gl_flat_fs, bright, "section");
 	if (e == 0)
 		e = draw_program(r, &r->point, gl_point_vs, gl_flat_fs, false, "point");
+	if (e == 0)
+		e = draw_program(r, &r->grid, gl_grid_vs, gl_grid_fs, bright, "grid");
 	if (e < 0)
 		return e;
 	GLuint cs = compile(r, GL_COMPUTE_SHADER, gl_pack_cs, bright ? gl_bright_prelude : NULL, "pack");
@@ -240,6 +246,11 @@ static int create_objects(struct render_gl *r)
 		if (e < 0)
 			return e;
 	}
+	e = gl_grid_create(r);
+	if (e < 0) {
+		log_warn("GL renderer: no 3-D textures here");
+		return e;
+	}
 
 	gl->ClearColor(0, 0, 0, 0);
 	if (r->ctx.backend == GL_BACKEND_OSMESA)
@@ -282,7 +293,10 @@ static void destroy_gl(struct render_gl *r)
 		gl->DeleteProgram(r->point.id);
 		gl->DeleteProgram(r->pack);
 		gl->DeleteProgram(r->list);
+		gl->DeleteProgram(r->grid.id);
+		gl_grid_release(r, true);
 	}
+	r->grid_tex_count = 0; /* gone with the context, if not above */
 	gl_context_destroy(&r->ctx);
 	r->have_ctx = false;
 	memset(r->out, 0, sizeof(r->out));
@@ -453,6 +467,7 @@ static void draw_image(struct render_gl *r, uint32_t k, uint32_t slot)
 		draw_runs(r, runs, n, GL_LINES, 12);
 		draw_runs(r, runs, n, GL_POINTS, 12);
 	}
+	gl_grid_draw(r, k, slot, u.tile);
 	uint32_t p0 = b->point_start[k], p1 = b->point_start[k + 1];
 	if (p1 > p0) {
 		/* GL keeps a point whose centre is in the viewport whole, and
@@ -508,6 +523,9 @@ static int render_batches(struct render_gl *r)
 		uint32_t n = r->images - first < r->batch ? r->images - first : r->batch;
 		if (r->opts.naive)
 			gl->Clear(GL_COLOR_BUFFER_BIT);
+		err = gl_grid_mark(r, first, n);
+		if (err < 0)
+			break;
 		for (uint32_t i = 0; i < n; i++)
 			draw_image(r, first + i, i);
 		if (r->opts.naive) {
@@ -588,11 +606,10 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 {
 	struct render_gl *r = (struct render_gl *)base;
 	/* Turned draws (scene.h) are drawn by the CPU renderer only: the whole
-	 * scene goes there, whatever no_fallback says. */
-	/* Turns and grids are drawn by the CPU renderer (GL 3-D textures for
-	 * grids are later work: docs/rendering.md, "Grids"). */
-	if (r->gl_dead || (scene && (scene_has_turn(scene->draws, scene->draw_count) ||
-				     scene_has_grid(scene->draws, scene->draw_count))))
+	 * scene goes there, whatever no_fallback says. Grids are drawn here
+	 * (gl_grid.c), unless they exceed the 3-D texture size or the budget
+	 * (-EFBIG below). */
+	if (r->gl_dead || (scene && scene_has_turn(scene->draws, scene->draw_count)))
 		return render_on_cpu(r, scene, out);
 	uint64_t t0 = (uint64_t)now_ns();
 	memset(&r->base.stats, 0, sizeof(r->base.stats));
@@ -605,6 +622,8 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 		return err;
 	err = gl_context_bind(&r->ctx);
 	if (err == 0)
+		err = gl_grid_prepare(r, scene);
+	if (err == 0)
 		err = upload(r);
 	if (err == 0)
 		err = render_batches(r);
@@ -614,6 +633,8 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	}
 	gl_context_unbind(&r->ctx);
 	r->volumes++;
+	if (err == -EFBIG && !r->opts.no_fallback) /* grids too large: logged, this scene only */
+		return render_on_cpu(r, scene, out);
 	if (err == -E2BIG && !r->opts.no_fallback) {
 		/* This scene only: the next one may fit again. */
 		if (!r->told_too_big)
@@ -641,6 +662,7 @@ static void render_gl_destroy(struct renderer *base)
 {
 	struct render_gl *r = (struct render_gl *)base;
 	destroy_gl(r);
+	gl_grid_free(r);
 	render_destroy(r->cpu);
 	bin_finish(&r->bins);
 	brightness_map_finish(&r->bright);

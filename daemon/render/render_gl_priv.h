@@ -69,6 +69,53 @@ struct gl_batch {
 	uint32_t first, n; /* volume images first .. first + n - 1 */
 };
 
+/* Texture units of the grid pass (gl_grid.c): a grid's samples and the
+ * lookup tables of the volume's grid draws. */
+#define GL_GRID_UNIT 3
+#define GL_LUT_UNIT 4
+#define GL_LUT_WIDTH 64 /* lookup table entries a row of their texture */
+/* Bytes of grid textures one volume may need (render_gl_options
+ * .max_grid_bytes sets less): a volume whose grids need more, or one
+ * larger than GL_MAX_3D_TEXTURE_SIZE, renders on the CPU. */
+#define GL_GRID_BUDGET (1ull << 30)
+/* Renders a texture of a grid with an id (scene_draw.grid_id) is kept
+ * while no render draws it (the object cache renders a scene's objects
+ * one by one); one known by its address only is deleted at once. */
+#define GL_GRID_KEEP 8
+
+enum {
+	GRID_UNI_RECT,
+	GRID_UNI_OFF,
+	GRID_UNI_DIR,
+	GRID_UNI_UP,
+	GRID_UNI_N,
+	GRID_UNI_TF,
+	GRID_UNI_COL,
+	GRID_UNI_LUT,
+	GRID_UNI_COUNT
+};
+
+/* A grid's samples as a 3-D texture, kept from one render to the next
+ * while the grid is drawn (gl_grid.c, GL_GRID_KEEP). */
+struct gl_grid_tex {
+	uint64_t id; /* scene_draw.grid_id; 0: the grid is known by grid, data, type and n */
+	const struct scene_grid *grid;
+	const void *data;
+	uint32_t type, n[3];
+	GLuint tex;
+	uint64_t bytes;
+	uint64_t last; /* the render that last drew it (render_gl.grid_renders) */
+};
+
+/* A grid draw of the render in progress: volume space to its voxel
+ * coordinates (grid_prepare()), its texture and its lookup table's first
+ * entry in lut_tex. */
+struct gl_grid_draw {
+	const struct scene_draw *draw;
+	double lin[3][3], off[3];
+	uint32_t tex, lut;
+};
+
 struct render_gl {
 	struct renderer base;
 	struct render_gl_options opts;
@@ -101,6 +148,24 @@ struct render_gl {
 	int32_t *slot_of; /* per tile of a batch: its slot in the output, or -1 */
 	uint8_t *rgba;    /* naive: one image read back */
 	uint64_t volumes;
+
+	/* Grids (gl_grid.c): the program and its uniforms, the textures
+	 * kept, this render's grid draws and their lookup tables. */
+	struct gl_program grid;
+	GLint grid_uni[GRID_UNI_COUNT];
+	GLuint grid_vao, lut_tex;
+	uint32_t lut_rows;
+	GLint max_3d;          /* GL_MAX_3D_TEXTURE_SIZE */
+	uint64_t grid_renders; /* renders prepared, this one included */
+	struct gl_grid_tex *grid_tex;
+	uint32_t grid_tex_count, grid_tex_cap;
+	struct gl_grid_draw *grid_draws;
+	uint32_t grid_draw_count, grid_draw_cap;
+	uint8_t *lut_staging;
+	size_t lut_staging_cap; /* entries */
+	uint32_t *grid_marks;   /* a batch's tile marks (gl_grid_mark()) */
+	size_t grid_marks_cap;  /* words */
+	bool told_grid_too_big;
 
 	struct renderer *cpu;  /* renders what GL cannot, created when first needed */
 	bool gl_dead;          /* GL failed: every volume renders on the CPU */

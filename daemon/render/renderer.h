@@ -48,19 +48,22 @@ struct render_cpu_options {
 
 /* GL renderer options (render_gl.c). */
 struct render_gl_options {
-	const char *backend; /* "egl" (default when NULL) or "osmesa" */
-	unsigned threads;    /* binning threads; 0 = one per core */
-	unsigned batch;      /* images per batch; 0 = as many as fit, at most 16 */
-	bool naive;          /* the unoptimised baseline the benchmark measures
+	const char *backend;     /* "egl" (default when NULL) or "osmesa" */
+	unsigned threads;        /* binning threads; 0 = one per core */
+	unsigned batch;          /* images per batch; 0 = as many as fit, at most 16 */
+	bool naive;              /* the unoptimised baseline the benchmark measures
 			      * against: every primitive in every image, RGBA
 			      * read back whole, halftone and pack on the CPU */
-	bool no_fallback;    /* a GL failure fails the render instead of
+	bool no_fallback;        /* a GL failure fails the render instead of
 			      * handing over to the CPU renderer (tests) */
-	bool hardware_only;  /* fail (ENODEV) on a software rasterizer, before
+	bool hardware_only;      /* fail (ENODEV) on a software rasterizer, before
 			      * building shaders: what "auto" asks for */
-	uint32_t max_prims;  /* binned primitives a volume may have on GL; more
+	uint32_t max_prims;      /* binned primitives a volume may have on GL; more
 			      * render that volume on the CPU. 0 = as many as
 			      * the primitive texture holds (tests set less) */
+	uint64_t max_grid_bytes; /* bytes of grid textures a volume may need on
+				  * GL; more render that volume on the CPU. 0 =
+				  * GL_GRID_BUDGET, 1 GiB (tests set less) */
 };
 
 struct renderer_impl {
