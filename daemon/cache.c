@@ -547,6 +547,26 @@ void cache_done(struct cache *c, int result)
 	evict_to(c, c->budget);
 }
 
+void cache_forget_orphans(struct cache *c)
+{
+	if (c->planned)
+		return;
+	for (uint32_t i = 0; i < c->count;) {
+		struct entry *e = c->entries[i];
+		bool orphan = false;
+		for (uint32_t d = 0; !e->seen && d < e->draw_count; d++)
+			orphan |= e->refs[d]->refs == 1;
+		if (!orphan) {
+			i++;
+			continue;
+		}
+		free_entry(c, e);
+		memmove(c->entries + i, c->entries + i + 1, (c->count - i - 1) * sizeof(*c->entries));
+		c->count--;
+		c->stats.expired++;
+	}
+}
+
 void cache_set_budget(struct cache *c, uint64_t bytes)
 {
 	c->budget = bytes;

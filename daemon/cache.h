@@ -86,6 +86,12 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 /* After the render (the loop's thread): takes the new entries in, or, when
  * result < 0, forgets what the render was to make; keeps the budget. */
 void cache_done(struct cache *c, int result);
+/* Forgets, now, the objects missing from the last plan whose draws' data
+ * only the cache still holds (the loop's thread, outside a plan and its
+ * render: once the scene before it is released). No scene can draw that
+ * data again, and waiting for IDLE_VOLUMES more plans would keep it (a
+ * gone client's volume, say) as long as the display stays idle. */
+void cache_forget_orphans(struct cache *c);
 
 void cache_get_stats(const struct cache *c, struct cache_stats *out);
 /* A new budget (the loop's thread): new entries are made only within it,

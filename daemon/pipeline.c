@@ -341,6 +341,8 @@ static int render_done(sd_event_source *s, int fd, uint32_t revents, void *data)
 		p->dirty = true;
 	} else {
 		keep_rendered(p);
+		if (p->cache) /* the scene before is gone: what only the cache holds goes too */
+			cache_forget_orphans(p->cache);
 		p->work->seq = p->work_seq; /* rendering cleared it */
 		p->ready = true;
 		p->stats.volumes_rendered++;

@@ -4,8 +4,9 @@
  * recoloured, given new vertex data, hidden and shown again, deleted, and
  * deleted several at once (a client disconnecting), with budgets from
  * roomy to tiny (evictions) and none; every composed volume must be bit for
- * bit the renderer's full render of the same scene. One draw in eight is
- * a grid (scene.h, SCENE_GRID). The CPU renderer at two geometries; the GL
+ * bit the renderer's full render of the same scene, and the cache follows
+ * no deleted object once it is done (cache_forget_orphans()). One draw in
+ * eight is a grid (scene.h, SCENE_GRID). The CPU renderer at two geometries; the GL
  * renderers, each against its own full render, when they run here (grids
  * drawn from their 3-D textures, objects composed as any others). */
 #include <math.h>
@@ -288,6 +289,16 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 		int err = cache_render(c, r, &w.snap.scene, composed);
 		cache_done(c, err);
 		CHECK_EQ(err, 0);
+		/* The world's scene holds no references: a deleted object's data
+		 * is the cache's alone, and its entry goes now. */
+		cache_forget_orphans(c);
+		struct cache_stats now;
+		cache_get_stats(c, &now);
+		unsigned alive = 0;
+		for (int i = 0; i < MAX_OBJECTS; i++)
+			alive += w.obj[i].alive;
+		CHECK_MSG(now.objects <= alive, "step %u (%s): %u objects followed, %u alive", s, what, now.objects,
+			  alive);
 		CHECK_EQ(render_volume(r, &w.snap.scene, full), 0);
 		if (!rtest_same(composed, full)) {
 			if (bad++ < 5)
