@@ -49,11 +49,17 @@ static int64_t now_ms(void)
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
 }
 
+#define SANDBOX_PIPE_BYTES (1 << 20)
+
 int sandbox_start(struct sandbox *sb, sandbox_child_fn fn, void *arg)
 {
 	int p[2];
 	if (pipe2(p, O_CLOEXEC) < 0)
 		return -errno;
+	/* A scan's hundreds of MB cross it: 1 MiB at a time (the most an
+	 * unprivileged process may ask by default) rather than 64 KiB cuts the
+	 * switches between child and parent. Only a hint: failing is fine. */
+	(void)fcntl(p[0], F_SETPIPE_SZ, SANDBOX_PIPE_BYTES);
 	sb->pid = fork();
 	if (sb->pid < 0) {
 		int e = errno;

@@ -143,11 +143,27 @@ static void shifted_range(const void *buf, enum scan_stored stored, const struct
 	*lo = INT64_MAX;
 	*hi = INT64_MIN;
 	for (uint32_t k = 0; k < s->dims[2]; k++) {
-		int64_t inter = (int64_t)rescale_of(r, count, k).inter;
-		for (size_t n = k * per_slice; n < (k + 1) * per_slice; n++) {
-			int64_t v = get_int(buf, stored, n) + inter;
-			*lo = v < *lo ? v : *lo;
-			*hi = v > *hi ? v : *hi;
+		int64_t inter = (int64_t)rescale_of(r, count, k).inter, mn = INT64_MAX, mx = INT64_MIN;
+		size_t n0 = k * per_slice, n1 = (k + 1) * per_slice;
+		/* The 16-bit types of CT (a whole intercept, e.g. -1024) typed;
+		 * the rest through get_int(). */
+		if (stored == SCAN_STORED_U16 || stored == SCAN_STORED_I16) {
+			for (size_t n = n0; n < n1; n++) {
+				int64_t v = stored == SCAN_STORED_U16 ? ((const uint16_t *)buf)[n]
+								      : ((const int16_t *)buf)[n];
+				mn = v < mn ? v : mn;
+				mx = v > mx ? v : mx;
+			}
+		} else {
+			for (size_t n = n0; n < n1; n++) {
+				int64_t v = get_int(buf, stored, n);
+				mn = v < mn ? v : mn;
+				mx = v > mx ? v : mx;
+			}
+		}
+		if (n1 > n0) {
+			*lo = mn + inter < *lo ? mn + inter : *lo;
+			*hi = mx + inter > *hi ? mx + inter : *hi;
 		}
 	}
 }
@@ -227,6 +243,8 @@ static enum scan_type result_type(const void *buf, enum scan_stored stored, cons
 		return SCAN_U8;
 	if (kind == RESCALE_IDENTITY && stored == SCAN_STORED_U16)
 		return SCAN_U16;
+	if (kind == RESCALE_IDENTITY && (stored == SCAN_STORED_I16 || stored == SCAN_STORED_I8))
+		return SCAN_I16; /* fits whatever the values: no need to look */
 	int64_t lo, hi;
 	shifted_range(buf, stored, s, r, count, &lo, &hi);
 	if (lo >= INT16_MIN && hi <= INT16_MAX)
