@@ -10,6 +10,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "fdio.h"
 struct text {
 	char *data;
 	size_t len, cap;
@@ -117,20 +118,6 @@ static int edit(const struct text *src, const char *key, const char *value, stru
 	return r;
 }
 
-static int write_all(int fd, const char *p, size_t n)
-{
-	while (n) {
-		ssize_t w = write(fd, p, n);
-		if (w < 0 && errno == EINTR)
-			continue;
-		if (w < 0)
-			return -errno;
-		p += w;
-		n -= (size_t)w;
-	}
-	return 0;
-}
-
 /* out written to a temporary file beside path, then renamed over it. */
 static int replace_file(const char *path, const struct text *out, mode_t mode, char *err, size_t err_size)
 {
@@ -147,7 +134,7 @@ static int replace_file(const char *path, const struct text *out, mode_t mode, c
 	}
 	int r = fchmod(fd, mode) < 0 ? -errno : 0;
 	if (r == 0)
-		r = write_all(fd, out->data, out->len);
+		r = fd_write_all(fd, out->data, out->len);
 	if (r == 0 && fsync(fd) < 0)
 		r = -errno;
 	if (close(fd) < 0 && r == 0)

@@ -11,27 +11,13 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fdio.h"
 void model_mesh_free(struct model_mesh *mesh)
 {
 	free(mesh->vertices);
 	free(mesh->colors);
 	free(mesh->indices);
 	memset(mesh, 0, sizeof(*mesh));
-}
-
-static int write_all(int fd, const void *data, size_t len)
-{
-	const uint8_t *p = data;
-	while (len > 0) {
-		ssize_t n = write(fd, p, len);
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n <= 0)
-			return n < 0 ? -errno : -EPIPE;
-		p += n;
-		len -= (size_t)n;
-	}
-	return 0;
 }
 
 static size_t index_count(size_t triangles, size_t lines, size_t points)
@@ -55,13 +41,13 @@ int model_wire_send_mesh(int fd, const struct model_mesh *mesh)
 {
 	struct model_wire_header h = model_wire_mesh_header(mesh);
 	size_t indices = index_count(mesh->triangle_count, mesh->line_count, mesh->point_count);
-	int ret = write_all(fd, &h, sizeof(h));
+	int ret = fd_write_all(fd, &h, sizeof(h));
 	if (ret == 0)
-		ret = write_all(fd, mesh->vertices, 3 * sizeof(float) * mesh->vertex_count);
+		ret = fd_write_all(fd, mesh->vertices, 3 * sizeof(float) * mesh->vertex_count);
 	if (ret == 0 && mesh->colored)
-		ret = write_all(fd, mesh->colors, 4 * mesh->vertex_count);
+		ret = fd_write_all(fd, mesh->colors, 4 * mesh->vertex_count);
 	if (ret == 0)
-		ret = write_all(fd, mesh->indices, sizeof(uint32_t) * indices);
+		ret = fd_write_all(fd, mesh->indices, sizeof(uint32_t) * indices);
 	return ret;
 }
 
@@ -73,8 +59,8 @@ int model_wire_send_error(int fd, int status, const char *text)
 		.status = status > 0 ? (uint32_t)status : EINVAL,
 		.text_len = len < MODEL_MAX_TEXT ? (uint32_t)len : MODEL_MAX_TEXT,
 	};
-	int ret = write_all(fd, &h, sizeof(h));
-	return ret == 0 ? write_all(fd, text, h.text_len) : ret;
+	int ret = fd_write_all(fd, &h, sizeof(h));
+	return ret == 0 ? fd_write_all(fd, text, h.text_len) : ret;
 }
 
 static int fail(char *why, size_t why_size, const char *fmt, ...) __attribute__((format(printf, 3, 4)));

@@ -9,6 +9,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "fdio.h"
 /* RAS to display: x = -R, y = S, z = A (a rotation: determinant +1). */
 static void ras_to_display(const double ras[3], double d[3])
 {
@@ -72,20 +73,6 @@ size_t scan_layout_source(const struct scan_layout *l, const uint32_t scan_dims[
 	return index;
 }
 
-static int write_all(int fd, const uint8_t *p, size_t len)
-{
-	while (len > 0) {
-		ssize_t n = write(fd, p, len < (1u << 30) ? len : (1u << 30));
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n <= 0)
-			return n < 0 ? -errno : -EPIPE;
-		p += n;
-		len -= (size_t)n;
-	}
-	return 0;
-}
-
 /* One display row (fixed y and z): nx samples from src, step elements apart. */
 static void gather_row(uint8_t *dst, const uint8_t *src, ptrdiff_t step, uint32_t nx, size_t per)
 {
@@ -111,12 +98,12 @@ int scan_layout_write(const struct scan *s, const struct scan_layout *l, int fd)
 			gather_row(buf + used, (const uint8_t *)s->data + first * per, step, l->dims[0], per);
 			used += row;
 			if (used + row > cap) {
-				ret = write_all(fd, buf, used);
+				ret = fd_write_all(fd, buf, used);
 				used = 0;
 			}
 		}
 	if (ret == 0 && used > 0)
-		ret = write_all(fd, buf, used);
+		ret = fd_write_all(fd, buf, used);
 	free(buf);
 	return ret;
 }

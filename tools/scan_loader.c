@@ -10,6 +10,7 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "fdio.h"
 #include "model_sandbox.h"
 #include "model_wire.h"
 #include "scan_priv.h"
@@ -25,21 +26,6 @@ struct scan_child {
 	int *fds; /* room for files->count */
 };
 
-static int write_all(int fd, const void *data, size_t len)
-{
-	const uint8_t *p = data;
-	while (len > 0) {
-		ssize_t n = write(fd, p, len);
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n <= 0)
-			return n < 0 ? -errno : -EPIPE;
-		p += n;
-		len -= (size_t)n;
-	}
-	return 0;
-}
-
 static int send_error(int fd, int status, const char *text)
 {
 	size_t len = strlen(text);
@@ -48,8 +34,8 @@ static int send_error(int fd, int status, const char *text)
 		.status = status > 0 ? (uint32_t)status : EINVAL,
 		.text_len = len < SCAN_WIRE_MAX_TEXT ? (uint32_t)len : SCAN_WIRE_MAX_TEXT,
 	};
-	int ret = write_all(fd, &h, sizeof(h));
-	return ret == 0 ? write_all(fd, text, h.text_len) : ret;
+	int ret = fd_write_all(fd, &h, sizeof(h));
+	return ret == 0 ? fd_write_all(fd, text, h.text_len) : ret;
 }
 
 static int send_scan(int fd, const struct scan *s)
@@ -62,7 +48,7 @@ static int send_scan(int fd, const struct scan *s)
 	memcpy(h.what, s->what, sizeof(h.what));
 	h.what[sizeof(h.what) - 1] = '\0';
 	scan_layout_of(s->dims, s->spacing, s->to_ras, &l);
-	int ret = write_all(fd, &h, sizeof(h));
+	int ret = fd_write_all(fd, &h, sizeof(h));
 	return ret == 0 ? scan_layout_write(s, &l, fd) : ret;
 }
 
@@ -95,8 +81,8 @@ static void scan_test_lie(int out_fd)
 		len = 4;
 	if (strcmp(hook, "scan-extra") == 0)
 		len = 9;
-	int ret = write_all(out_fd, &h, sizeof(h));
-	_exit(ret == 0 && write_all(out_fd, samples, len) == 0 ? 0 : 1);
+	int ret = fd_write_all(out_fd, &h, sizeof(h));
+	_exit(ret == 0 && fd_write_all(out_fd, samples, len) == 0 ? 0 : 1);
 }
 #endif
 

@@ -289,3 +289,40 @@ double rtest_row_mid(const struct geometry *g, uint32_t v)
 {
 	return 0.5 * (rtest_row_y0(g, v) + rtest_row_y1(g, v));
 }
+
+void rtest_invert(const float m[16], double inv[16])
+{
+	double a[4][8];
+	for (int r = 0; r < 4; r++)
+		for (int c = 0; c < 4; c++) {
+			a[r][c] = m[c * 4 + r];
+			a[r][4 + c] = r == c;
+		}
+	for (int c = 0; c < 4; c++) {
+		int p = c;
+		for (int r = c + 1; r < 4; r++)
+			if (fabs(a[r][c]) > fabs(a[p][c]))
+				p = r;
+		for (int k = 0; k < 8; k++) {
+			double t = a[c][k];
+			a[c][k] = a[p][k];
+			a[p][k] = t;
+		}
+		double d = a[c][c];
+		if (!(fabs(d) > 1e-12)) {
+			fprintf(stderr, "rtest_invert: a singular transform\n");
+			abort();
+		}
+		for (int k = 0; k < 8; k++)
+			a[c][k] /= d;
+		for (int r = 0; r < 4; r++)
+			if (r != c) {
+				double f = a[r][c];
+				for (int k = 0; k < 8; k++)
+					a[r][k] -= f * a[c][k];
+			}
+	}
+	for (int r = 0; r < 4; r++)
+		for (int c = 0; c < 4; c++)
+			inv[c * 4 + r] = a[r][4 + c];
+}

@@ -60,6 +60,10 @@ void rtest_saturated(uint32_t i, uint8_t out[3]);
 /* A draw of m with the identity transform. */
 struct scene_draw rtest_draw(enum scene_prim prim, const struct rtest_mesh *m, uint8_t r, uint8_t g, uint8_t b);
 void rtest_identity(float t[16]);
+/* Inverse of the affine column-major m into inv (column-major), by
+ * Gauss-Jordan elimination with partial pivoting on the 4x4: independent
+ * of the renderers' own inversion. Aborts when m is singular. */
+void rtest_invert(const float m[16], double inv[16]);
 
 /* Renders draws with a fresh CPU renderer; aborts on failure. */
 struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws, uint32_t n, unsigned threads);

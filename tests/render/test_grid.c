@@ -40,42 +40,6 @@
 #include "render_gl.h"
 #include "rtest.h"
 
-/* Inverse of the affine column-major m into inv (column-major), by
- * Gauss-Jordan elimination with partial pivoting on the 4x4. */
-static void invert(const float m[16], double inv[16])
-{
-	double a[4][8];
-	for (int r = 0; r < 4; r++)
-		for (int c = 0; c < 4; c++) {
-			a[r][c] = m[c * 4 + r];
-			a[r][4 + c] = r == c;
-		}
-	for (int c = 0; c < 4; c++) {
-		int p = c;
-		for (int r = c + 1; r < 4; r++)
-			if (fabs(a[r][c]) > fabs(a[p][c]))
-				p = r;
-		for (int k = 0; k < 8; k++) {
-			double t = a[c][k];
-			a[c][k] = a[p][k];
-			a[p][k] = t;
-		}
-		double d = a[c][c];
-		CHECK(fabs(d) > 1e-12);
-		for (int k = 0; k < 8; k++)
-			a[c][k] /= d;
-		for (int r = 0; r < 4; r++)
-			if (r != c) {
-				double f = a[r][c];
-				for (int k = 0; k < 8; k++)
-					a[r][k] -= f * a[c][k];
-			}
-	}
-	for (int r = 0; r < 4; r++)
-		for (int c = 0; c < 4; c++)
-			inv[c * 4 + r] = a[r][4 + c];
-}
-
 /* The model point that pixel (u, v) of volume image k shows. */
 static void pixel_model(const struct geometry *g, const double inv[16], uint32_t k, uint32_t u, uint32_t v,
 			double out[3])
@@ -129,7 +93,7 @@ static void check_box(const char *name, const struct geometry *g)
 	struct scene_draw d = grid_draw(&gr, m);
 	struct volume *vol = rtest_render(g, &d, 1, 2);
 	double inv[16];
-	invert(m, inv);
+	rtest_invert(m, inv);
 	uint64_t lit = 0, ambiguous = 0;
 	for (uint32_t k = 0; k < images_of(g); k++)
 		for (uint32_t v = 0; v < g->height; v++)

@@ -253,42 +253,6 @@ static double voxel_distance(const struct ellipsoid *e, const double q[3])
 /* ------------------------------------------------------------------ */
 /* Placement and pixels. */
 
-/* Inverse of the affine column-major m into inv (column-major), by
- * Gauss-Jordan elimination with partial pivoting on the 4x4. */
-static void invert(const float m[16], double inv[16])
-{
-	double a[4][8];
-	for (int r = 0; r < 4; r++)
-		for (int c = 0; c < 4; c++) {
-			a[r][c] = m[c * 4 + r];
-			a[r][4 + c] = r == c;
-		}
-	for (int c = 0; c < 4; c++) {
-		int p = c;
-		for (int r = c + 1; r < 4; r++)
-			if (fabs(a[r][c]) > fabs(a[p][c]))
-				p = r;
-		for (int k = 0; k < 8; k++) {
-			double t = a[c][k];
-			a[c][k] = a[p][k];
-			a[p][k] = t;
-		}
-		double d = a[c][c];
-		CHECK(fabs(d) > 1e-12);
-		for (int k = 0; k < 8; k++)
-			a[c][k] /= d;
-		for (int r = 0; r < 4; r++)
-			if (r != c) {
-				double f = a[r][c];
-				for (int k = 0; k < 8; k++)
-					a[r][k] -= f * a[c][k];
-			}
-	}
-	for (int r = 0; r < 4; r++)
-		for (int c = 0; c < 4; c++)
-			inv[c * 4 + r] = a[r][4 + c];
-}
-
 /* 3x3 row-major products. */
 static void mul3(double a[3][3], double b[3][3], double out[3][3])
 {
@@ -449,7 +413,7 @@ static void check_fidelity(const char *gname, const struct geometry *g, const st
 	d.transfer.sampling = SCENE_TRILINEAR;
 	struct volume *tri = rtest_render(g, &d, 1, 2);
 	double inv[16];
-	invert(m, inv);
+	rtest_invert(m, inv);
 	memset(f, 0, sizeof(*f));
 	const int16_t *data = pg->data;
 	for (uint32_t k = 0; k < images_of(g); k++)
