@@ -196,6 +196,12 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) voi
 				nz = _mm256_or_si256(nz, q[c][h]);
 			}
 			on = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nz, _mm256_setzero_si256())), on);
+			if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
+				const __m256 w = _mm256_loadu_ps(tf->weight + 8 * h), e = _mm256_set1_ps(1e-3f);
+				for (int c = 0; c < 3; c++)
+					q[c][h] = _mm256_cvttps_epi32(
+						_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(q[c][h]), w), e));
+			}
 			for (int c = 0; c < 3; c++)
 				q[c][h] = _mm256_and_si256(q[c][h], _mm256_castps_si256(on));
 		}
@@ -221,7 +227,7 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) voi
 			px[c] = _mm256_permutevar8x32_epi32(w, order);
 		}
 	}
-	if (tf->weight)
+	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx2(px[c], tf->weight);
 	for (int c = 0; c < 3; c++) {
@@ -294,6 +300,13 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 		on1 = _mm512_mask_test_epi32_mask(on1, n1, n1);
 		if (!(on0 | on1))
 			return;
+		if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
+			const __m512 w0 = _mm512_loadu_ps(tf->weight), w1 = _mm512_loadu_ps(tf->weight + 16);
+#define WEIGH(x, w) _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(_mm512_cvtepi32_ps(x), w), _mm512_set1_ps(1e-3f)))
+			r0 = WEIGH(r0, w0), gg0 = WEIGH(gg0, w0), b0 = WEIGH(b0, w0);
+			r1 = WEIGH(r1, w1), gg1 = WEIGH(gg1, w1), b1 = WEIGH(b1, w1);
+#undef WEIGH
+		}
 #define JOIN(x0, x1)                                                                           \
 	_mm256_inserti128_si256(_mm256_castsi128_si256(_mm512_maskz_cvtusepi32_epi8(on0, x0)), \
 				_mm512_maskz_cvtusepi32_epi8(on1, x1), 1)
@@ -302,7 +315,7 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 		px[2] = JOIN(b0, b1);
 #undef JOIN
 	}
-	if (tf->weight)
+	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx512(px[c], tf->weight);
 	for (int c = 0; c < 3; c++) {
