@@ -30,23 +30,21 @@ struct stage_prim {
 	uint32_t key;
 };
 
-struct stage_point {
-	struct bin_point rec;
-	uint32_t key;
-};
-
 struct bin_work {
 	const struct scene *scene;
 	unsigned threads;
 	uint64_t prim_items, point_items;
 	struct draw_base *base; /* per draw */
 	size_t base_cap;
-	/* Two staging entries per item (a primitive or point may need two
-	 * records); unused ones have key KEY_NONE. */
+	/* Two staging entries per item (a primitive may need two records);
+	 * unused ones have key KEY_NONE. */
 	struct stage_prim *stage_prims;
 	size_t stage_prims_cap;
-	struct stage_point *stage_points;
-	size_t stage_points_cap;
+	/* bin_point_slots() records and keys per point (bin.h). */
+	struct bin_point *point_recs;
+	size_t point_recs_cap;
+	uint16_t *point_keys;
+	size_t point_keys_cap;
 	uint32_t *hist; /* threads x (prim keys + point keys) */
 	size_t hist_cap;
 	size_t prim_cap, point_cap, turn_cap; /* of the sorted arrays */
@@ -94,7 +92,8 @@ void bin_finish(struct bin_set *b)
 	if (w) {
 		free(w->base);
 		free(w->stage_prims);
-		free(w->stage_points);
+		free(w->point_recs);
+		free(w->point_keys);
 		free(w->hist);
 		free(w);
 	}
@@ -244,77 +243,6 @@ static void turn_prims(const struct bin_set *b, uint32_t turn, struct stage_prim
 	}
 }
 
-/* The record of a point in volume image k: its voxel, colour and size. */
-static void point_key(const struct bin_set *b, const double p[3], uint32_t k, const struct bin_point *look,
-		      struct stage_point *s)
-{
-	const struct geometry *g = &b->geom;
-	s->rec = *look;
-	s->rec.u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
-	s->rec.v = (uint16_t)geometry_row(g, p[1]);
-	s->key = k;
-}
-
-/* Turns the staged records of a point by turn (1 .. N-1): what image k
- * held goes to image k + turn (mod N), and where that is M or more (a
- * mirrored device) to image k + turn - M mirrored: u -> W-1-u, and an even
- * square flagged to reach the other way (bin_point_columns()); an odd one
- * is its own mirror. */
-static void turn_points(const struct bin_set *b, uint32_t turn, struct stage_point *s)
-{
-	const struct geometry *g = &b->geom;
-	for (int i = 0; i < 2; i++) {
-		if (s[i].key == KEY_NONE)
-			continue;
-		uint32_t j = (s[i].key + turn) % g->images_per_rev; /* key < M <= N, turn < N */
-		if (j >= b->images) {
-			j -= b->images;
-			s[i].rec.u = (uint16_t)(g->width - 1 - s[i].rec.u);
-			if (s[i].rec.size % 2 == 0)
-				s[i].rec.size |= BIN_POINT_MIRRORED;
-		}
-		s[i].key = j;
-	}
-}
-
-/* scene.h: 0 counts as 1, and sizes are capped. */
-static uint8_t point_size(const struct scene_draw *d)
-{
-	if (d->point_size == 0)
-		return 1;
-	return d->point_size < BIN_POINT_MAX_SIZE ? d->point_size : BIN_POINT_MAX_SIZE;
-}
-
-/* A point lights one voxel (a square of them when larger) in each lobe's
- * image (docs/design.md section 3). On a mirrored device both lobes usually fold
- * onto one volume image and then give one record: the square is placed in
- * the volume image's own columns, which the mirrored half turn shows
- * mirrored. */
-static void bin_one_point(const struct bin_set *b, const struct scene_draw *d, const float *xyz, const uint8_t rgb[3],
-			  struct stage_point *out)
-{
-	double p[3];
-	out[0].key = out[1].key = KEY_NONE;
-	if (!transform(d->transform, xyz, p))
-		return;
-	const struct geometry *g = &b->geom;
-	uint32_t N = g->images_per_rev, M = b->images, front, back;
-	bool near = false;
-	front = slot_of(&b->slots, (float)p[0], (float)p[2], &near);
-	if (near || front == SLOT_AXIS || N % 2 != 0) {
-		/* Close to a boundary: the exact rule decides. */
-		double phi = atan2(p[2], p[0]);
-		front = geometry_image_of_azimuth(g, phi);
-		back = geometry_image_of_azimuth_back(g, phi);
-	} else {
-		back = (front + N / 2) % N;
-	}
-	struct bin_point look = { .rgb = { rgb[0], rgb[1], rgb[2] }, .size = point_size(d) };
-	point_key(b, p, front % M, &look, &out[0]);
-	if (back % M != front % M)
-		point_key(b, p, back % M, &look, &out[1]);
-}
-
 /* ---- the parallel build ---- */
 
 struct chunk {
@@ -354,6 +282,18 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 		}                                                                                                  \
 	} while (0)
 
+/* The points of draw di in chunk c: [*lo, *hi), false when none. */
+static bool point_run(const struct bin_work *w, uint32_t di, struct chunk c, uint64_t *lo, uint64_t *hi)
+{
+	const struct scene_draw *d = &w->scene->draws[di];
+	if (draw_verts(d) != 1 || !d->xyz)
+		return false;
+	uint64_t base = w->base[di].point, end = base + d->count;
+	*lo = base > c.lo ? base : c.lo;
+	*hi = end < c.hi ? end : c.hi;
+	return *lo < *hi;
+}
+
 /* Adds the keys of a staged pair to a histogram (mask: KEY_MASK for
  * primitives, whose keys carry their turn). */
 static inline void count_keys(uint32_t *hist, uint32_t k0, uint32_t k1, uint32_t mask)
@@ -379,13 +319,13 @@ static void count_job(void *arg, unsigned t)
 		count_keys(hist, s[0].key, s[1].key, KEY_MASK);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
-	FOR_ITEMS(b, true, c, d, nv, i, {
-		struct stage_point *s = &w->stage_points[2 * i];
-		bin_one_point(b, d, xyz_, rgb_, s);
-		if (turn_)
-			turn_points(b, turn_, s);
-		count_keys(hist + pk, s[0].key, s[1].key, UINT32_MAX);
-	});
+	uint32_t slots = bin_point_slots(b);
+	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
+		uint64_t lo, hi, base = w->base[di].point;
+		if (point_run(w, di, c, &lo, &hi))
+			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
+					 w->point_keys + slots * lo, hist + pk);
+	}
 }
 
 /* Each thread's records go, in item order, to its own offsets: the result
@@ -414,9 +354,13 @@ static void scatter_job(void *arg, unsigned t)
 		}
 	}
 	c = chunk_of(w->point_items, w->threads, t);
-	for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
-		if (w->stage_points[i].key != KEY_NONE)
-			b->points[off[pk + w->stage_points[i].key]++] = w->stage_points[i].rec;
+	uint32_t slots = bin_point_slots(b);
+	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
+		uint64_t lo, hi, base = w->base[di].point;
+		if (point_run(w, di, c, &lo, &hi))
+			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
+					   w->point_keys + slots * lo, off + pk);
+	}
 }
 
 static int grow(void **p, size_t *cap, size_t need, size_t size)
@@ -463,8 +407,10 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 		return -E2BIG;
 	size_t keys = prim_keys(b) + b->images;
 	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, 2 * w->prim_items, sizeof(*w->stage_prims))) < 0 ||
-	    (r = grow((void **)&w->stage_points, &w->stage_points_cap, 2 * w->point_items, sizeof(*w->stage_points))) <
-		    0 ||
+	    (r = grow((void **)&w->point_recs, &w->point_recs_cap, bin_point_slots(b) * w->point_items,
+		      sizeof(*w->point_recs))) < 0 ||
+	    (r = grow((void **)&w->point_keys, &w->point_keys_cap, bin_point_slots(b) * w->point_items,
+		      sizeof(*w->point_keys))) < 0 ||
 	    (r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
 		return r;
 	memset(w->hist, 0, threads * keys * sizeof(uint32_t));

@@ -94,6 +94,9 @@ struct bin_set {
 	uint32_t point_count;
 	struct bin_point *points; /* sorted by image */
 	uint32_t *point_start;    /* M + 1 offsets into points */
+	/* Tests: bin points with the scalar rule alone, not the AVX2 path
+	 * (bin_points.c), which gives the same records. */
+	bool points_scalar;
 
 	/* Work space of a build. */
 	struct bin_work *work;
@@ -133,6 +136,32 @@ static inline void bin_point_columns(const struct bin_point *p, uint32_t n, uint
 	*lo = p->u > before ? p->u - before : 0;
 	*hi = p->u + after < n ? p->u + after : n - 1;
 }
+
+/* Points at binning, for bin.c (bin_points.c; docs/rendering.md, "Points"
+ * and "Binning"): one pass stages each point's record(s) and counts them
+ * per image, a scatter moves them to their sorted place. The records are
+ * exactly those of the scalar rule (transform in double, slot from the
+ * slope table, atan2 near a slot boundary or on the axis); the AVX2 path
+ * computes the same operations four points at a time and hands every point
+ * the table flags as near, on the axis or not finite to the scalar rule. */
+
+/* Staged records per point: 1 on a mirrored device (both lobes fold onto
+ * one volume image; the rare second record of a rounding tie is made again
+ * by the scatter), else 2. */
+static inline uint32_t bin_point_slots(const struct bin_set *b)
+{
+	return b->geom.mirrored ? 1 : 2;
+}
+
+/* Stages points j0 .. j1 - 1 of draw d: recs and keys point at point j0's
+ * bin_point_slots() entries; counts each record's volume image in hist. */
+void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+		      struct bin_point *recs, uint16_t *keys, uint32_t *hist);
+
+/* Moves the staged records of points j0 .. j1 - 1 of draw d (as staged by
+ * bin_points_stage()) to b->points[off[image]++], in point order. */
+void bin_points_scatter(struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+			const struct bin_point *recs, const uint16_t *keys, uint32_t *off);
 
 static inline int bin_prim_in_image(const struct bin_set *b, const struct bin_prim *p, uint32_t k)
 {

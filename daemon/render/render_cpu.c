@@ -104,8 +104,15 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 /* Lights a binned point's square (bin.h), clipped to the image. */
 static void light_point(struct section_canvas *c, const struct bin_point *p)
 {
-	if (p->size == 1) { /* the common case, without the spans */
-		section_pixel(c, p->u, p->v, p->rgb);
+	if (p->size == 1) { /* the common case: section_pixel() without branches */
+		uint32_t u = p->u, v = p->v, t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE;
+		uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES +
+			      halftone_pos(u % VOLUME_TILE);
+		for (int i = 0; i < 3; i++) {
+			uint8_t was = px[i * HALFTONE_PLANE_BYTES], rgb = p->rgb[i];
+			px[i * HALFTONE_PLANE_BYTES] = was > rgb ? was : rgb;
+		}
+		c->rows[t] |= 1u << (v % VOLUME_TILE);
 		return;
 	}
 	uint32_t u0, u1, v0, v1;

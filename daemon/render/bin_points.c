@@ -1,0 +1,381 @@
+#include "bin.h"
+
+#include <float.h>
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#if defined(__x86_64__) || defined(__i386__)
+#include <immintrin.h>
+#define BIN_POINTS_AVX2 1
+#endif
+
+/* A staged key: the volume image (below 16384, geometry_validate()), or
+ * none; on a mirrored device PKEY_SECOND says the point has a second
+ * record, which the scatter makes again. */
+#define PKEY_NONE 0xFFFFu
+#define PKEY_SECOND 0x8000u
+#define PKEY_IMAGE 0x3FFFu
+#define NO_IMAGE UINT32_MAX
+
+/* scene.h: 0 counts as 1, and sizes are capped. */
+static uint8_t point_size(const struct scene_draw *d)
+{
+	if (d->point_size == 0)
+		return 1;
+	return d->point_size < BIN_POINT_MAX_SIZE ? d->point_size : BIN_POINT_MAX_SIZE;
+}
+
+/* The turn of a draw, mod N. */
+static uint32_t draw_turn(const struct bin_set *b, const struct scene_draw *d)
+{
+	return d->turn ? d->turn % b->geom.images_per_rev : 0;
+}
+
+/* bin.c's transform: column-major affine in double; false if the result
+ * is not a finite float. */
+static bool point_transform(const float m[16], const float *xyz, double out[3])
+{
+	double x = xyz[0], y = xyz[1], z = xyz[2];
+	for (int i = 0; i < 3; i++) {
+		out[i] = (double)m[i] * x + (double)m[4 + i] * y + (double)m[8 + i] * z + m[12 + i];
+		if (!(fabs(out[i]) <= FLT_MAX))
+			return false;
+	}
+	return true;
+}
+
+/* A record turned by turn (1 .. N-1): what image *k held goes to image
+ * *k + turn (mod N), and where that is M or more (a mirrored device) to
+ * image *k + turn - M mirrored: u -> W-1-u, and an even square flagged to
+ * reach the other way (bin_point_columns()); an odd one is its own mirror. */
+static inline void turn_record(const struct bin_set *b, uint32_t turn, struct bin_point *r, uint32_t *k)
+{
+	const struct geometry *g = &b->geom;
+	uint32_t j = (*k + turn) % g->images_per_rev; /* k < M <= N, turn < N */
+	if (j >= b->images) {
+		j -= b->images;
+		r->u = (uint16_t)(g->width - 1 - r->u);
+		if (r->size % 2 == 0)
+			r->size |= BIN_POINT_MIRRORED;
+	}
+	*k = j;
+}
+
+/* The record of a transformed point in volume image k. */
+static inline void point_record(const struct bin_set *b, const double p[3], uint32_t k, struct bin_point *r)
+{
+	const struct geometry *g = &b->geom;
+	r->u = (uint16_t)geometry_column(g, p[0] * b->dir[2 * k] + p[2] * b->dir[2 * k + 1]);
+	r->v = (uint16_t)geometry_row(g, p[1]);
+}
+
+/* The rule itself (docs/design.md section 3): a point lights one voxel (a
+ * square of them when larger) in each lobe's image. On a mirrored device
+ * both lobes usually fold onto one volume image and then give one record:
+ * the square is placed in the volume image's own columns, which the
+ * mirrored half turn shows mirrored. Fills up to two records and their
+ * volume images (NO_IMAGE: none), turned by turn (0 .. N-1). */
+static void point_exact(const struct bin_set *b, const struct scene_draw *d, const float *xyz, const uint8_t rgb[3],
+			uint32_t turn, struct bin_point r[2], uint32_t k[2])
+{
+	double p[3];
+	k[0] = k[1] = NO_IMAGE;
+	if (!point_transform(d->transform, xyz, p))
+		return;
+	const struct geometry *g = &b->geom;
+	uint32_t N = g->images_per_rev, M = b->images, front, back;
+	bool near = false;
+	front = slot_of(&b->slots, (float)p[0], (float)p[2], &near);
+	if (near || front == SLOT_AXIS || N % 2 != 0) {
+		/* Close to a boundary: the exact rule decides. */
+		double phi = atan2(p[2], p[0]);
+		front = geometry_image_of_azimuth(g, phi);
+		back = geometry_image_of_azimuth_back(g, phi);
+	} else {
+		back = (front + N / 2) % N;
+	}
+	struct bin_point look = { .rgb = { rgb[0], rgb[1], rgb[2] }, .size = point_size(d) };
+	r[0] = r[1] = look;
+	k[0] = front % M;
+	point_record(b, p, k[0], &r[0]);
+	if (back % M != front % M) {
+		k[1] = back % M;
+		point_record(b, p, k[1], &r[1]);
+	}
+	for (int i = 0; turn && i < 2; i++)
+		if (k[i] != NO_IMAGE)
+			turn_record(b, turn, &r[i], &k[i]);
+}
+
+static inline const uint8_t *point_rgb(const struct scene_draw *d, uint64_t j)
+{
+	return d->prim_rgb ? d->prim_rgb + j * 3 : d->rgb;
+}
+
+/* Stages the records of point j (at entry i of recs and keys). */
+static inline void stage_exact(const struct bin_set *b, const struct scene_draw *d, uint64_t j, uint32_t turn,
+			       struct bin_point *recs, uint16_t *keys, uint64_t i, uint32_t *hist)
+{
+	struct bin_point r[2];
+	uint32_t k[2];
+	point_exact(b, d, d->xyz + 3 * j, point_rgb(d, j), turn, r, k);
+	if (k[0] != NO_IMAGE)
+		hist[k[0]]++;
+	if (k[1] != NO_IMAGE)
+		hist[k[1]]++;
+	if (b->geom.mirrored) {
+		recs[i] = r[0];
+		keys[i] = (uint16_t)(k[0] == NO_IMAGE ? PKEY_NONE : k[0] | (k[1] != NO_IMAGE ? PKEY_SECOND : 0));
+	} else {
+		recs[2 * i] = r[0];
+		recs[2 * i + 1] = r[1];
+		keys[2 * i] = (uint16_t)(k[0] == NO_IMAGE ? PKEY_NONE : k[0]);
+		keys[2 * i + 1] = (uint16_t)(k[1] == NO_IMAGE ? PKEY_NONE : k[1]);
+	}
+}
+
+#ifdef BIN_POINTS_AVX2
+/* stage_exact() for stage_avx2()'s fast path (mirrored, no turn): counts
+ * only a second record, the first being counted with the others. */
+static void stage_fast_exact(const struct bin_set *b, const struct scene_draw *d, uint64_t j, struct bin_point *recs,
+			     uint16_t *keys, uint64_t i, uint32_t *hist)
+{
+	struct bin_point r[2];
+	uint32_t k[2];
+	point_exact(b, d, d->xyz + 3 * j, point_rgb(d, j), 0, r, k);
+	recs[i] = r[0];
+	keys[i] = (uint16_t)(k[0] == NO_IMAGE ? PKEY_NONE : k[0] | (k[1] != NO_IMAGE ? PKEY_SECOND : 0));
+	if (k[1] != NO_IMAGE)
+		hist[k[1]]++;
+}
+
+/* turn_record() on a record word (stage_avx2()). */
+static inline void turn_word(const struct bin_set *b, uint32_t turn, uint64_t *w, uint32_t *k)
+{
+	const struct geometry *g = &b->geom;
+	uint32_t j = (*k + turn) % g->images_per_rev;
+	if (j >= b->images) {
+		j -= b->images;
+		uint64_t u = g->width - 1 - (*w & 0xFFFF);
+		*w = (*w & ~(uint64_t)0xFFFF) | u;
+		if ((*w >> 56) % 2 == 0)
+			*w |= (uint64_t)BIN_POINT_MIRRORED << 56;
+	}
+	*k = j;
+}
+
+_Static_assert(sizeof(struct bin_point) == 8 && offsetof(struct bin_point, v) == 2 &&
+		       offsetof(struct bin_point, rgb) == 4 && offsetof(struct bin_point, size) == 7,
+	       "the AVX2 path writes points as 64-bit words");
+_Static_assert(sizeof(struct slot_bucket) == 12 && offsetof(struct slot_bucket, near) == 4 &&
+		       offsetof(struct slot_bucket, below) == 8 && offsetof(struct slot_bucket, above) == 10,
+	       "the AVX2 path gathers slot buckets as three 32-bit words");
+
+/* Points j0 .. j1 - 1 four at a time, with exactly point_exact()'s
+ * operations (no fused multiply-adds: each product and sum rounded as the
+ * scalar code rounds it); a point the slope table flags as near a slot
+ * boundary, on the axis or not finite goes to point_exact(). Even N. */
+__attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set *b, const struct scene_draw *d,
+							   uint64_t j0, uint64_t j1, struct bin_point *recs,
+							   uint16_t *keys, uint32_t *hist)
+{
+	const struct geometry *g = &b->geom;
+	const struct slot_table *t = &b->slots;
+	const float *m = d->transform;
+	const uint32_t N = g->images_per_rev, M = b->images, turn = draw_turn(b, d);
+	const bool mirrored = g->mirrored;
+	const __m256d m0 = _mm256_set1_pd(m[0]), m1 = _mm256_set1_pd(m[1]), m2 = _mm256_set1_pd(m[2]);
+	const __m256d m4 = _mm256_set1_pd(m[4]), m5 = _mm256_set1_pd(m[5]), m6 = _mm256_set1_pd(m[6]);
+	const __m256d m8 = _mm256_set1_pd(m[8]), m9 = _mm256_set1_pd(m[9]), m10 = _mm256_set1_pd(m[10]);
+	const __m256d m12 = _mm256_set1_pd(m[12]), m13 = _mm256_set1_pd(m[13]), m14 = _mm256_set1_pd(m[14]);
+	const __m256d absmask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
+	const __m256d fltmax = _mm256_set1_pd(FLT_MAX), one = _mm256_set1_pd(1.0);
+	/* (S + 1) / 2 == (S + 1) * 0.5 exactly: both round the same real */
+	const __m256d halfv = _mm256_set1_pd(0.5);
+	const __m256d width = _mm256_set1_pd((double)g->width), height = _mm256_set1_pd((double)g->height);
+	const double hh = g->half_height;
+	const __m256d h = _mm256_set1_pd(hh), h2 = _mm256_set1_pd(2.0 * hh), zero = _mm256_setzero_pd();
+	const __m128i wmax = _mm_set1_epi32((int)g->width - 1), hmax = _mm_set1_epi32((int)g->height - 1);
+	const __m128 fzero = _mm_setzero_ps(), fabsmask = _mm_castsi128_ps(_mm_set1_epi32(INT32_MAX));
+	const __m128 nbuckets = _mm_set1_ps((float)t->buckets), eps = _mm_set1_ps(1e-5f), neps = _mm_set1_ps(-1e-5f);
+	const __m128i rowlen = _mm_set1_epi32((int)t->buckets + 1), lo16 = _mm_set1_epi32(0xFFFF);
+	const __m128i vM = _mm_set1_epi32((int)M), vN = _mm_set1_epi32((int)N), half = _mm_set1_epi32((int)(N / 2));
+	const float *table = (const float *)t->b;
+	const int *table_i = (const int *)t->b;
+	const double *dir = b->dir;
+	const uint64_t size = point_size(d);
+	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
+			    size << 56;
+	const __m256i hi4 = _mm256_set1_epi64x((long long)hi);
+	/* mirrored, unturned, one colour: no per-point scalar work in the
+	 * loop, the records counted by a second pass over their keys */
+	const bool fast = mirrored && !turn && !d->prim_rgb;
+	uint64_t j = j0;
+	for (; j + 4 <= j1; j += 4) {
+		const float *p = d->xyz + 3 * j;
+		__m256d x = _mm256_cvtps_pd(_mm_setr_ps(p[0], p[3], p[6], p[9]));
+		__m256d y = _mm256_cvtps_pd(_mm_setr_ps(p[1], p[4], p[7], p[10]));
+		__m256d z = _mm256_cvtps_pd(_mm_setr_ps(p[2], p[5], p[8], p[11]));
+		/* ((m0 x + m4 y) + m8 z) + m12, as the scalar code groups it */
+		__m256d X = _mm256_add_pd(
+			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m0, x), _mm256_mul_pd(m4, y)), _mm256_mul_pd(m8, z)),
+			m12);
+		__m256d Y = _mm256_add_pd(
+			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m1, x), _mm256_mul_pd(m5, y)), _mm256_mul_pd(m9, z)),
+			m13);
+		__m256d Z = _mm256_add_pd(
+			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m2, x), _mm256_mul_pd(m6, y)), _mm256_mul_pd(m10, z)),
+			m14);
+		__m256d fin = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(X, absmask), fltmax, _CMP_LE_OQ),
+							  _mm256_cmp_pd(_mm256_and_pd(Y, absmask), fltmax, _CMP_LE_OQ)),
+					    _mm256_cmp_pd(_mm256_and_pd(Z, absmask), fltmax, _CMP_LE_OQ));
+		/* slot_of((float)X, (float)Z); lanes it would not see (not
+		 * finite) or that have no slot there (on the axis, or a float
+		 * overflow) go to point_exact(), their slope zeroed so that the
+		 * gathers stay inside the table */
+		__m128 fx = _mm256_cvtpd_ps(X), fz = _mm256_cvtpd_ps(Z);
+		__m128 ax = _mm_and_ps(fx, fabsmask), az = _mm_and_ps(fz, fabsmask);
+		__m128 xneg = _mm_cmplt_ps(fx, fzero), zneg = _mm_cmplt_ps(fz, fzero);
+		__m128 odd = _mm_xor_ps(xneg, zneg); /* quadrants 1 and 3 */
+		__m128 perp = _mm_blendv_ps(az, ax, odd), radial = _mm_blendv_ps(ax, az, odd);
+		__m128 gt = _mm_cmpgt_ps(perp, radial);
+		__m128 mn = _mm_min_ps(perp, radial), mx = _mm_max_ps(perp, radial);
+		__m128 exact = _mm_or_ps(_mm_cmpeq_ps(mx, fzero), _mm_cmpeq_ps(mx, _mm_set1_ps(INFINITY)));
+		exact = _mm_or_ps(exact, _mm_cmpunord_ps(fx, fz));
+		__m128 s = _mm_div_ps(mn, mx);
+		s = _mm_andnot_ps(_mm_or_ps(exact, _mm_cmpunord_ps(s, s)), s);
+		__m128i q = _mm_sub_epi32(_mm_setzero_si128(),
+					  _mm_add_epi32(_mm_add_epi32(_mm_castps_si128(zneg), _mm_castps_si128(zneg)),
+							_mm_castps_si128(odd))); /* 2 zneg + odd */
+		__m128i octant = _mm_sub_epi32(_mm_add_epi32(q, q), _mm_castps_si128(gt));
+		__m128i idx = _mm_add_epi32(_mm_mullo_epi32(octant, rowlen), _mm_cvttps_epi32(_mm_mul_ps(s, nbuckets)));
+		__m128i idx3 = _mm_add_epi32(_mm_add_epi32(idx, idx), idx);
+		__m128 edge = _mm_i32gather_ps(table, idx3, 4);
+		__m128 nearv = _mm_i32gather_ps(table + 1, idx3, 4);
+		__m128i ba = _mm_i32gather_epi32(table_i + 2, idx3, 4);
+		__m128 dd = _mm_sub_ps(s, nearv);
+		exact = _mm_or_ps(exact, _mm_and_ps(_mm_cmplt_ps(dd, eps), _mm_cmpgt_ps(dd, neps)));
+		__m128i front = _mm_castps_si128(
+			_mm_blendv_ps(_mm_castsi128_ps(_mm_and_si128(ba, lo16)),
+				      _mm_castsi128_ps(_mm_srli_epi32(ba, 16)), _mm_cmpge_ps(s, edge)));
+		/* the volume image of each lobe: front % M, (front + N/2) % N % M */
+		__m128i k0 = _mm_sub_epi32(front, _mm_andnot_si128(_mm_cmpgt_epi32(vM, front), vM));
+		__m128i back = _mm_add_epi32(front, half);
+		back = _mm_sub_epi32(back, _mm_andnot_si128(_mm_cmpgt_epi32(vN, back), vN));
+		/* column of X cos + Z sin, row of Y */
+		__m256d S = _mm256_add_pd(_mm256_mul_pd(X, _mm256_i32gather_pd(dir, _mm_add_epi32(k0, k0), 8)),
+					  _mm256_mul_pd(Z, _mm256_i32gather_pd(dir + 1, _mm_add_epi32(k0, k0), 8)));
+		__m256d fu = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(S, one), halfv), width);
+		__m256d fv = _mm256_mul_pd(_mm256_div_pd(_mm256_sub_pd(h, Y), h2), height);
+		__m128i u0 = _mm256_cvttpd_epi32(_mm256_and_pd(fu, _mm256_cmp_pd(fu, zero, _CMP_GE_OQ)));
+		u0 = _mm_blendv_epi8(u0, wmax, _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(fu, width, _CMP_GE_OQ))));
+		__m128i v0 = _mm256_cvttpd_epi32(_mm256_and_pd(fv, _mm256_cmp_pd(fv, zero, _CMP_GE_OQ)));
+		v0 = _mm_blendv_epi8(v0, hmax,
+				     _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(fv, height, _CMP_GE_OQ))));
+		__m128i u1 = _mm_setzero_si128();
+		if (!mirrored) {
+			__m256d S1 = _mm256_add_pd(
+				_mm256_mul_pd(X, _mm256_i32gather_pd(dir, _mm_add_epi32(back, back), 8)),
+				_mm256_mul_pd(Z, _mm256_i32gather_pd(dir + 1, _mm_add_epi32(back, back), 8)));
+			__m256d f1 = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(S1, one), halfv), width);
+			u1 = _mm256_cvttpd_epi32(_mm256_and_pd(f1, _mm256_cmp_pd(f1, zero, _CMP_GE_OQ)));
+			u1 = _mm_blendv_epi8(u1, wmax,
+					     _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(f1, width, _CMP_GE_OQ))));
+		}
+		int ex = _mm_movemask_ps(exact) | (~_mm256_movemask_pd(fin) & 0xF);
+		/* records as 64-bit words (x86: little-endian): u, v, then the
+		 * colour and size of hi */
+		__m128i uv0 = _mm_or_si128(u0, _mm_slli_epi32(v0, 16));
+		if (fast) { /* 4 records, 4 keys at once; counted below */
+			_mm256_storeu_si256((__m256i *)(recs + (j - j0)),
+					    _mm256_or_si256(_mm256_cvtepu32_epi64(uv0), hi4));
+			_mm_storel_epi64((__m128i *)(keys + (j - j0)), _mm_packus_epi32(k0, k0));
+			for (int l = 0; ex && l < 4; l++)
+				if (ex & (1 << l))
+					stage_fast_exact(b, d, j + (uint64_t)l, recs, keys, j + (uint64_t)l - j0, hist);
+			continue;
+		}
+		uint32_t ka[4], kb[4], uva[4], ub[4];
+		_mm_storeu_si128((__m128i *)ka, k0);
+		_mm_storeu_si128((__m128i *)kb, back);
+		_mm_storeu_si128((__m128i *)uva, uv0);
+		_mm_storeu_si128((__m128i *)ub, u1);
+		for (int l = 0; l < 4; l++) {
+			uint64_t jj = j + (uint64_t)l, i = jj - j0;
+			if (ex & (1 << l)) {
+				stage_exact(b, d, jj, turn, recs, keys, i, hist);
+				continue;
+			}
+			uint64_t w = hi;
+			if (d->prim_rgb) {
+				const uint8_t *c = d->prim_rgb + 3 * jj;
+				w = (uint64_t)c[0] << 32 | (uint64_t)c[1] << 40 | (uint64_t)c[2] << 48 |
+				    (uint64_t)size << 56;
+			}
+			uint64_t w0 = w | uva[l];
+			uint32_t k = ka[l];
+			if (turn)
+				turn_word(b, turn, &w0, &k);
+			hist[k]++;
+			if (mirrored) {
+				memcpy(&recs[i], &w0, sizeof(w0));
+				keys[i] = (uint16_t)k;
+				continue;
+			}
+			memcpy(&recs[2 * i], &w0, sizeof(w0));
+			keys[2 * i] = (uint16_t)k;
+			uint64_t w1 = w | (uva[l] & 0xFFFF0000u) | ub[l];
+			k = kb[l];
+			if (turn)
+				turn_word(b, turn, &w1, &k);
+			hist[k]++;
+			memcpy(&recs[2 * i + 1], &w1, sizeof(w1));
+			keys[2 * i + 1] = (uint16_t)k;
+		}
+	}
+	if (fast)
+		for (uint64_t i = 0; i < j - j0; i++)
+			if (keys[i] != PKEY_NONE)
+				hist[keys[i] & PKEY_IMAGE]++;
+	return j;
+}
+#endif
+
+void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+		      struct bin_point *recs, uint16_t *keys, uint32_t *hist)
+{
+	uint32_t turn = draw_turn(b, d);
+	uint64_t j = j0;
+#ifdef BIN_POINTS_AVX2
+	if (!b->points_scalar && b->geom.images_per_rev % 2 == 0 && __builtin_cpu_supports("avx2"))
+		j = stage_avx2(b, d, j0, j1, recs, keys, hist);
+#endif
+	for (; j < j1; j++)
+		stage_exact(b, d, j, turn, recs, keys, j - j0, hist);
+}
+
+void bin_points_scatter(struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+			const struct bin_point *recs, const uint16_t *keys, uint32_t *off)
+{
+	struct bin_point *out = b->points;
+	if (!b->geom.mirrored) {
+		for (uint64_t i = 0; i < 2 * (j1 - j0); i++)
+			if (keys[i] != PKEY_NONE)
+				out[off[keys[i]]++] = recs[i];
+		return;
+	}
+	for (uint64_t i = 0; i < j1 - j0; i++) {
+		uint32_t key = keys[i];
+		if (key == PKEY_NONE)
+			continue;
+		out[off[key & PKEY_IMAGE]++] = recs[i];
+		if (key & PKEY_SECOND) { /* a rounding tie: made again */
+			struct bin_point r[2];
+			uint32_t k[2];
+			uint64_t jj = j0 + i;
+			point_exact(b, d, d->xyz + 3 * jj, point_rgb(d, jj), draw_turn(b, d), r, k);
+			out[off[k[1]]++] = r[1];
+		}
+	}
+}

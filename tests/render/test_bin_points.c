@@ -1,0 +1,144 @@
+/* The AVX2 point binning (daemon/render/bin_points.c) gives exactly the
+ * records of the scalar rule, in the same order: random points and points
+ * exactly on slot boundaries, on the axis and on its planes (both signs of
+ * zero), next to and past the float range (dropped), NaN and infinite
+ * ones, under the identity, a turn about the axis, a tilt and a scale,
+ * with turns, even and odd point sizes and per-point colours, on mirrored,
+ * plain, odd-N and perspecta geometries, with 1, 2 and 3 workers, and in
+ * draws whose lengths are no multiple of four. */
+#include <float.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "bin.h"
+#include "check.h"
+#include "pool.h"
+#include "rtest.h"
+
+static uint64_t rng = 0x243f6a8885a308d3ull;
+
+static double rnd(void)
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 7;
+	rng ^= rng << 17;
+	return (double)(rng >> 11) / 9007199254740992.0;
+}
+
+/* Points that stress the slot table and the clamps. */
+static void make_points(const struct geometry *g, struct rtest_mesh *m, uint32_t random_count)
+{
+	double d = 2.0 * M_PI / g->images_per_rev;
+	for (uint32_t i = 0; i < random_count; i++) {
+		double r = 1.2 * sqrt(rnd()), a = 2.0 * M_PI * rnd();
+		rtest_mesh_add(m, r * cos(a), (2.0 * rnd() - 1.0) * 1.2 * g->half_height, r * sin(a));
+	}
+	/* slot boundaries and centres, at several radii */
+	for (uint32_t j = 0; j < 2 * g->images_per_rev; j++) {
+		double a = 0.5 * j * d;
+		for (double r = 1e-6; r < 2.0; r *= 7.0)
+			rtest_mesh_add(m, r * cos(a), 0.1 * j / g->images_per_rev, r * sin(a));
+		rtest_mesh_add(m, cos(a) * (1 + 1e-7), 0.0, sin(a) * (1 - 1e-7));
+	}
+	const double special[][3] = {
+		{ 0, 0, 0 },        { -0.0, 0, -0.0 }, { 0.5, 0, 0 },      { -0.5, 0, 0 },      { 0, 0, 0.5 },
+		{ 0, 0, -0.5 },     { -0.0, 1, 0.5 },  { 0.5, 1, -0.0 },   { 0.3, 0.2, 0.3 },   { -0.3, 0.2, 0.3 },
+		{ 0.3, 0.2, -0.3 }, { -0.3, 5, -0.3 }, { 1e30, 0, 1 },     { 1, 1e30, 1 },      { 1, 0, -1e30 },
+		{ 3e38, 0, 3e38 },  { 1e-40, 0, 0 },   { 0, 0, -1e-40 },   { 1e-40, 0, 1e-40 }, { FLT_MAX, 0, 1 },
+		{ NAN, 0, 0 },      { 0, NAN, 0 },     { 0, 0, INFINITY }, { -INFINITY, 0, 0 },
+	};
+	for (size_t i = 0; i < sizeof(special) / sizeof(special[0]); i++)
+		rtest_mesh_add(m, special[i][0], special[i][1], special[i][2]);
+}
+
+static void set_transforms(struct scene_draw *d, int kind)
+{
+	rtest_identity(d->transform);
+	if (kind == 1) { /* a turn about the axis */
+		double a = 0.377;
+		d->transform[0] = (float)cos(a);
+		d->transform[2] = (float)sin(a);
+		d->transform[8] = (float)-sin(a);
+		d->transform[10] = (float)cos(a);
+	} else if (kind == 2) { /* tilted, scaled, moved */
+		d->transform[0] = 0.8f;
+		d->transform[1] = 0.3f;
+		d->transform[4] = -0.2f;
+		d->transform[5] = 1.1f;
+		d->transform[9] = 0.25f;
+		d->transform[10] = 0.9f;
+		d->transform[12] = 0.05f;
+		d->transform[14] = -0.1f;
+	} else if (kind == 3) { /* huge: most points past the float range */
+		d->transform[0] = d->transform[5] = d->transform[10] = 1e37f;
+	}
+}
+
+static void check_geometry(const struct geometry *g)
+{
+	struct rtest_mesh m = { 0 };
+	make_points(g, &m, 20000);
+	uint32_t n = m.count / 3;
+	uint8_t *rgbs = malloc(3 * (size_t)n);
+	CHECK(rgbs != NULL);
+	for (uint32_t i = 0; i < n; i++)
+		rtest_colour(i, rgbs + 3 * i);
+	/* draws of awkward lengths over the same vertices */
+	struct scene_draw draws[8];
+	uint32_t first = 0;
+	for (int i = 0; i < 8; i++) {
+		uint32_t len = i == 7 ? n - first : n / 9 + (uint32_t)i;
+		draws[i] = rtest_draw(SCENE_POINTS, &m, 255, (uint8_t)(40 * i), 7);
+		draws[i].xyz = m.xyz + 3 * (size_t)first;
+		draws[i].count = len;
+		draws[i].point_size = (uint8_t)(i % 4 == 0 ? 0 : i % 4 == 1 ? 2 : i % 4 == 2 ? 3 : 20);
+		draws[i].turn = (uint16_t)(i % 3 == 0 ? 0 : i * 37 + 1);
+		draws[i].prim_rgb = i % 2 ? rgbs + 3 * (size_t)first : NULL;
+		set_transforms(&draws[i], i % 4);
+		first += len;
+	}
+	struct scene scene = { .draw_count = 8, .draws = draws };
+	for (unsigned threads = 1; threads <= 3; threads++) {
+		struct pool *pool = pool_create(threads);
+		CHECK(pool != NULL);
+		struct bin_set ref, simd;
+		CHECK(bin_init(&ref, g) == 0);
+		CHECK(bin_init(&simd, g) == 0);
+		ref.points_scalar = true;
+		CHECK(bin_build(&ref, &scene, pool) == 0);
+		CHECK(bin_build(&simd, &scene, pool) == 0);
+		CHECK_MSG(ref.point_count == simd.point_count, "N %u: %u points against %u", g->images_per_rev,
+			  simd.point_count, ref.point_count);
+		CHECK(ref.point_count > n / 2);
+		CHECK(memcmp(ref.point_start, simd.point_start, (ref.images + 1) * sizeof(uint32_t)) == 0);
+		uint32_t differ = 0;
+		for (uint32_t i = 0; i < ref.point_count && i < simd.point_count; i++)
+			differ += memcmp(&ref.points[i], &simd.points[i], sizeof(struct bin_point)) != 0;
+		CHECK_MSG(differ == 0, "N %u, %u threads: %u of %u records differ", g->images_per_rev, threads, differ,
+			  ref.point_count);
+		/* and again, the storage reused */
+		CHECK(bin_build(&simd, &scene, pool) == 0);
+		CHECK(simd.point_count == ref.point_count &&
+		      memcmp(ref.points, simd.points, ref.point_count * sizeof(struct bin_point)) == 0);
+		bin_finish(&ref);
+		bin_finish(&simd);
+		pool_destroy(pool);
+	}
+	free(rgbs);
+	rtest_mesh_free(&m);
+}
+
+int main(void)
+{
+	struct geometry small = rtest_small(), odd = rtest_odd(), perspecta;
+	struct geometry even_plain = { 200, 40, 64, false, 1.25f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
+	struct geometry odd_n = { 96, 64, 45, false, 1.25f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
+	CHECK(geometry_from_profile("perspecta", &perspecta) == 0);
+	check_geometry(&small);
+	check_geometry(&odd);
+	check_geometry(&even_plain);
+	check_geometry(&odd_n);
+	check_geometry(&perspecta);
+	return check_done();
+}
