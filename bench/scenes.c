@@ -238,13 +238,15 @@ static const struct grid_scene {
 	double height; /* the box's height, in half heights h */
 	float threshold, lo, hi;
 	uint32_t sampling;
+	double tilt; /* degrees about the x axis: not upright, the general path */
 } grids[] = {
-	{ { 128, 128, 128 }, 1.8, -500, -160, 240, SCENE_TRILINEAR },
-	{ { 256, 256, 256 }, 1.8, -500, -160, 240, SCENE_TRILINEAR },
+	{ { 128, 128, 128 }, 1.8, -500, -160, 240, SCENE_TRILINEAR, 0 },
+	{ { 256, 256, 256 }, 1.8, -500, -160, 240, SCENE_TRILINEAR, 0 },
 	/* CT-sized: 512 x 512 pixels of 0.7 mm, 300 slices of 1 mm. */
-	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_NEAREST },
-	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_TRILINEAR },
-	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, 300, -100, 1700, SCENE_TRILINEAR },
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_NEAREST, 0 },
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, -500, -160, 240, SCENE_TRILINEAR, 0 },
+	{ { 512, 300, 512 }, 1.3 * 300 / 358.4, 300, -100, 1700, SCENE_TRILINEAR, 0 },
+	{ { 128, 128, 128 }, 1.5, -500, -160, 240, SCENE_TRILINEAR, 20 },
 };
 static const struct {
 	double c[3], r[3], value; /* centre and half axes in -1..1; the value set inside */
@@ -299,7 +301,26 @@ static int build_grid(struct bench_scene *s, struct scene_data *d, const struct 
 						.hi = gs->hi,
 						.sampling = gs->sampling };
 	double h = g->half_height * gs->height;
-	const float m[16] = { 1.3f, 0, 0, 0, 0, (float)h, 0, 0, 0, 0, 1.3f, 0, -0.65f, (float)(-h / 2), -0.65f, 1 };
+	/* The box centred, then tilted about x. */
+	double c = cos(gs->tilt * M_PI / 180), sn = sin(gs->tilt * M_PI / 180);
+	const float m[16] = {
+		1.3f,
+		0,
+		0,
+		0,
+		0,
+		(float)(h * c),
+		(float)(h * sn),
+		0,
+		0,
+		(float)(-1.3 * sn),
+		(float)(1.3 * c),
+		0,
+		-0.65f,
+		(float)(-h / 2 * c + 0.65 * sn),
+		(float)(-h / 2 * sn - 0.65 * c),
+		1
+	};
 	memcpy(dr->transform, m, sizeof(m));
 	return 0;
 }
@@ -334,6 +355,8 @@ static const struct bench_scene_info scenes[] = {
 	{ "S5-ct-trilinear", "the same, trilinear", 0, 0, 0, 1, &impl_grid, 3 },
 	{ "S5-ct-bone", "the same, trilinear, bone threshold (300 HU: the skull shell alone)", 0, 0, 0, 1, &impl_grid,
 	  4 },
+	{ "S5-phantom-tilted", "the 128^3 phantom tilted 20 degrees about x (1.5 h high): the general path", 0, 0, 0, 1,
+	  &impl_grid, 5 },
 	{ NULL, NULL, 0, 0, 0, 0, NULL, 0 },
 };
 

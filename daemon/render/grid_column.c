@@ -4,11 +4,6 @@
 #include <math.h>
 #include <string.h>
 
-uint32_t grid_clamp_index(int64_t i, uint32_t n)
-{
-	return i < 0 ? 0 : i >= (int64_t)n ? n - 1 : (uint32_t)i;
-}
-
 void grid_column_setup(struct column *col, const struct scene_grid *gr, double fx, double fz, bool tri)
 {
 	if (!tri) {

@@ -49,7 +49,10 @@ static inline float lerp(float a, float b, float t)
 }
 
 /* i clamped to 0 .. n - 1: the edge samples repeated. */
-uint32_t grid_clamp_index(int64_t i, uint32_t n);
+static inline uint32_t grid_clamp_index(int64_t i, uint32_t n)
+{
+	return i < 0 ? 0 : i >= (int64_t)n ? n - 1 : (uint32_t)i;
+}
 
 /* One pixel column of an upright grid: the one line (nearest) or four
  * lines (trilinear) of samples it reads, with what sample_at() works out
