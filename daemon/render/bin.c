@@ -170,7 +170,8 @@ static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool n
 	uint32_t slack = near ? 3 : 1;
 	if (gap <= slack || 2 * (gap - slack) <= N)
 		return false;
-	*len = (end + N - start) % N + 1;
+	*len = end + N - start; /* mod N, without a division: below 2N */
+	*len = (*len >= N ? *len - N : *len) + 1;
 	*first = start;
 	if (near) {
 		*first = (start + N - 1) % N;
@@ -193,7 +194,9 @@ static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t fir
 	}
 	s->rec.first = (uint16_t)first;
 	s->rec.count = (uint16_t)count;
-	s->key = ceil_log2(count) * b->images + first;
+	/* ceil_log2(count), count >= 1, without its loop */
+	unsigned cls = count > 1 ? 32 - (unsigned)__builtin_clz(count - 1) : 0;
+	s->key = cls * b->images + first;
 }
 
 /* Records (one or two) of one segment or triangle. */
@@ -215,7 +218,8 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 	if (!prim_arc(b, (const float(*)[3])p->v, n, false, &first, &len)) {
 		prim_key(b, &out[0], 0, M);
 	} else if (b->geom.mirrored) {
-		prim_key(b, &out[0], first % M, len); /* both lobes fold onto M images */
+		/* both lobes fold onto M images: first < N = 2M */
+		prim_key(b, &out[0], first >= M ? first - M : first, len);
 	} else if (!prim_arc(b, (const float(*)[3])p->v, n, true, &bf, &bl) || len + bl >= M) {
 		prim_key(b, &out[0], 0, M);
 	} else {

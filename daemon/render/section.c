@@ -17,6 +17,9 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
 	c->rgb = calloc(tiles, HALFTONE_TILE_BYTES);
 	c->rows = calloc(tiles, sizeof(*c->rows));
+	int e;
+	if (frexp(2.0 * g->half_height, &e) == 0.5)
+		c->row_scale = 1.0 / (2.0 * g->half_height); /* exact */
 	c->weighted_plane = c->tiles_x * VOLUME_TILE;
 	c->weighted = malloc((size_t)c->weighted_plane * 3);
 	if (!c->rgb || !c->rows || !c->weighted) {
@@ -77,6 +80,52 @@ static inline void max_bytes(uint8_t *row, uint32_t a, uint32_t b, uint8_t value
 		row[j] = row[j] < value ? value : row[j];
 }
 
+/* Half a canvas tile row (16 bytes), and the pixel of each byte of the
+ * row's two halves (halftone_pos()). */
+typedef uint8_t span_half __attribute__((vector_size(16)));
+static const span_half span_pixel[2] = { { 7, 6, 5, 4, 3, 2, 1, 0, 15, 14, 13, 12, 11, 10, 9, 8 },
+					 { 23, 22, 21, 20, 19, 18, 17, 16, 31, 30, 29, 28, 27, 26, 25, 24 } };
+
+/* Per-byte MAX of value into the bytes of pixels a..b (a <= b <= 31) of a
+ * canvas tile row, without a branch per pixel: the halves holding them
+ * are read and written whole, their other bytes unchanged. */
+static inline void max_pixels(uint8_t *r, uint32_t a, uint32_t b, uint8_t value)
+{
+	span_half lo = { 0 }, hi = { 0 }, val = { 0 };
+	lo += (uint8_t)a;
+	hi += (uint8_t)b;
+	val += value;
+	for (uint32_t h = a / 16; h <= b / 16; h++) {
+		span_half row, lit;
+		memcpy(&row, r + 16 * h, sizeof(row));
+		lit = (span_half)((span_pixel[h] >= lo) & (span_pixel[h] <= hi)) & val;
+		row = row ^ ((row ^ lit) & (span_half)(row < lit));
+		memcpy(r + 16 * h, &row, sizeof(row));
+	}
+}
+
+/* section_span()'s byte loops: what the tests compare max_pixels() with
+ * (section_canvas.general). */
+static void span_bytes(uint8_t *base, uint32_t a, uint32_t b, const uint8_t rgb[3])
+{
+	for (int i = 0; i < 3; i++) {
+		if (!rgb[i])
+			continue;
+		uint8_t *r = base + i * HALFTONE_PLANE_BYTES;
+		/* Pixels a..b are bytes a^7..b^7: whole groups of 8
+		 * stay whole, partial groups at the ends reverse. */
+		uint32_t ga = a & ~7u, gb = b & ~7u;
+		if (ga == gb) {
+			max_bytes(r, ga + 7 - (b & 7), ga + 7 - (a & 7), rgb[i]);
+		} else {
+			max_bytes(r, ga, ga + 7 - (a & 7), rgb[i]);
+			if (gb > ga + 8)
+				max_bytes(r, ga + 8, gb - 1, rgb[i]);
+			max_bytes(r, gb + 7 - (b & 7), gb + 7, rgb[i]);
+		}
+	}
+}
+
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3])
 {
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
@@ -84,21 +133,12 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 		uint32_t t = row + u / VOLUME_TILE;
 		uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
 		uint8_t *base = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES;
-		for (int i = 0; i < 3; i++) {
-			if (!rgb[i])
-				continue;
-			uint8_t *r = base + i * HALFTONE_PLANE_BYTES;
-			/* Pixels a..b are bytes a^7..b^7: whole groups of 8
-			 * stay whole, partial groups at the ends reverse. */
-			uint32_t ga = a & ~7u, gb = b & ~7u;
-			if (ga == gb) {
-				max_bytes(r, ga + 7 - (b & 7), ga + 7 - (a & 7), rgb[i]);
-			} else {
-				max_bytes(r, ga, ga + 7 - (a & 7), rgb[i]);
-				if (gb > ga + 8)
-					max_bytes(r, ga + 8, gb - 1, rgb[i]);
-				max_bytes(r, gb + 7 - (b & 7), gb + 7, rgb[i]);
-			}
+		if (c->general) {
+			span_bytes(base, a, b, rgb);
+		} else {
+			for (int i = 0; i < 3; i++)
+				if (rgb[i])
+					max_pixels(base + i * HALFTONE_PLANE_BYTES, a, b, rgb[i]);
 		}
 		c->rows[t] |= 1u << y;
 		u += b - a + 1;
@@ -221,7 +261,7 @@ static int clip_plane(const double (*in)[3], int n, double (*out)[3], double nx,
 {
 	int m = 0;
 	for (int i = 0; i < n; i++) {
-		const double *p = in[i], *q = in[(i + 1) % n];
+		const double *p = in[i], *q = in[i + 1 < n ? i + 1 : 0];
 		double dp = nx * p[0] + nz * p[2], dq = nx * q[0] + nz * q[2];
 		if (dp >= 0.0)
 			memcpy(out[m++], p, sizeof(out[0]));
@@ -246,7 +286,7 @@ static inline __attribute__((always_inline)) void edges_init(struct edges *e, co
 {
 	e->n = n;
 	for (int i = 0; i < n; i++) {
-		const double *a = q[i], *b = q[(i + 1) % n];
+		const double *a = q[i], *b = q[i + 1 < n ? i + 1 : 0];
 		if (a[1] > b[1]) {
 			const double *t = a;
 			a = b;
@@ -286,6 +326,16 @@ static void vertices_in_slab(const double (*q)[2], int n, double ylo, double yhi
 	}
 }
 
+/* geometry_row(), by a product where 2h is a power of two (perspecta,
+ * small): x / 2^k and x 2^-k are the same rounding of the same number. */
+static inline uint32_t canvas_row(const struct section_canvas *c, double y)
+{
+	double h = c->geom.half_height;
+	if (c->row_scale == 0.0 || c->general)
+		return geometry_row(&c->geom, y);
+	return geometry_clamp_index_((h - y) * c->row_scale * c->geom.height, c->geom.height);
+}
+
 /* The body of project_raster() and project_raster_mirrored(), with mirror
  * a constant in each: the unmirrored path tests nothing per row. */
 static inline __attribute__((always_inline)) void raster_rows(struct section_canvas *c, const double (*q)[2], int n,
@@ -300,7 +350,7 @@ static inline __attribute__((always_inline)) void raster_rows(struct section_can
 	double h = g->half_height, row_h = 2.0 * h / g->height;
 	/* A hair of slack so rounding at a row edge never loses a touch. */
 	double eps = 1e-9 * row_h;
-	uint32_t v0 = geometry_row(g, ymax), v1 = geometry_row(g, ymin);
+	uint32_t v0 = canvas_row(c, ymax), v1 = canvas_row(c, ymin);
 	/* Per row, the polygon's s range inside the slab comes from its
 	 * vertices in the slab and its edges' crossings of the slab's two
 	 * lines (s is linear along an edge). The outer rows' slabs are open,
@@ -405,10 +455,15 @@ static inline __attribute__((always_inline)) void lobe_body(
 	double a[SECTION_MAX_VERTS][3], b[SECTION_MAX_VERTS][3];
 	const double(*piece)[3] = v;
 	if (in1 != n || in2 != n) {
-		n = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
-		if (n == 0)
-			return;
-		n = clip_plane((const double(*)[3])a, n, b, sign * w->n2x, sign * w->n2z);
+		/* A plane every vertex is inside leaves them as they are. */
+		const double(*cut)[3] = v;
+		if (in1 != n || c->general) {
+			n = clip_plane(v, n, a, sign * w->n1x, sign * w->n1z);
+			if (n == 0)
+				return;
+			cut = (const double(*)[3])a;
+		}
+		n = clip_plane(cut, n, b, sign * w->n2x, sign * w->n2z);
 		if (n == 0)
 			return;
 		piece = (const double(*)[3])b;
@@ -454,6 +509,32 @@ static inline struct section_weight *weight_start(const struct section_canvas *c
 	return wt;
 }
 
+/* Which lobes the clipping can leave a piece in: bit 0 s >= 0, bit 1
+ * s < 0. d1 + d2 is linear (2 sin(D / 2) s): where it is below -m at
+ * every vertex, m = 1e-12 of the largest |x|, |z| (X), no point of the
+ * primitive has d1 >= 0 and d2 >= 0, and none of the clip's either: the
+ * first plane keeps vertices with d2 < -m, and its cut points p + t (q - p)
+ * have |d1| and the error of their d2 under 50 ulps of X (t = dp / (dp -
+ * dq) divides by a difference of opposite signs: no cancellation), so their
+ * d2 stays below 0 and the second plane keeps nothing. Likewise above m for
+ * the s < 0 lobe. Most primitives lie in one lobe; the other's clip would
+ * cost about as much as the piece. */
+static inline unsigned lobes_reached(const struct section_canvas *c, const double (*v)[3], int n, const double *d1,
+				     const double *d2)
+{
+	double lo = INFINITY, hi = -INFINITY, xz = 0.0;
+	for (int i = 0; i < n; i++) {
+		lo = dmin(lo, d1[i] + d2[i]);
+		hi = dmax(hi, d1[i] + d2[i]);
+	}
+	if (c->general || (lo <= 0.0 && hi >= 0.0))
+		return 3;
+	for (int i = 0; i < n; i++)
+		xz = dmax(xz, dmax(fabs(v[i][0]), fabs(v[i][2])));
+	double m = 1e-12 * xz;
+	return (hi < -m ? 0u : 1u) | (lo > m ? 0u : 2u);
+}
+
 void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 		  const uint8_t rgb[3])
 {
@@ -463,8 +544,11 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w, const
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
 	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
-	section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
-	section_lobe(c, w, v, n, d1, d2, -1.0, rgb, wt);
+	unsigned lobes = lobes_reached(c, v, n, d1, d2);
+	if (lobes & 1)
+		section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
+	if (lobes & 2)
+		section_lobe(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }
 
 void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
@@ -480,6 +564,9 @@ void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
 	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
-	section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
-	section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb, wt);
+	unsigned lobes = lobes_reached(c, v, n, d1, d2);
+	if (lobes & 1)
+		section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
+	if (lobes & 2)
+		section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb, wt);
 }

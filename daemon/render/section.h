@@ -35,6 +35,12 @@ struct section_canvas {
 	uint32_t weighted_plane; /* weighted colour per column, in canvas order */
 	float *scratch;          /* NULL, or scratch_floats floats: grid.c's, */
 	size_t scratch_floats;   /* grown as needed, freed with the canvas */
+	double row_scale;        /* 1 / (2h) where 2h is a power of two, else 0 */
+	/* Tests: none of section.c's shortcuts, which light the same voxels
+	 * (lobes the clip cannot reach, planes every vertex is inside, rows
+	 * by a product, spans by half rows): both lobes, both planes,
+	 * geometry_row(), spans byte by byte. */
+	bool general;
 };
 
 /* The two half-spaces of image k's s >= 0 lobe, as inward normals in the xz

@@ -1,0 +1,145 @@
+/* section.c's shortcuts (lobes the clip cannot reach, planes every vertex
+ * is inside, rows by a product, spans by half rows) against the general
+ * path (section_canvas.general: both lobes, both planes, geometry_row(),
+ * spans byte by byte), pixel for pixel: many random small triangles and
+ * segments about each image's wedge planes, near and across the axis, with
+ * vertices on column and row boundaries and on the wedge planes, degenerate
+ * ones, drawn plain and mirrored, on three geometries (2h a power of two
+ * and not), in the exact, even and uniform brightness models. */
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "brightness.h"
+#include "check.h"
+#include "rtest.h"
+#include "section.h"
+
+/* splitmix64: the same cases on every machine. */
+static uint64_t rng_state = 17;
+
+static double unit(void)
+{
+	uint64_t z = (rng_state += 0x9e3779b97f4a7c15u);
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+	z ^= z >> 31;
+	return (double)(z >> 11) * (1.0 / 9007199254740992.0);
+}
+
+static double range(double lo, double hi)
+{
+	return lo + (hi - lo) * unit();
+}
+
+/* Whether the two canvases hold the same bytes and row masks; clears both. */
+static bool same_and_clear(struct section_canvas *a, struct section_canvas *b)
+{
+	bool same = true;
+	uint32_t tiles = a->tiles_x * a->tiles_y;
+	for (uint32_t t = 0; t < tiles; t++) {
+		if (!a->rows[t] && !b->rows[t])
+			continue;
+		if (a->rows[t] != b->rows[t] || memcmp(a->rgb + (size_t)t * HALFTONE_TILE_BYTES,
+						       b->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES))
+			same = false;
+		/* Both masks: a row one canvas lit and the other did not. */
+		uint32_t rows = a->rows[t] | b->rows[t];
+		a->rows[t] = b->rows[t] = rows;
+		section_canvas_clear_tile(a, t);
+		section_canvas_clear_tile(b, t);
+	}
+	return same;
+}
+
+/* A vertex near (r, y) at azimuth phi, or moved onto something exact. */
+static void vertex(const struct geometry *g, const struct section_wedge *w, double cx, double cy, double cz,
+		   double size, double out[3])
+{
+	double row_h = 2.0 * g->half_height / g->height, col_w = 2.0 / g->width;
+	out[0] = cx + range(-size, size);
+	out[1] = cy + range(-size, size);
+	out[2] = cz + range(-size, size);
+	double pick = unit();
+	if (pick < 0.1) { /* y on a row boundary */
+		out[1] = g->half_height - round((g->half_height - out[1]) / row_h) * row_h;
+	} else if (pick < 0.2) { /* s on a column boundary, on the image's plane */
+		double s = out[0] * w->dx + out[2] * w->dz;
+		s = round((s + 1.0) / col_w) * col_w - 1.0;
+		out[0] = s * w->dx;
+		out[2] = s * w->dz;
+	} else if (pick < 0.3) { /* on a wedge plane: azimuth theta_k +- D/2 */
+		double r = hypot(out[0], out[2]), a = atan2(w->dz, w->dx);
+		a += (unit() < 0.5 ? -0.5 : 0.5) * 2.0 * M_PI / g->images_per_rev;
+		out[0] = r * cos(a);
+		out[2] = r * sin(a);
+	}
+	for (int j = 0; j < 3; j++)
+		out[j] = F(out[j]);
+}
+
+static void check_geometry(const struct geometry *g, uint32_t cases)
+{
+	struct section_canvas fast, slow;
+	struct brightness_map bright;
+	CHECK(section_canvas_init(&fast, g) == 0);
+	CHECK(section_canvas_init(&slow, g) == 0);
+	CHECK(brightness_map_init(&bright, g) == 0);
+	fast.bright = slow.bright = &bright; /* weighted near the axis unless EXACT */
+	slow.general = true;
+	uint32_t images = geometry_images_per_volume(g);
+	double col_w = 2.0 / g->width;
+	for (uint32_t i = 0; i < cases; i++) {
+		uint32_t k = (uint32_t)(unit() * images);
+		struct section_wedge w;
+		section_wedge_init(&w, g, k);
+		/* Mostly about the planes of the wedge, some across the axis. */
+		double r = unit() < 0.15 ? range(0.0, 3.0 * col_w) : range(0.0, 1.1);
+		double phi = atan2(w.dz, w.dx) + range(-1.5, 1.5) * 2.0 * M_PI / g->images_per_rev;
+		if (unit() < 0.3)
+			phi += M_PI; /* the s < 0 lobe */
+		double cx = r * cos(phi), cz = r * sin(phi), cy = range(-1.05, 1.05) * g->half_height;
+		double size = col_w * exp(range(log(1e-4), log(3.0)));
+		int n = unit() < 0.8 ? 3 : 2;
+		double v[3][3] = { { 0 } };
+		for (int a = 0; a < n; a++)
+			vertex(g, &w, cx, cy, cz, size, v[a]);
+		double pick = unit();
+		if (pick < 0.05) { /* two vertices the same */
+			memcpy(v[1], v[0], sizeof(v[0]));
+		} else if (pick < 0.08) { /* all the same: a point */
+			memcpy(v[1], v[0], sizeof(v[0]));
+			memcpy(v[2], v[0], sizeof(v[0]));
+		} else if (pick < 0.12 && n == 3) { /* collinear */
+			for (int j = 0; j < 3; j++)
+				v[2][j] = F(v[0][j] + 0.5 * (v[1][j] - v[0][j]));
+		}
+		uint8_t rgb[3] = { (uint8_t)(1 + i % 255), (uint8_t)(i * 7 % 256), 255 };
+		bool mirror = unit() < 0.3;
+		section_prim_mirror(&fast, &w, (const double(*)[3])v, n, rgb, mirror);
+		section_prim_mirror(&slow, &w, (const double(*)[3])v, n, rgb, mirror);
+		CHECK_MSG(same_and_clear(&fast, &slow),
+			  "%ux%u N %u: case %u, image %u, %d vertices (%.17g %.17g %.17g) (%.17g %.17g %.17g) "
+			  "(%.17g %.17g %.17g), mirror %d",
+			  g->width, g->height, g->images_per_rev, i, k, n, v[0][0], v[0][1], v[0][2], v[1][0], v[1][1],
+			  v[1][2], v[2][0], v[2][1], v[2][2], mirror);
+	}
+	section_canvas_finish(&fast);
+	section_canvas_finish(&slow);
+	brightness_map_finish(&bright);
+}
+
+int main(void)
+{
+	struct geometry perspecta, small = rtest_small(), odd = rtest_odd();
+	CHECK(geometry_from_profile("perspecta", &perspecta) == 0);
+	check_geometry(&perspecta, 200000);
+	check_geometry(&small, 100000);
+	check_geometry(&odd, 100000);
+	perspecta.brightness = GEOMETRY_BRIGHTNESS_EVEN;
+	odd.brightness = GEOMETRY_BRIGHTNESS_UNIFORM;
+	check_geometry(&perspecta, 100000);
+	check_geometry(&odd, 50000);
+	return check_done();
+}
