@@ -26,6 +26,7 @@
 static void client_kill(struct client *c)
 {
 	c->dead = true;
+	volumes_cancel_build(c);
 	c->left_scene = objects_leave_stage(c);
 	objects_leave_watch(c);
 	/* A closed socket stays readable: stop listening, or the loop spins. */
@@ -55,13 +56,15 @@ void client_flush(struct client *c)
 	if (c->dead)
 		return;
 	int r = proto_conn_flush(c->conn);
+	/* Not read while a volume of its own is being made. */
+	uint32_t in = c->building ? 0 : EPOLLIN;
 	if (r == -EAGAIN) {
-		sd_event_source_set_io_events(c->source, EPOLLIN | EPOLLOUT);
+		sd_event_source_set_io_events(c->source, in | EPOLLOUT);
 	} else if (r < 0) {
 		log_debug("client %d: write failed: %s", proto_conn_get_fd(c->conn), strerror(-r));
 		client_kill(c);
 	} else {
-		sd_event_source_set_io_events(c->source, EPOLLIN);
+		sd_event_source_set_io_events(c->source, in);
 	}
 }
 
@@ -459,10 +462,24 @@ static int dispatch_message(struct client *c, struct proto_message *m)
 	return r;
 }
 
+/* Serves the requests already read, until one makes c wait (building).
+ * false: c failed. */
+static bool client_dispatch(struct client *c)
+{
+	struct proto_error err = { 0 };
+	struct proto_message m;
+	int r = 0;
+	while (!c->dead && !c->building && (r = proto_conn_next(c->conn, &m, &err)) == 1)
+		dispatch_message(c, &m);
+	if (r < 0 && !c->dead)
+		client_fail(c, 0, err.code, "%s", err.text);
+	return !c->dead;
+}
+
 static void client_read(struct client *c)
 {
 	struct proto_error err = { 0 };
-	for (int i = 0; i < CLIENT_READS_PER_WAKEUP && !c->dead; i++) {
+	for (int i = 0; i < CLIENT_READS_PER_WAKEUP && !c->dead && !c->building; i++) {
 		int n = proto_conn_read(c->conn, &err);
 		if (n == -EPROTO) {
 			if (proto_conn_over_fd_cap(c->conn))
@@ -477,18 +494,21 @@ static void client_read(struct client *c)
 			client_kill(c);
 			return;
 		}
-		struct proto_message m;
-		int r = 0;
-		while (!c->dead && (r = proto_conn_next(c->conn, &m, &err)) == 1)
-			dispatch_message(c, &m);
-		if (r < 0 && !c->dead) {
-			client_fail(c, 0, err.code, "%s", err.text);
+		if (!client_dispatch(c))
 			return;
-		}
 		if (n == 0)
 			break;
 	}
 	client_flush(c);
+}
+
+void client_resume(struct client *c)
+{
+	if (c->dead)
+		return;
+	sd_event_source_set_enabled(c->source, SD_EVENT_ON);
+	if (client_dispatch(c))
+		client_flush(c); /* reading again, unless another volume waits */
 }
 
 static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data)
@@ -498,7 +518,14 @@ static int client_event(sd_event_source *s, int fd, uint32_t revents, void *data
 		return 0;
 	if (revents & EPOLLOUT)
 		client_flush(c);
-	if (revents & (EPOLLIN | EPOLLHUP | EPOLLERR))
+	if (c->building && (revents & (EPOLLHUP | EPOLLERR))) {
+		/* Hung up while its volume is made: what it sent before is
+		 * still served (client_resume()); meanwhile not listening, as
+		 * these would come again and again. */
+		sd_event_source_set_enabled(c->source, SD_EVENT_OFF);
+		return 0;
+	}
+	if (!c->building && (revents & (EPOLLIN | EPOLLHUP | EPOLLERR)))
 		client_read(c);
 	return 0;
 }
@@ -564,6 +591,7 @@ err_free:
 
 void client_destroy(struct client *c)
 {
+	volumes_cancel_build(c);
 	/* Layers first: they hold references to lists. */
 	struct layer *y, *ytmp;
 	link_for_each_safe(y, ytmp, &c->layers, link)

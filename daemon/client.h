@@ -174,6 +174,9 @@ struct client {
 	uint32_t state_flags; /* the last state event sent (version 2) */
 	float state_rpm;
 	bool dead;
+	/* NULL, or a volume being made a step at a time (volumes.c): the
+	 * client's later requests wait, unread, until it is made. */
+	struct vbuild *building;
 	bool answered;   /* answers queued, not yet flushed */
 	bool left_scene; /* its layers, taken off the stage when it died, showed */
 };
@@ -242,6 +245,11 @@ int objects_list_append(struct list *l, struct vdata *v);
 int volumes_list_draw(void *target, const struct proto_list_draw_volume_args *a);
 int volumes_list_set_lut(void *target, const struct proto_list_set_volume_lut_args *a);
 void volume_object_destroy(struct volume_obj *vo);
+/* Stops making c's volume, if it is making one (its object goes with c). */
+void volumes_cancel_build(struct client *c);
+/* c's volume is made: its waiting requests are served, and it is read
+ * again (client.c). */
+void client_resume(struct client *c);
 /* Registers a new object under its client-chosen id (checked). */
 int object_register(struct client *c, struct object *obj, uint32_t id, enum proto_interface type);
 void object_destroy(struct object *obj);

@@ -1,6 +1,7 @@
 /* Volumes (protocol 6, docs/volumes.md): display.create_volume copies a
  * client's samples once into the renderers' layout (scene.h, scene_grid:
- * the up axis y fastest); list.draw_volume draws one with a transfer
+ * the up axis y fastest; a big volume a few slices per turn of the event
+ * loop, its client's later requests waiting); list.draw_volume draws one with a transfer
  * function; list.set_volume_lut sets the lookup table of the draws that
  * follow. The samples count against the client's max-buffer-bytes and the
  * daemon's memory-budget while the volume object lives; a draw of one
@@ -9,10 +10,12 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <systemd/sd-event.h>
 
 #include "client.h"
 #include "draw.h"
 #include "grid.h"
+#include "log.h"
 #include "stage.h"
 
 #define VOLUME_MAX_SIZE 4096
@@ -58,10 +61,11 @@ TRANSPOSE(uint16_t)
 TRANSPOSE(uint32_t)
 #undef TRANSPOSE
 
-static void relayout(void *dst, const uint8_t *src, const uint32_t n[3], uint32_t size, bool swap)
+static void relayout(void *dst, const uint8_t *src, const uint32_t n[3], uint32_t size, bool swap, uint32_t z0,
+		     uint32_t z1)
 {
 	size_t slice = (size_t)n[0] * n[1];
-	for (uint64_t z = 0; z < n[2]; z++) {
+	for (uint64_t z = z0; z < z1; z++) {
 		uint8_t *out = (uint8_t *)dst + z * slice * size;
 		const uint8_t *in = src + z * slice * size;
 		if (swap) {
@@ -105,9 +109,9 @@ static int check_shape(struct client *c, const struct proto_display_create_volum
 	return 0;
 }
 
-/* The grid of a's samples, read from src: laid out for the renderers and
- * its bricks' maxima made (bytes: both together). NULL when out of memory. */
-static struct vgrid *vgrid_build(const struct proto_display_create_volume_args *a, const uint8_t *src, uint64_t bytes)
+/* A grid for a's samples, not yet made (bytes: samples and bricks' maxima
+ * together). NULL when out of memory. */
+static struct vgrid *vgrid_new(const struct proto_display_create_volume_args *a, uint64_t bytes)
 {
 	struct vgrid *g = calloc(1, sizeof(*g));
 	uint64_t bricks = (uint64_t)a->nx * a->nz * scene_grid_bricks(a->ny);
@@ -119,19 +123,90 @@ static struct vgrid *vgrid_build(const struct proto_display_create_volume_args *
 		free(brick_max);
 		return NULL;
 	}
-	const uint32_t n[3] = { a->nx, a->ny, a->nz };
-	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
-	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && a->type != SCENE_GRID_RGBA8;
-	relayout(samples, src, n, sample_bytes(a->type), swap);
 	*g = (struct vgrid){
 		.refs = 1,
 		.bytes = bytes,
-		.grid = { a->type, { n[0], n[1], n[2] }, { a->sx, a->sy, a->sz }, samples, brick_max },
+		.grid = { a->type, { a->nx, a->ny, a->nz }, { a->sx, a->sy, a->sz }, samples, brick_max },
 		.samples = samples,
 		.brick_max = brick_max,
 	};
-	grid_brick_max(&g->grid, brick_max);
 	return g;
+}
+
+/* Slices z0 .. z1 - 1 of g made from src (the client's, x fastest): laid
+ * out for the renderers, their bricks' maxima made. */
+static void vgrid_make(struct vgrid *g, const uint8_t *src, uint32_t z0, uint32_t z1)
+{
+	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
+	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && g->grid.type != SCENE_GRID_RGBA8;
+	relayout(g->samples, src, g->grid.n, sample_bytes(g->grid.type), swap, z0, z1);
+	grid_brick_max_slabs(&g->grid, z0, z1, g->brick_max);
+}
+
+/* A volume bigger than a step is made a step at a time, one per turn of
+ * the event loop, so that the other clients are served meanwhile; its
+ * client's later requests wait (client.h, building) until it is made. Its
+ * buffer cannot go before then: only its client could destroy it. */
+#define BUILD_STEP_BYTES (8u << 20)
+
+struct vbuild {
+	struct client *c;
+	struct vgrid *g;
+	const uint8_t *src;
+	uint32_t z, slices; /* the next slice; slices a step */
+	struct sd_event_source *step;
+};
+
+static int build_step(sd_event_source *s, void *data)
+{
+	struct vbuild *b = data;
+	const struct scene_grid *gr = &b->g->grid;
+	uint32_t z1 = gr->n[2] - b->z > b->slices ? b->z + b->slices : gr->n[2];
+	vgrid_make(b->g, b->src, b->z, z1);
+	b->z = z1;
+	if (b->z < gr->n[2]) {
+		sd_event_source_set_enabled(s, SD_EVENT_ONESHOT);
+		return 0;
+	}
+	struct client *c = b->c;
+	log_debug("volume of %ux%ux%u samples made in %u steps", gr->n[0], gr->n[1], gr->n[2],
+		  (gr->n[2] + b->slices - 1) / b->slices);
+	volumes_cancel_build(c); /* done: frees b */
+	client_resume(c);
+	return 0;
+}
+
+void volumes_cancel_build(struct client *c)
+{
+	struct vbuild *b = c->building;
+	if (!b)
+		return;
+	sd_event_source_disable_unref(b->step);
+	free(b);
+	c->building = NULL;
+}
+
+/* Makes g from src now when it is small, else starts making it a step at a
+ * time (c waits). 0, or -ENOMEM. */
+static int vgrid_start(struct client *c, struct vgrid *g, const uint8_t *src)
+{
+	const struct scene_grid *gr = &g->grid;
+	size_t slice = (size_t)gr->n[0] * gr->n[1] * sample_bytes(gr->type);
+	if (slice * gr->n[2] <= BUILD_STEP_BYTES) {
+		vgrid_make(g, src, 0, gr->n[2]);
+		return 0;
+	}
+	struct vbuild *b = calloc(1, sizeof(*b));
+	if (!b)
+		return -ENOMEM;
+	*b = (struct vbuild){ c, g, src, 0, (uint32_t)(BUILD_STEP_BYTES / slice ? BUILD_STEP_BYTES / slice : 1), NULL };
+	if (sd_event_add_defer(c->env->event, &b->step, build_step, b) < 0) {
+		free(b);
+		vgrid_make(g, src, 0, gr->n[2]); /* no event source: now, then */
+		return 0;
+	}
+	c->building = b;
+	return 0;
 }
 
 int objects_create_volume(struct client *c, const struct proto_display_create_volume_args *a)
@@ -152,7 +227,7 @@ int objects_create_volume(struct client *c, const struct proto_display_create_vo
 	if ((r = objects_charge(c, bytes)) < 0)
 		return r;
 	struct volume_obj *vo = calloc(1, sizeof(*vo));
-	struct vgrid *g = vo ? vgrid_build(a, b->map + a->offset, bytes) : NULL;
+	struct vgrid *g = vo ? vgrid_new(a, bytes) : NULL;
 	if (!g) {
 		free(vo);
 		objects_uncharge(c, bytes);
@@ -164,8 +239,11 @@ int objects_create_volume(struct client *c, const struct proto_display_create_vo
 		objects_uncharge(c, bytes);
 		vgrid_unref(g);
 		free(vo);
+		return r;
 	}
-	return r;
+	if (vgrid_start(c, g, b->map + a->offset) < 0) /* the object goes with c */
+		return client_fail(c, 1, PROTO_ERR_NO_MEMORY, "out of memory");
+	return 0;
 }
 
 void volume_object_destroy(struct volume_obj *vo)

@@ -192,14 +192,15 @@ void grid_colours(const struct scene_draw *d, uint8_t *out)
 		out[3] = transfer(d, base + (float)i, none, out);
 }
 
-void grid_brick_max(const struct scene_grid *g, float *out)
+void grid_brick_max_slabs(const struct scene_grid *g, uint32_t k0, uint32_t k1, float *out)
 {
 	uint32_t nb = scene_grid_bricks(g->n[1]), n1 = g->n[1];
-	size_t lines = (size_t)g->n[0] * g->n[2];
+	size_t lines = (size_t)g->n[0] * (k1 - k0), skip = (size_t)g->n[0] * k0;
+	out += skip * nb;
 	/* Line by line, as the samples lie: NaN never wins (it lights nothing). */
 #define BRICKS(T, STEP, VALUE)                                                                                    \
 	do {                                                                                                      \
-		const T *p = (const T *)g->data;                                                                  \
+		const T *p = (const T *)g->data + skip * n1 * STEP;                                               \
 		for (size_t l = 0; l < lines; l++, p += (size_t)n1 * STEP)                                        \
 			for (uint32_t b = 0; b < nb; b++) {                                                       \
 				float mx = -INFINITY;                                                             \
@@ -229,6 +230,11 @@ void grid_brick_max(const struct scene_grid *g, float *out)
 		break;
 	}
 #undef BRICKS
+}
+
+void grid_brick_max(const struct scene_grid *g, float *out)
+{
+	grid_brick_max_slabs(g, 0, g->n[2], out);
 }
 
 bool grid_prepare_rows(struct grid_job *job, const struct geometry *g)

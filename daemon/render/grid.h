@@ -44,6 +44,9 @@ bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3]);
  * scene_grid.brick_max), grid_brick_count(g) of them; NaN samples left
  * out (-inf for a brick of them). */
 void grid_brick_max(const struct scene_grid *g, float *out);
+/* The same for the lines of slabs k0 .. k1 - 1 only (the grid's samples
+ * there made), into their places in out (the whole array). */
+void grid_brick_max_slabs(const struct scene_grid *g, uint32_t k0, uint32_t k1, float *out);
 static inline uint64_t grid_brick_count(const struct scene_grid *g)
 {
 	return (uint64_t)g->n[0] * g->n[2] * scene_grid_bricks(g->n[1]);

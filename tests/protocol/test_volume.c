@@ -11,10 +11,17 @@
  * errors:  a size of 0, a buffer too short, a window of width 0 and a
  *          draw of a non-volume are invalid_value / invalid_object, fatal to
  *          that client only;
- * quota:   a volume over max-buffer-bytes is the quota error. */
+ * quota:   a volume over max-buffer-bytes is the quota error;
+ * big:     a volume over the daemon's step (8 MiB) is made a few slices per
+ *          turn of its loop: the requests sent behind it wait for it (the
+ *          ball shows, as the small one does), another client is served
+ *          meanwhile, and a client that hangs up or destroys the volume
+ *          while it is made leaves the daemon as it was. */
 #include <errno.h>
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "scenes.h"
 
@@ -212,9 +219,78 @@ static void test_quota(void)
 	daemon_stop(&d);
 }
 
+enum { NB = 320 }; /* 32.8 MB of uint8: four steps */
+
+static struct spindle_volume *big_ball(struct spindle *sp, bool keep_buffer, struct spindle_buffer **buf_out)
+{
+	uint8_t *v = malloc((size_t)NB * NB * NB);
+	CHECK(v != NULL);
+	for (uint32_t z = 0; z < NB; z++)
+		for (uint32_t y = 0; y < NB; y++)
+			for (uint32_t x = 0; x < NB; x++) {
+				double dx = (x + 0.5) / NB - 0.5, dy = (y + 0.5) / NB - 0.5, dz = (z + 0.5) / NB - 0.5;
+				v[((size_t)z * NB + y) * NB + x] = dx * dx + dy * dy + dz * dz <= 0.16 ? 255 : 0;
+			}
+	struct spindle_buffer *buf = spindle_buffer_create(sp, v, (size_t)NB * NB * NB);
+	free(v);
+	CHECK(buf != NULL);
+	const uint32_t size[3] = { NB, NB, NB };
+	const float spacing[3] = { 1.0f / NB, 1.0f / NB, 1.0f / NB };
+	struct spindle_volume *vol = spindle_volume_create(sp, buf, 0, SPINDLE_VOLUME_U8, size, spacing);
+	CHECK(vol != NULL);
+	if (keep_buffer)
+		*buf_out = buf;
+	else
+		spindle_buffer_destroy(buf);
+	return vol;
+}
+
+static void test_big(void)
+{
+	struct daemon d;
+	daemon_start(&d);
+	struct spindle *witness = client_connect(&d);
+	uint64_t before = memory_used(witness);
+	/* Shown: the draw and commit queued behind the volume wait for it. */
+	struct spindle *sp = client_connect(&d);
+	struct spindle_layer *y = show_volume(sp, big_ball(sp, false, NULL), 1.4f, 255, 255, 255);
+	CHECK(y != NULL);
+	struct volume *vol = capture_volume(sp);
+	uint64_t lit = count_lit(vol, 0);
+	volume_destroy(vol);
+	CHECK_MSG(lit > 10000, "the big ball lit %llu pixels", (unsigned long long)lit);
+	/* Another client's volume while a third is served. */
+	struct spindle *other = client_connect(&d);
+	struct spindle_volume *ov = big_ball(other, false, NULL);
+	CHECK(spindle_flush(other) == 0);
+	CHECK(spindle_roundtrip(witness) == 0);
+	CHECK(spindle_roundtrip(other) == 0);
+	/* Destroyed right behind its create, with its buffer. */
+	struct spindle_buffer *b = NULL;
+	struct spindle_volume *gone = big_ball(other, true, &b);
+	spindle_volume_destroy(gone);
+	spindle_buffer_destroy(b);
+	spindle_volume_destroy(ov);
+	CHECK(spindle_roundtrip(other) == 0);
+	spindle_disconnect(other);
+	/* Hung up while its volume is made. */
+	struct spindle *quitter = client_connect(&d);
+	big_ball(quitter, false, NULL);
+	CHECK(spindle_flush(quitter) == 0);
+	spindle_disconnect(quitter);
+	spindle_disconnect(sp);
+	/* Back to where it was, once the daemon has let them go. */
+	uint64_t now = 0;
+	for (int i = 0; i < 200 && (now = memory_used(witness)) > before; i++)
+		usleep(10000);
+	CHECK_MSG(now <= before, "memory_used %llu, %llu before", (unsigned long long)now, (unsigned long long)before);
+	spindle_disconnect(witness);
+	daemon_stop(&d);
+}
+
 static const struct named_test tests[] = {
 	{ "sphere", test_sphere }, { "destroy", test_destroy }, { "lut", test_lut },
-	{ "errors", test_errors }, { "quota", test_quota },
+	{ "errors", test_errors }, { "quota", test_quota },     { "big", test_big },
 };
 
 int main(int argc, char **argv)
