@@ -124,19 +124,6 @@ static int draw_verts(const struct scene_draw *d)
 	return 0;
 }
 
-/* Column-major affine transform in double; false if the result is not a
- * finite float (primitives are stored in float: past FLT_MAX is inf). */
-static bool transform(const float m[16], const float *xyz, double out[3])
-{
-	double x = xyz[0], y = xyz[1], z = xyz[2];
-	for (int i = 0; i < 3; i++) {
-		out[i] = (double)m[i] * x + (double)m[4 + i] * y + (double)m[8 + i] * z + m[12 + i];
-		if (!(fabs(out[i]) <= FLT_MAX))
-			return false;
-	}
-	return true;
-}
-
 /* The closed arc of slots [*first, *first + *len) (mod N) holding the
  * xz projection of the n vertices (negated when neg: the s < 0 lobe).
  * False when the projection may touch the axis: every slot. */
@@ -180,12 +167,6 @@ static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool n
 	return *len < N;
 }
 
-/* The turn of a draw, mod N (no division for the usual 0). */
-static inline uint32_t draw_turn(const struct bin_set *b, const struct scene_draw *d)
-{
-	return d->turn ? d->turn % b->geom.images_per_rev : 0;
-}
-
 static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t first, uint32_t count)
 {
 	if (count >= b->images) {
@@ -206,7 +187,7 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 	double t[3][3];
 	out[0].key = out[1].key = KEY_NONE;
 	for (int i = 0; i < n; i++)
-		if (!transform(d->transform, xyz + 3 * i, t[i]))
+		if (!bin_transform(d->transform, xyz + 3 * i, t[i]))
 			return; /* NaN or infinite: nothing sensible to light */
 	struct bin_prim *p = &out[0].rec;
 	for (int i = 0; i < n; i++)
@@ -273,7 +254,7 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 			if (nv == 0 || !d->xyz || (nv == 1) != (points))                                           \
 				continue;                                                                          \
 			uint64_t n_ = d->count / (uint32_t)nv;                                                     \
-			const uint32_t turn_ = draw_turn(b, d);                                                    \
+			const uint32_t turn_ = bin_draw_turn(b, d);                                                \
 			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;    \
 			uint64_t hi_ =                                                                             \
 				BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi; \
@@ -404,7 +385,7 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 			w->point_items += d->count;
 		} else {
 			w->prim_items += d->count / (uint32_t)nv;
-			b->turned |= draw_turn(b, d) != 0;
+			b->turned |= bin_draw_turn(b, d) != 0;
 		}
 	}
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)

@@ -22,6 +22,8 @@
 #ifndef SPINDLE_BIN_H
 #define SPINDLE_BIN_H
 
+#include <float.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -144,6 +146,26 @@ static inline void bin_point_columns(const struct bin_point *p, uint32_t n, uint
  * slope table, atan2 near a slot boundary or on the axis); the AVX2 path
  * computes the same operations four points at a time and hands every point
  * the table flags as near, on the axis or not finite to the scalar rule. */
+
+/* What binning points and primitives share: the draw's transform of a
+ * vertex, column-major affine in double, false if the result is not a
+ * finite float (primitives are stored in float: past FLT_MAX is inf); and
+ * the draw's turn, mod N. */
+static inline bool bin_transform(const float m[16], const float *xyz, double out[3])
+{
+	double x = xyz[0], y = xyz[1], z = xyz[2];
+	for (int i = 0; i < 3; i++) {
+		out[i] = (double)m[i] * x + (double)m[4 + i] * y + (double)m[8 + i] * z + m[12 + i];
+		if (!(fabs(out[i]) <= FLT_MAX))
+			return false;
+	}
+	return true;
+}
+
+static inline uint32_t bin_draw_turn(const struct bin_set *b, const struct scene_draw *d)
+{
+	return d->turn ? d->turn % b->geom.images_per_rev : 0;
+}
 
 /* Staged records per point: 1 on a mirrored device (both lobes fold onto
  * one volume image; the rare second record of a rounding tie is made again

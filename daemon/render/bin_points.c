@@ -26,25 +26,6 @@ static uint8_t point_size(const struct scene_draw *d)
 	return d->point_size < BIN_POINT_MAX_SIZE ? d->point_size : BIN_POINT_MAX_SIZE;
 }
 
-/* The turn of a draw, mod N. */
-static uint32_t draw_turn(const struct bin_set *b, const struct scene_draw *d)
-{
-	return d->turn ? d->turn % b->geom.images_per_rev : 0;
-}
-
-/* bin.c's transform: column-major affine in double; false if the result
- * is not a finite float. */
-static bool point_transform(const float m[16], const float *xyz, double out[3])
-{
-	double x = xyz[0], y = xyz[1], z = xyz[2];
-	for (int i = 0; i < 3; i++) {
-		out[i] = (double)m[i] * x + (double)m[4 + i] * y + (double)m[8 + i] * z + m[12 + i];
-		if (!(fabs(out[i]) <= FLT_MAX))
-			return false;
-	}
-	return true;
-}
-
 /* A record turned by turn (1 .. N-1): what image *k held goes to image
  * *k + turn (mod N), and where that is M or more (a mirrored device) to
  * image *k + turn - M mirrored: u -> W-1-u, and an even square flagged to
@@ -81,7 +62,7 @@ static void point_exact(const struct bin_set *b, const struct scene_draw *d, con
 {
 	double p[3];
 	k[0] = k[1] = NO_IMAGE;
-	if (!point_transform(d->transform, xyz, p))
+	if (!bin_transform(d->transform, xyz, p))
 		return;
 	const struct geometry *g = &b->geom;
 	uint32_t N = g->images_per_rev, M = b->images, front, back;
@@ -183,7 +164,7 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 	const struct geometry *g = &b->geom;
 	const struct slot_table *t = &b->slots;
 	const float *m = d->transform;
-	const uint32_t N = g->images_per_rev, M = b->images, turn = draw_turn(b, d);
+	const uint32_t N = g->images_per_rev, M = b->images, turn = bin_draw_turn(b, d);
 	const bool mirrored = g->mirrored;
 	const __m256d m0 = _mm256_set1_pd(m[0]), m1 = _mm256_set1_pd(m[1]), m2 = _mm256_set1_pd(m[2]);
 	const __m256d m4 = _mm256_set1_pd(m[4]), m5 = _mm256_set1_pd(m[5]), m6 = _mm256_set1_pd(m[6]);
@@ -345,7 +326,7 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
 		      struct bin_point *recs, uint16_t *keys, uint32_t *hist)
 {
-	uint32_t turn = draw_turn(b, d);
+	uint32_t turn = bin_draw_turn(b, d);
 	uint64_t j = j0;
 #ifdef BIN_POINTS_AVX2
 	if (!b->points_scalar && b->geom.images_per_rev % 2 == 0 && __builtin_cpu_supports("avx2"))
@@ -374,7 +355,7 @@ void bin_points_scatter(struct bin_set *b, const struct scene_draw *d, uint64_t 
 			struct bin_point r[2];
 			uint32_t k[2];
 			uint64_t jj = j0 + i;
-			point_exact(b, d, d->xyz + 3 * jj, point_rgb(d, jj), draw_turn(b, d), r, k);
+			point_exact(b, d, d->xyz + 3 * jj, point_rgb(d, jj), bin_draw_turn(b, d), r, k);
 			out[off[k[1]]++] = r[1];
 		}
 	}
