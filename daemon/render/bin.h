@@ -78,6 +78,15 @@ struct bin_run {
  * cache renders them one by one) costs less than waking the workers. */
 #define BIN_SERIAL_VERTICES 1024
 
+/* The paths that bin points (bin_points.c): each gives exactly the
+ * records of the scalar rule. */
+enum bin_points_isa {
+	BIN_POINTS_AUTO,   /* the fastest the CPU has */
+	BIN_POINTS_SCALAR, /* the rule alone */
+	BIN_POINTS_AVX2,   /* four points at a time */
+	BIN_POINTS_AVX512, /* eight at a time, the rest as AVX2 does */
+};
+
 /* Storage is kept between builds and only grows. */
 struct bin_set {
 	struct geometry geom;
@@ -96,9 +105,9 @@ struct bin_set {
 	uint32_t point_count;
 	struct bin_point *points; /* sorted by image */
 	uint32_t *point_start;    /* M + 1 offsets into points */
-	/* Tests: bin points with the scalar rule alone, not the AVX2 path
-	 * (bin_points.c), which gives the same records. */
-	bool points_scalar;
+	/* Tests: the path that bins points (bin_points.c); every path gives
+	 * the same records. 0 (BIN_POINTS_AUTO): the fastest there is. */
+	enum bin_points_isa points_isa;
 
 	/* Work space of a build. */
 	struct bin_work *work;
@@ -143,9 +152,10 @@ static inline void bin_point_columns(const struct bin_point *p, uint32_t n, uint
  * and "Binning"): one pass stages each point's record(s) and counts them
  * per image, a scatter moves them to their sorted place. The records are
  * exactly those of the scalar rule (transform in double, slot from the
- * slope table, atan2 near a slot boundary or on the axis); the AVX2 path
- * computes the same operations four points at a time and hands every point
- * the table flags as near, on the axis or not finite to the scalar rule. */
+ * slope table, atan2 near a slot boundary or on the axis); the AVX-512 and
+ * AVX2 paths compute the same operations eight or four points at a time and
+ * hand every point the table flags as near, on the axis or not finite to
+ * the scalar rule. */
 
 /* What binning points and primitives share: the draw's transform of a
  * vertex, column-major affine in double, false if the result is not a
@@ -174,6 +184,10 @@ static inline uint32_t bin_point_slots(const struct bin_set *b)
 {
 	return b->geom.mirrored ? 1 : 2;
 }
+
+/* Whether this CPU runs isa (AUTO and SCALAR: always). A path it lacks
+ * bins with the scalar rule. */
+bool bin_points_isa_supported(enum bin_points_isa isa);
 
 /* Stages points j0 .. j1 - 1 of draw d: recs and keys point at point j0's
  * bin_point_slots() entries; counts each record's volume image in hist. */

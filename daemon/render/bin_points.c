@@ -7,7 +7,7 @@
 
 #if defined(__x86_64__) || defined(__i386__)
 #include <immintrin.h>
-#define BIN_POINTS_AVX2 1
+#define BIN_POINTS_X86 1
 #endif
 
 /* A staged key: the volume image (below 16384, geometry_validate()), or
@@ -116,7 +116,7 @@ static inline void stage_exact(const struct bin_set *b, const struct scene_draw 
 	}
 }
 
-#ifdef BIN_POINTS_AVX2
+#ifdef BIN_POINTS_X86
 /* stage_exact() for stage_avx2()'s fast path (mirrored, no turn): counts
  * only a second record, the first being counted with the others. */
 static void stage_fast_exact(const struct bin_set *b, const struct scene_draw *d, uint64_t j, struct bin_point *recs,
@@ -146,12 +146,56 @@ static inline void turn_word(const struct bin_set *b, uint32_t turn, uint64_t *w
 	*k = j;
 }
 
+/* The vector paths' lanes past the fast path: the records of points j ..
+ * j + n - 1 from their images ka (front), kb (back, unmirrored), columns
+ * and row uva (u | v << 16) and back columns ub, the colour and size word
+ * hi of a one-colour draw; a lane set in ex goes to the scalar rule. recs
+ * and keys point at point j's entries. */
+static inline void stage_lanes(const struct bin_set *b, const struct scene_draw *d, uint64_t j, int n, unsigned ex,
+			       const uint32_t *ka, const uint32_t *kb, const uint32_t *uva, const uint32_t *ub,
+			       uint64_t hi, uint32_t turn, struct bin_point *recs, uint16_t *keys, uint32_t *hist)
+{
+	const bool mirrored = b->geom.mirrored;
+	const uint64_t size = point_size(d);
+	for (int l = 0; l < n; l++) {
+		uint64_t jj = j + (uint64_t)l, i = (uint64_t)l;
+		if (ex & (1u << l)) {
+			stage_exact(b, d, jj, turn, recs, keys, i, hist);
+			continue;
+		}
+		uint64_t w = hi;
+		if (d->prim_rgb) {
+			const uint8_t *c = d->prim_rgb + 3 * jj;
+			w = (uint64_t)c[0] << 32 | (uint64_t)c[1] << 40 | (uint64_t)c[2] << 48 | size << 56;
+		}
+		uint64_t w0 = w | uva[l];
+		uint32_t k = ka[l];
+		if (turn)
+			turn_word(b, turn, &w0, &k);
+		hist[k]++;
+		if (mirrored) {
+			memcpy(&recs[i], &w0, sizeof(w0));
+			keys[i] = (uint16_t)k;
+			continue;
+		}
+		memcpy(&recs[2 * i], &w0, sizeof(w0));
+		keys[2 * i] = (uint16_t)k;
+		uint64_t w1 = w | (uva[l] & 0xFFFF0000u) | ub[l];
+		k = kb[l];
+		if (turn)
+			turn_word(b, turn, &w1, &k);
+		hist[k]++;
+		memcpy(&recs[2 * i + 1], &w1, sizeof(w1));
+		keys[2 * i + 1] = (uint16_t)k;
+	}
+}
+
 _Static_assert(sizeof(struct bin_point) == 8 && offsetof(struct bin_point, v) == 2 &&
 		       offsetof(struct bin_point, rgb) == 4 && offsetof(struct bin_point, size) == 7,
-	       "the AVX2 path writes points as 64-bit words");
-_Static_assert(sizeof(struct slot_bucket) == 12 && offsetof(struct slot_bucket, near) == 4 &&
-		       offsetof(struct slot_bucket, below) == 8 && offsetof(struct slot_bucket, above) == 10,
-	       "the AVX2 path gathers slot buckets as three 32-bit words");
+	       "the vector paths write points as 64-bit words");
+_Static_assert(sizeof(struct slot_bucket) == 12 && offsetof(struct slot_bucket, below) == 4 &&
+		       offsetof(struct slot_bucket, above) == 6 && offsetof(struct slot_bucket, near) == 8,
+	       "the vector paths gather a slot bucket as a 64-bit word (edge, below, above) and a float (near)");
 
 /* Points j0 .. j1 - 1 four at a time, with exactly point_exact()'s
  * operations (no fused multiply-adds: each product and sum rounded as the
@@ -183,7 +227,6 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 	const __m128i rowlen = _mm_set1_epi32((int)t->buckets + 1), lo16 = _mm_set1_epi32(0xFFFF);
 	const __m128i vM = _mm_set1_epi32((int)M), vN = _mm_set1_epi32((int)N), half = _mm_set1_epi32((int)(N / 2));
 	const float *table = (const float *)t->b;
-	const int *table_i = (const int *)t->b;
 	const double *dir = b->dir;
 	const uint64_t size = point_size(d);
 	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
@@ -232,9 +275,12 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 		__m128i octant = _mm_sub_epi32(_mm_add_epi32(q, q), _mm_castps_si128(gt));
 		__m128i idx = _mm_add_epi32(_mm_mullo_epi32(octant, rowlen), _mm_cvttps_epi32(_mm_mul_ps(s, nbuckets)));
 		__m128i idx3 = _mm_add_epi32(_mm_add_epi32(idx, idx), idx);
-		__m128 edge = _mm_i32gather_ps(table, idx3, 4);
-		__m128 nearv = _mm_i32gather_ps(table + 1, idx3, 4);
-		__m128i ba = _mm_i32gather_epi32(table_i + 2, idx3, 4);
+		/* edge | below << 32 | above << 48, and near */
+		__m256i eb = _mm256_i32gather_epi64((const long long *)table, idx3, 4);
+		__m128 nearv = _mm_i32gather_ps(table + 2, idx3, 4);
+		__m256i ebs = _mm256_permutevar8x32_epi32(eb, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+		__m128 edge = _mm_castsi128_ps(_mm256_castsi256_si128(ebs));
+		__m128i ba = _mm256_extracti128_si256(ebs, 1);
 		__m128 dd = _mm_sub_ps(s, nearv);
 		exact = _mm_or_ps(exact, _mm_and_ps(_mm_cmplt_ps(dd, eps), _mm_cmpgt_ps(dd, neps)));
 		__m128i front = _mm_castps_si128(
@@ -282,38 +328,141 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 		_mm_storeu_si128((__m128i *)kb, back);
 		_mm_storeu_si128((__m128i *)uva, uv0);
 		_mm_storeu_si128((__m128i *)ub, u1);
-		for (int l = 0; l < 4; l++) {
-			uint64_t jj = j + (uint64_t)l, i = jj - j0;
-			if (ex & (1 << l)) {
-				stage_exact(b, d, jj, turn, recs, keys, i, hist);
-				continue;
-			}
-			uint64_t w = hi;
-			if (d->prim_rgb) {
-				const uint8_t *c = d->prim_rgb + 3 * jj;
-				w = (uint64_t)c[0] << 32 | (uint64_t)c[1] << 40 | (uint64_t)c[2] << 48 |
-				    (uint64_t)size << 56;
-			}
-			uint64_t w0 = w | uva[l];
-			uint32_t k = ka[l];
-			if (turn)
-				turn_word(b, turn, &w0, &k);
-			hist[k]++;
-			if (mirrored) {
-				memcpy(&recs[i], &w0, sizeof(w0));
-				keys[i] = (uint16_t)k;
-				continue;
-			}
-			memcpy(&recs[2 * i], &w0, sizeof(w0));
-			keys[2 * i] = (uint16_t)k;
-			uint64_t w1 = w | (uva[l] & 0xFFFF0000u) | ub[l];
-			k = kb[l];
-			if (turn)
-				turn_word(b, turn, &w1, &k);
-			hist[k]++;
-			memcpy(&recs[2 * i + 1], &w1, sizeof(w1));
-			keys[2 * i + 1] = (uint16_t)k;
+		stage_lanes(b, d, j, 4, (unsigned)ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
+			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
+	}
+	if (fast)
+		for (uint64_t i = 0; i < j - j0; i++)
+			if (keys[i] != PKEY_NONE)
+				hist[keys[i] & PKEY_IMAGE]++;
+	return j;
+}
+
+/* stage_avx2() eight points at a time on AVX-512 (32 vector registers: no
+ * constant spilled), with the same operations lane for lane. */
+#define AVX512_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2")))
+AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct scene_draw *d, uint64_t j0,
+					   uint64_t j1, struct bin_point *recs, uint16_t *keys, uint32_t *hist)
+{
+	const struct geometry *g = &b->geom;
+	const struct slot_table *t = &b->slots;
+	const float *m = d->transform;
+	const uint32_t N = g->images_per_rev, M = b->images, turn = bin_draw_turn(b, d);
+	const bool mirrored = g->mirrored;
+	const __m512d m0 = _mm512_set1_pd(m[0]), m1 = _mm512_set1_pd(m[1]), m2 = _mm512_set1_pd(m[2]);
+	const __m512d m4 = _mm512_set1_pd(m[4]), m5 = _mm512_set1_pd(m[5]), m6 = _mm512_set1_pd(m[6]);
+	const __m512d m8 = _mm512_set1_pd(m[8]), m9 = _mm512_set1_pd(m[9]), m10 = _mm512_set1_pd(m[10]);
+	const __m512d m12 = _mm512_set1_pd(m[12]), m13 = _mm512_set1_pd(m[13]), m14 = _mm512_set1_pd(m[14]);
+	const __m512d fltmax = _mm512_set1_pd(FLT_MAX), one = _mm512_set1_pd(1.0), halfv = _mm512_set1_pd(0.5);
+	const __m512d width = _mm512_set1_pd((double)g->width), height = _mm512_set1_pd((double)g->height);
+	const double hh = g->half_height;
+	const __m512d h = _mm512_set1_pd(hh), h2 = _mm512_set1_pd(2.0 * hh), zero = _mm512_setzero_pd();
+	const __m256i wmax = _mm256_set1_epi32((int)g->width - 1), hmax = _mm256_set1_epi32((int)g->height - 1);
+	const __m256 fzero = _mm256_setzero_ps(), fabsmask = _mm256_castsi256_ps(_mm256_set1_epi32(INT32_MAX));
+	const __m256 nbuckets = _mm256_set1_ps((float)t->buckets), eps = _mm256_set1_ps(1e-5f);
+	const __m256 neps = _mm256_set1_ps(-1e-5f), finf = _mm256_set1_ps(INFINITY);
+	const __m256i rowlen = _mm256_set1_epi32((int)t->buckets + 1), lo16 = _mm256_set1_epi32(0xFFFF);
+	const __m256i vM = _mm256_set1_epi32((int)M), vN = _mm256_set1_epi32((int)N);
+	const __m256i half = _mm256_set1_epi32((int)(N / 2));
+	/* x, y, z of eight points from 24 floats: lanes 0..15 of the first
+	 * load, 16..23 of the second */
+	const __m512i ix = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 0, 0, 0, 0, 0, 0, 0, 0);
+	const __m512i iy = _mm512_setr_epi32(1, 4, 7, 10, 13, 16, 19, 22, 0, 0, 0, 0, 0, 0, 0, 0);
+	const __m512i iz = _mm512_setr_epi32(2, 5, 8, 11, 14, 17, 20, 23, 0, 0, 0, 0, 0, 0, 0, 0);
+	const float *table = (const float *)t->b;
+	const double *dir = b->dir;
+	const uint64_t size = point_size(d);
+	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
+			    size << 56;
+	const __m512i hi8 = _mm512_set1_epi64((long long)hi);
+	const bool fast = mirrored && !turn && !d->prim_rgb;
+	uint64_t j = j0;
+	for (; j + 8 <= j1; j += 8) {
+		const float *p = d->xyz + 3 * j;
+		__m512 a = _mm512_loadu_ps(p), c = _mm512_castps256_ps512(_mm256_loadu_ps(p + 16));
+		__m512d x = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, ix, c)));
+		__m512d y = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iy, c)));
+		__m512d z = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iz, c)));
+		__m512d X = _mm512_add_pd(
+			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m0, x), _mm512_mul_pd(m4, y)), _mm512_mul_pd(m8, z)),
+			m12);
+		__m512d Y = _mm512_add_pd(
+			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m1, x), _mm512_mul_pd(m5, y)), _mm512_mul_pd(m9, z)),
+			m13);
+		__m512d Z = _mm512_add_pd(
+			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m2, x), _mm512_mul_pd(m6, y)), _mm512_mul_pd(m10, z)),
+			m14);
+		__mmask8 fin = _mm512_cmp_pd_mask(_mm512_abs_pd(X), fltmax, _CMP_LE_OQ) &
+			       _mm512_cmp_pd_mask(_mm512_abs_pd(Y), fltmax, _CMP_LE_OQ) &
+			       _mm512_cmp_pd_mask(_mm512_abs_pd(Z), fltmax, _CMP_LE_OQ);
+		__m256 fx = _mm512_cvtpd_ps(X), fz = _mm512_cvtpd_ps(Z);
+		__m256 ax = _mm256_and_ps(fx, fabsmask), az = _mm256_and_ps(fz, fabsmask);
+		__m256 xneg = _mm256_cmp_ps(fx, fzero, _CMP_LT_OS), zneg = _mm256_cmp_ps(fz, fzero, _CMP_LT_OS);
+		__m256 odd = _mm256_xor_ps(xneg, zneg);
+		__m256 perp = _mm256_blendv_ps(az, ax, odd), radial = _mm256_blendv_ps(ax, az, odd);
+		__m256 gt = _mm256_cmp_ps(perp, radial, _CMP_GT_OS);
+		__m256 mn = _mm256_min_ps(perp, radial), mx = _mm256_max_ps(perp, radial);
+		__m256 exact = _mm256_or_ps(_mm256_cmp_ps(mx, fzero, _CMP_EQ_OQ), _mm256_cmp_ps(mx, finf, _CMP_EQ_OQ));
+		exact = _mm256_or_ps(exact, _mm256_cmp_ps(fx, fz, _CMP_UNORD_Q));
+		__m256 s = _mm256_div_ps(mn, mx);
+		s = _mm256_andnot_ps(_mm256_or_ps(exact, _mm256_cmp_ps(s, s, _CMP_UNORD_Q)), s);
+		__m256i q = _mm256_sub_epi32(
+			_mm256_setzero_si256(),
+			_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
+					 _mm256_castps_si256(odd)));
+		__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
+		__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, rowlen),
+					       _mm256_cvttps_epi32(_mm256_mul_ps(s, nbuckets)));
+		__m256i idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
+		__m512i eb = _mm512_i32gather_epi64(idx3, table, 4); /* edge | below << 32 | above << 48 */
+		__m256 nearv = _mm256_i32gather_ps(table + 2, idx3, 4);
+		__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
+		__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
+		__m256 dd = _mm256_sub_ps(s, nearv);
+		exact = _mm256_or_ps(
+			exact, _mm256_and_ps(_mm256_cmp_ps(dd, eps, _CMP_LT_OS), _mm256_cmp_ps(dd, neps, _CMP_GT_OS)));
+		__m256i front = _mm256_castps_si256(_mm256_blendv_ps(
+			_mm256_castsi256_ps(_mm256_and_si256(ba, lo16)), _mm256_castsi256_ps(_mm256_srli_epi32(ba, 16)),
+			_mm256_cmp_ps(s, edge, _CMP_GE_OS)));
+		__m256i k0 = _mm256_sub_epi32(front, _mm256_andnot_si256(_mm256_cmpgt_epi32(vM, front), vM));
+		__m256i back = _mm256_add_epi32(front, half);
+		back = _mm256_sub_epi32(back, _mm256_andnot_si256(_mm256_cmpgt_epi32(vN, back), vN));
+		__m256i k2 = _mm256_add_epi32(k0, k0);
+		__m512d S = _mm512_add_pd(_mm512_mul_pd(X, _mm512_i32gather_pd(k2, dir, 8)),
+					  _mm512_mul_pd(Z, _mm512_i32gather_pd(k2, dir + 1, 8)));
+		__m512d fu = _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S, one), halfv), width);
+		__m512d fv = _mm512_mul_pd(_mm512_div_pd(_mm512_sub_pd(h, Y), h2), height);
+		__m256i u0 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(fu, zero, _CMP_GE_OQ), fu));
+		u0 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(fu, width, _CMP_GE_OQ), u0, wmax);
+		__m256i v0 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(fv, zero, _CMP_GE_OQ), fv));
+		v0 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(fv, height, _CMP_GE_OQ), v0, hmax);
+		__m256i u1 = _mm256_setzero_si256();
+		if (!mirrored) {
+			__m256i b2 = _mm256_add_epi32(back, back);
+			__m512d S1 = _mm512_add_pd(_mm512_mul_pd(X, _mm512_i32gather_pd(b2, dir, 8)),
+						   _mm512_mul_pd(Z, _mm512_i32gather_pd(b2, dir + 1, 8)));
+			__m512d f1 = _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S1, one), halfv), width);
+			u1 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(f1, zero, _CMP_GE_OQ), f1));
+			u1 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(f1, width, _CMP_GE_OQ), u1, wmax);
 		}
+		unsigned ex = (unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF);
+		__m256i uv0 = _mm256_or_si256(u0, _mm256_slli_epi32(v0, 16));
+		if (fast) {
+			_mm512_storeu_si512((void *)(recs + (j - j0)),
+					    _mm512_or_si512(_mm512_cvtepu32_epi64(uv0), hi8));
+			_mm_storeu_si128((__m128i *)(keys + (j - j0)), _mm256_cvtepi32_epi16(k0));
+			for (int l = 0; ex && l < 8; l++)
+				if (ex & (1u << l))
+					stage_fast_exact(b, d, j + (uint64_t)l, recs, keys, j + (uint64_t)l - j0, hist);
+			continue;
+		}
+		uint32_t ka[8], kb[8], uva[8], ub[8];
+		_mm256_storeu_si256((__m256i *)ka, k0);
+		_mm256_storeu_si256((__m256i *)kb, back);
+		_mm256_storeu_si256((__m256i *)uva, uv0);
+		_mm256_storeu_si256((__m256i *)ub, u1);
+		stage_lanes(b, d, j, 8, ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
+			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
 	}
 	if (fast)
 		for (uint64_t i = 0; i < j - j0; i++)
@@ -323,14 +472,51 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 }
 #endif
 
+bool bin_points_isa_supported(enum bin_points_isa isa)
+{
+	switch (isa) {
+	case BIN_POINTS_AUTO:
+	case BIN_POINTS_SCALAR:
+		return true;
+#ifdef BIN_POINTS_X86
+	case BIN_POINTS_AVX2:
+		return __builtin_cpu_supports("avx2");
+	case BIN_POINTS_AVX512:
+		return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("avx512f") &&
+		       __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+		       __builtin_cpu_supports("avx512bw");
+#else
+	default:
+		return false;
+#endif
+	}
+	return false;
+}
+
+/* The path that stages: the one asked for, the best there is for
+ * BIN_POINTS_AUTO, or the scalar rule where the asked one is missing. */
+static enum bin_points_isa isa_of(enum bin_points_isa want)
+{
+	if (want == BIN_POINTS_AUTO) {
+		if (bin_points_isa_supported(BIN_POINTS_AVX512))
+			return BIN_POINTS_AVX512;
+		return bin_points_isa_supported(BIN_POINTS_AVX2) ? BIN_POINTS_AVX2 : BIN_POINTS_SCALAR;
+	}
+	return bin_points_isa_supported(want) ? want : BIN_POINTS_SCALAR;
+}
+
 void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
 		      struct bin_point *recs, uint16_t *keys, uint32_t *hist)
 {
 	uint32_t turn = bin_draw_turn(b, d);
 	uint64_t j = j0;
-#ifdef BIN_POINTS_AVX2
-	if (!b->points_scalar && b->geom.images_per_rev % 2 == 0 && __builtin_cpu_supports("avx2"))
-		j = stage_avx2(b, d, j0, j1, recs, keys, hist);
+#ifdef BIN_POINTS_X86
+	const uint32_t slots = bin_point_slots(b);
+	enum bin_points_isa isa = b->geom.images_per_rev % 2 == 0 ? isa_of(b->points_isa) : BIN_POINTS_SCALAR;
+	if (isa == BIN_POINTS_AVX512)
+		j = stage_avx512(b, d, j0, j1, recs, keys, hist);
+	if (isa != BIN_POINTS_SCALAR) /* what is left, or all */
+		j = stage_avx2(b, d, j, j1, recs + slots * (j - j0), keys + slots * (j - j0), hist);
 #endif
 	for (; j < j1; j++)
 		stage_exact(b, d, j, turn, recs, keys, j - j0, hist);

@@ -18,10 +18,10 @@
 
 struct slot_bucket {
 	float edge;     /* slope of the boundary in this bucket, or 4 (none) */
-	float near;     /* slope of the closest boundary in this or a
-			  * neighbouring bucket, or 4 */
 	uint16_t below; /* slot for slopes < edge */
 	uint16_t above; /* slot for slopes >= edge */
+	float near;     /* slope of the closest boundary in this or a
+			  * neighbouring bucket, or 4 */
 };
 
 struct slot_table {

@@ -1,13 +1,15 @@
-/* The AVX2 point binning (daemon/render/bin_points.c) gives exactly the
- * records of the scalar rule, in the same order: random points and points
+/* The AVX2 and AVX-512 point binning (daemon/render/bin_points.c), and
+ * the path picked by default, give exactly the records of the scalar rule,
+ * in the same order: random points and points
  * exactly on slot boundaries, on the axis and on its planes (both signs of
  * zero), next to and past the float range (dropped), NaN and infinite
  * ones, under the identity, a turn about the axis, a tilt and a scale,
  * with turns, even and odd point sizes and per-point colours, on mirrored,
  * plain, odd-N and perspecta geometries, with 1, 2 and 3 workers, and in
- * draws whose lengths are no multiple of four. */
+ * draws whose lengths are no multiple of four or eight. */
 #include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -99,30 +101,40 @@ static void check_geometry(const struct geometry *g)
 		first += len;
 	}
 	struct scene scene = { .draw_count = 8, .draws = draws };
+	static const enum bin_points_isa paths[] = { BIN_POINTS_AVX2, BIN_POINTS_AVX512, BIN_POINTS_AUTO };
+	static const char *const names[] = { "avx2", "avx512", "auto" };
 	for (unsigned threads = 1; threads <= 3; threads++) {
 		struct pool *pool = pool_create(threads);
 		CHECK(pool != NULL);
-		struct bin_set ref, simd;
+		struct bin_set ref;
 		CHECK(bin_init(&ref, g) == 0);
-		CHECK(bin_init(&simd, g) == 0);
-		ref.points_scalar = true;
+		ref.points_isa = BIN_POINTS_SCALAR;
 		CHECK(bin_build(&ref, &scene, pool) == 0);
-		CHECK(bin_build(&simd, &scene, pool) == 0);
-		CHECK_MSG(ref.point_count == simd.point_count, "N %u: %u points against %u", g->images_per_rev,
-			  simd.point_count, ref.point_count);
 		CHECK(ref.point_count > n / 2);
-		CHECK(memcmp(ref.point_start, simd.point_start, (ref.images + 1) * sizeof(uint32_t)) == 0);
-		uint32_t differ = 0;
-		for (uint32_t i = 0; i < ref.point_count && i < simd.point_count; i++)
-			differ += memcmp(&ref.points[i], &simd.points[i], sizeof(struct bin_point)) != 0;
-		CHECK_MSG(differ == 0, "N %u, %u threads: %u of %u records differ", g->images_per_rev, threads, differ,
-			  ref.point_count);
-		/* and again, the storage reused */
-		CHECK(bin_build(&simd, &scene, pool) == 0);
-		CHECK(simd.point_count == ref.point_count &&
-		      memcmp(ref.points, simd.points, ref.point_count * sizeof(struct bin_point)) == 0);
+		for (size_t pth = 0; pth < sizeof(paths) / sizeof(paths[0]); pth++) {
+			if (!bin_points_isa_supported(paths[pth])) {
+				printf("N %u: no %s on this CPU, not compared\n", g->images_per_rev, names[pth]);
+				continue;
+			}
+			struct bin_set simd;
+			CHECK(bin_init(&simd, g) == 0);
+			simd.points_isa = paths[pth];
+			CHECK(bin_build(&simd, &scene, pool) == 0);
+			CHECK_MSG(ref.point_count == simd.point_count, "N %u, %s: %u points against %u",
+				  g->images_per_rev, names[pth], simd.point_count, ref.point_count);
+			CHECK(memcmp(ref.point_start, simd.point_start, (ref.images + 1) * sizeof(uint32_t)) == 0);
+			uint32_t differ = 0;
+			for (uint32_t i = 0; i < ref.point_count && i < simd.point_count; i++)
+				differ += memcmp(&ref.points[i], &simd.points[i], sizeof(struct bin_point)) != 0;
+			CHECK_MSG(differ == 0, "N %u, %s, %u threads: %u of %u records differ", g->images_per_rev,
+				  names[pth], threads, differ, ref.point_count);
+			/* and again, the storage reused */
+			CHECK(bin_build(&simd, &scene, pool) == 0);
+			CHECK(simd.point_count == ref.point_count &&
+			      memcmp(ref.points, simd.points, ref.point_count * sizeof(struct bin_point)) == 0);
+			bin_finish(&simd);
+		}
 		bin_finish(&ref);
-		bin_finish(&simd);
 		pool_destroy(pool);
 	}
 	free(rgbs);
