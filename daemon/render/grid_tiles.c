@@ -5,9 +5,9 @@
  * byte order), and then every row of the image is 32 lanes of the same
  * arithmetic: mixed along y by the row's weight, the transfer, and MAX into
  * the canvas row, 32 bytes a plane. Lanes without a value hold NaN, which
- * lights nothing. Written once with GCC's vector extensions and compiled
- * for AVX-512, AVX2 and the baseline, picked at run time; every variant
- * does the reference's operations in its order (no fused multiply-add:
+ * lights nothing. The rows in AVX-512 and AVX2 intrinsics and, for the
+ * rest, GCC's vector extensions, picked at run time; every variant does
+ * the reference's operations in its order (no fused multiply-add:
  * -ffp-contract=off), so all light what it lights, byte for byte. */
 #include <math.h>
 #include <pthread.h>
@@ -28,7 +28,7 @@
 
 #define LANES VOLUME_TILE /* pixel columns of a tile: the lanes of a row */
 #define HALF 16           /* lanes of a vector */
-#define LANE_AHEAD 4      /* lanes whose samples are asked for ahead */
+#define LANE_AHEAD 2      /* lanes whose samples are asked for ahead */
 
 typedef float f32v __attribute__((vector_size(4 * HALF)));
 typedef int32_t i32v __attribute__((vector_size(4 * HALF)));
