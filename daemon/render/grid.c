@@ -54,7 +54,6 @@ bool grid_prepare(struct grid_job *job, const struct scene_draw *d)
 	job->upright = upright(job);
 	job->reference = false;
 	job->columns = false;
-	job->colours = NULL;
 	job->rows = NULL;
 	return true;
 }
@@ -170,28 +169,6 @@ bool grid_sample(const struct scene_draw *d, const double f[3], uint8_t out[3])
 	return transfer(d, v, rgba, out);
 }
 
-size_t grid_colours_size(const struct scene_draw *d)
-{
-	if (d->transfer.sampling != SCENE_NEAREST)
-		return 0;
-	switch (d->grid->type) {
-	case SCENE_GRID_U8:
-		return 256;
-	case SCENE_GRID_U16:
-	case SCENE_GRID_I16:
-		return 65536;
-	}
-	return 0;
-}
-
-void grid_colours(const struct scene_draw *d, uint8_t *out)
-{
-	size_t n = grid_colours_size(d);
-	float base = d->grid->type == SCENE_GRID_I16 ? -32768.0f : 0.0f, none[4] = { 0 };
-	for (size_t i = 0; i < n; i++, out += 4)
-		out[3] = transfer(d, base + (float)i, none, out);
-}
-
 void grid_brick_max_slabs(const struct scene_grid *g, uint32_t k0, uint32_t k1, float *out)
 {
 	uint32_t nb = scene_grid_bricks(g->n[1]), n1 = g->n[1];
@@ -305,19 +282,6 @@ static bool columns_of(const struct grid_job *job, const double base[3], const d
 	return *u0 <= *u1;
 }
 
-/* Sample at of a u8, u16 or i16 grid as an index of its colour table. */
-static inline size_t sample_index(const struct scene_grid *gr, size_t at)
-{
-	switch (gr->type) {
-	case SCENE_GRID_U8:
-		return ((const uint8_t *)gr->data)[at];
-	case SCENE_GRID_U16:
-		return ((const uint16_t *)gr->data)[at];
-	default:
-		return (size_t)(((const int16_t *)gr->data)[at] + 32768);
-	}
-}
-
 /* Lights pixel (out, v) with rgb, weighted by m where it is active. */
 static void light(struct section_canvas *c, const struct brightness_map *m, uint32_t out, uint32_t v, uint8_t rgb[3])
 {
@@ -359,10 +323,10 @@ static void column_light(struct section_canvas *c, const struct canvas_column *c
 	column_pixel(cc, v, rgb);
 }
 
-/* An upright grid, column by column: each column's x and z once, its
- * lines mixed along x and z once (trilinear) and then read by every row
- * through the rows' table, bricks whose samples stay below the threshold
- * skipped. The same pixels and colours as the reference loop below, which
+/* An upright grid, column by column (what the tile path leaves: RGBA8,
+ * and tests): each column's x and z once, its lines mixed along x and z
+ * once (trilinear) and then read by every row through the rows' table,
+ * bricks whose samples stay below the threshold skipped. The same pixels and colours as the reference loop below, which
  * computes every pixel's f the same way. */
 static void draw_upright(struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror,
 			 const struct brightness_map *m)
@@ -410,14 +374,6 @@ static void draw_upright(struct section_canvas *c, const struct grid_job *job, c
 			const struct grid_row *r = &rows->row[v];
 			if (dark[r->j0 / SCENE_GRID_BRICK] && dark[r->j1 / SCENE_GRID_BRICK])
 				continue;
-			if (job->colours) { /* nearest: the value's colour, looked up */
-				const uint8_t *e = job->colours + 4 * sample_index(gr, col.line[0] + r->j0);
-				if (e[3]) {
-					uint8_t rgb[3] = { e[0], e[1], e[2] };
-					column_light(c, &cc, m, out, v, rgb);
-				}
-				continue;
-			}
 			float rgba[4] = { 0 }, val;
 			if (!tri) {
 				val = value_at(gr, col.i[0], r->j0, col.k[0], rgba);

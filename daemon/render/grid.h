@@ -52,10 +52,4 @@ static inline uint64_t grid_brick_count(const struct scene_grid *g)
 	return (uint64_t)g->n[0] * g->n[2] * scene_grid_bricks(g->n[1]);
 }
 
-/* Entries of d's colour table (65536 for u16 and i16, 256 for u8), or 0
- * when it has none (trilinear, f32, RGBA8); and the table: what the
- * transfer gives each value, so looked up it lights what sampling does. */
-size_t grid_colours_size(const struct scene_draw *d);
-void grid_colours(const struct scene_draw *d, uint8_t *out);
-
 #endif

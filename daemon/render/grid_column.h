@@ -21,10 +21,6 @@ struct grid_job {
 	bool upright;   /* the grid's up axis is the display's: column by column */
 	bool reference; /* draw by the reference loop anyway (tests) */
 	bool columns;   /* upright: column by column, never by tiles (tests) */
-	/* NULL, or (nearest sampling of u8, u16 or i16 samples) each value's
-	 * colour by the transfer, 4 bytes R, G, B, lit; at value + 32768 for
-	 * i16 (grid_colours()). Not owned. */
-	const uint8_t *colours;
 	/* NULL, or (upright only; grid_prepare_rows()) where each row of an
 	 * image samples: the same for every image and column, as the grid's
 	 * up axis is the display's. Owned: grid_job_finish() frees it. */

@@ -64,10 +64,9 @@ struct tile_span {
 	const struct brightness_map *bright; /* NULL, or an active one */
 };
 
-static inline __attribute__((always_inline)) f32v fsel(i32v m, f32v a, f32v b)
-{
-	return (f32v)(((i32v)a & m) | ((i32v)b & ~m));
-}
+/* a where mask m is set, else b (a macro: GCC notes the ABI of any
+ * function taking these vectors). */
+#define FSEL(m, a, b) ((f32v)(((i32v)(a) & (m)) | ((i32v)(b) & ~(m))))
 
 /* Lanes h * HALF .. of a row: the values from the mixed samples a and b,
  * their colours in px (0 where dark). Returns the lanes lit. */
@@ -81,7 +80,7 @@ static inline __attribute__((always_inline)) i32v row_half(const float *a, const
 	v = tri ? va * (1.0f - t) + vb * t : va;
 	i32v lit = v >= tf->thr;
 	f32v g = (v - tf->lo) * tf->scale, zero = { 0 }, one = zero + 1.0f;
-	g = fsel(g > 0.0f, fsel(g < 1.0f, g, one), zero);
+	g = FSEL(g > 0.0f, FSEL(g < 1.0f, g, one), zero);
 	i32v q[3];
 	if (!lut) {
 		for (int c = 0; c < 3; c++)

@@ -43,7 +43,6 @@ struct render_cpu {
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
-	uint8_t **colours; /* per grid job: its colour table (grid_colours()), or NULL */
 	struct volume *out;
 	struct rle_volume *canvas_out; /* render_canvas(): canvases, not packed images */
 	atomic_uint next_image;
@@ -122,25 +121,16 @@ static void light_point(struct section_canvas *c, const struct bin_point *p)
 		section_span(c, v, u0, u1, p->rgb);
 }
 
-/* Draws image k's points and primitives on the canvas; returns how many
- * (0: the canvas is untouched). */
-static void free_colour_tables(struct render_cpu *r)
-{
-	for (uint32_t i = 0; r->colours && i < r->grid_count; i++)
-		free(r->colours[i]);
-	free(r->colours);
-	r->colours = NULL;
-}
-
-/* The grid jobs of the last render, and their colour tables. */
+/* The grid jobs of the last render. */
 static void free_grid_jobs(struct render_cpu *r)
 {
-	free_colour_tables(r);
 	for (uint32_t i = 0; i < r->grid_count; i++)
 		grid_job_finish(&r->grids[i]);
 	r->grid_count = 0;
 }
 
+/* Draws image k's points, primitives and grids on the canvas; returns how
+ * many (0: the canvas is untouched). */
 static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	const struct bin_set *b = &r->bins;
@@ -182,27 +172,6 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	return drawn;
 }
 
-/* The grid jobs' colour tables, where they have one. 0 or -ENOMEM. */
-static int make_colour_tables(struct render_cpu *r)
-{
-	free_colour_tables(r);
-	if (!r->grid_count)
-		return 0;
-	r->colours = calloc(r->grid_count, sizeof(*r->colours));
-	if (!r->colours)
-		return -ENOMEM;
-	for (uint32_t i = 0; i < r->grid_count; i++) {
-		size_t n = grid_colours_size(r->grids[i].draw);
-		if (!n)
-			continue;
-		if (!(r->colours[i] = malloc(4 * n)))
-			return -ENOMEM;
-		grid_colours(r->grids[i].draw, r->colours[i]);
-		r->grids[i].colours = r->colours[i];
-	}
-	return 0;
-}
-
 /* The scene's grid draws that can be drawn, prepared. 0 or -ENOMEM. */
 static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 {
@@ -226,7 +195,7 @@ static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 		if (!grid_prepare_rows(job, &r->base.geom))
 			return -ENOMEM;
 	}
-	return make_colour_tables(r);
+	return 0;
 }
 
 /* Images are handed out one at a time; each image's result depends on

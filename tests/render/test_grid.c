@@ -327,6 +327,35 @@ static void draw_canvas(struct section_canvas *c, struct grid_job *job, uint32_t
 	grid_draw_image(c, job, k, mirror);
 }
 
+/* Every third image of job, mirrored and not: the column path and each
+ * tile variant against the reference loop, byte for byte. Returns the
+ * canvas rows the reference lit. */
+static uint64_t compare_upright(const char *name, const char *what, struct grid_job *job, struct section_canvas *ref,
+				struct section_canvas *fast)
+{
+	const struct geometry *g = &ref->geom;
+	size_t tiles = (size_t)ref->tiles_x * ref->tiles_y;
+	uint64_t rows = 0;
+	for (uint32_t k = 0; k < images_of(g); k += 3)
+		for (int mirror = 0; mirror < 2; mirror++) {
+			draw_canvas(ref, job, k, mirror, true);
+			for (int way = -1; way < 0 || grid_tiles_variant((unsigned)way); way++) {
+				const char *path = way < 0 ? "columns" : grid_tiles_variant((unsigned)way);
+				job->columns = way < 0;
+				CHECK(way < 0 || grid_tiles_use(path));
+				draw_canvas(fast, job, k, mirror, false);
+				CHECK_MSG(!memcmp(ref->rgb, fast->rgb, tiles * HALFTONE_TILE_BYTES) &&
+						  !memcmp(ref->rows, fast->rows, tiles * sizeof(*ref->rows)),
+					  "%s: %s image %u%s: the upright path (%s) differs", name, what, k,
+					  mirror ? " mirrored" : "", path);
+			}
+			CHECK(grid_tiles_use(grid_tiles_variant(0)));
+			for (size_t i = 0; i < tiles; i++)
+				rows += __builtin_popcount(ref->rows[i]);
+		}
+	return rows;
+}
+
 static void check_upright(const char *name, const struct geometry *g)
 {
 	enum { NX = 9, NY = 75, NZ = 7, S = NX * NY * NZ };
@@ -356,7 +385,6 @@ static void check_upright(const char *name, const struct geometry *g)
 	};
 	struct section_canvas ref, fast;
 	CHECK(section_canvas_init(&ref, g) == 0 && section_canvas_init(&fast, g) == 0);
-	size_t tiles = (size_t)ref.tiles_x * ref.tiles_y;
 	uint64_t pixels = 0;
 	/* Unweighted, then under the even and uniform brightness models (a
 	 * solid grid is weighted as a crossing surface, lane by lane). */
@@ -407,45 +435,12 @@ static void check_upright(const char *name, const struct geometry *g)
 					struct grid_job job;
 					CHECK(grid_prepare(&job, &d) && job.upright && grid_prepare_rows(&job, g) &&
 					      job.rows);
-					/* Nearest on u8, u16, i16: the colours looked up. */
-					size_t entries = grid_colours_size(&d);
-					uint8_t *colours = entries ? malloc(4 * entries) : NULL;
-					CHECK(!entries || colours);
-					if (colours)
-						grid_colours(&d, colours);
-					CHECK((entries != 0) ==
-					      (sampling == SCENE_NEAREST && kinds[t].type <= SCENE_GRID_I16));
 					ref.bright = fast.bright = model ? &maps[model] : NULL;
-					for (uint32_t k = 0; k < images_of(g); k += 3)
-						for (int mirror = 0; mirror < 2; mirror++) {
-							job.colours = NULL;
-							draw_canvas(&ref, &job, k, mirror, true);
-							job.colours = colours;
-							/* Column by column, then by tiles in each variant. */
-							for (int way = -1; way < 0 || grid_tiles_variant((unsigned)way);
-							     way++) {
-								job.columns = way < 0;
-								CHECK(way < 0 || grid_tiles_use(grid_tiles_variant(
-											 (unsigned)way)));
-								draw_canvas(&fast, &job, k, mirror, false);
-								CHECK_MSG(!memcmp(ref.rgb, fast.rgb,
-										  tiles * HALFTONE_TILE_BYTES) &&
-										  !memcmp(ref.rows, fast.rows,
-											  tiles * sizeof(*ref.rows)),
-									  "%s: model %d type %u sampling %d threshold "
-									  "%g image %u%s: "
-									  "the upright path (%s) differs",
-									  name, model, kinds[t].type, sampling,
-									  (double)kinds[t].threshold[th & 1], k,
-									  mirror ? " mirrored" : "",
-									  way < 0 ? "columns"
-										  : grid_tiles_variant((unsigned)way));
-							}
-							CHECK(grid_tiles_use(grid_tiles_variant(0)));
-							for (size_t i = 0; i < tiles; i++)
-								pixels += __builtin_popcount(ref.rows[i]);
-						}
-					free(colours);
+					char what[96];
+					snprintf(what, sizeof(what), "model %d type %u sampling %d threshold %g%s",
+						 model, kinds[t].type, sampling, (double)kinds[t].threshold[th & 1],
+						 th >= 2 ? " lut" : "");
+					pixels += compare_upright(name, what, &job, &ref, &fast);
 					grid_job_finish(&job);
 				}
 	section_canvas_finish(&ref);
