@@ -1,9 +1,12 @@
 #include "rtest.h"
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "render_gl.h"
 
 struct geometry rtest_small(void)
 {
@@ -325,4 +328,20 @@ void rtest_invert(const float m[16], double inv[16])
 	for (int r = 0; r < 4; r++)
 		for (int c = 0; c < 4; c++)
 			inv[c * 4 + r] = a[r][4 + c];
+}
+
+bool rtest_have_gl(const struct geometry *g, const char *backend)
+{
+	struct render_gl_options o = { .backend = backend, .threads = 2 };
+	struct renderer *r = render_gl_create(g, &o);
+	if (!r && errno == ENOENT && !strcmp(backend, "osmesa")) {
+		printf("%s: not in this build (no OSMesa), skipped\n", backend);
+		return false;
+	}
+	if (!r) {
+		fprintf(stderr, "%s: render_gl_create failed: %s\n", backend, strerror(errno));
+		exit(1);
+	}
+	render_destroy(r);
+	return true;
 }

@@ -64,6 +64,10 @@ void rtest_identity(float t[16]);
  * Gauss-Jordan elimination with partial pivoting on the 4x4: independent
  * of the renderers' own inversion. Aborts when m is singular. */
 void rtest_invert(const float m[16], double inv[16]);
+/* Whether GL renderer backend ("egl", "osmesa") can be made at g: false
+ * (a skip, said on stdout) only when the build has no OSMesa; any other
+ * failure ends the test (exit 1). */
+bool rtest_have_gl(const struct geometry *g, const char *backend);
 
 /* Renders draws with a fresh CPU renderer; aborts on failure. */
 struct volume *rtest_render(const struct geometry *g, const struct scene_draw *draws, uint32_t n, unsigned threads);

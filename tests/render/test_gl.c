@@ -636,21 +636,6 @@ static void check_hardware_only(const struct geometry *g, const char *backend)
 	render_destroy(r);
 }
 
-/* Whether the build has this backend: only OSMesa may be missing (ENOENT);
- * any other failure to create a renderer fails the test. */
-static bool have_backend(const struct geometry *g, const char *backend)
-{
-	struct render_gl_options o = { .backend = backend, .threads = 2 };
-	struct renderer *r = render_gl_create(g, &o);
-	if (!r && errno == ENOENT && !strcmp(backend, "osmesa")) {
-		printf("%s: not in this build (no OSMesa), skipped\n", backend);
-		return false;
-	}
-	CHECK_MSG(r, "%s: render_gl_create failed: %s", backend, strerror(errno));
-	render_destroy(r);
-	return true;
-}
-
 int main(int argc, char **argv)
 {
 	CHECK_MSG(argc == 2, "usage: %s tests/data", argv[0]);
@@ -660,7 +645,7 @@ int main(int argc, char **argv)
 	struct geometry small = rtest_small(), odd = rtest_odd();
 	for (int i = 0; i < 2; i++) {
 		const char *b = backends[i];
-		if (!have_backend(&small, b))
+		if (!rtest_have_gl(&small, b))
 			continue;
 		printf("%s:\n", b);
 		check_scenes("small", &small, b);

@@ -507,21 +507,6 @@ static void check_limits(const struct geometry *g, const char *backend)
 	render_destroy(cpu);
 }
 
-/* Whether backend can be created here; OSMesa missing from the build is a
- * skip, any other failure fails the test. */
-static bool have_backend(const struct geometry *g, const char *backend)
-{
-	struct render_gl_options o = { .backend = backend, .threads = 2 };
-	struct renderer *r = render_gl_create(g, &o);
-	if (!r && errno == ENOENT && !strcmp(backend, "osmesa")) {
-		printf("%s: not in this build (no OSMesa), skipped\n", backend);
-		return false;
-	}
-	CHECK_MSG(r, "%s: render_gl_create failed: %s", backend, strerror(errno));
-	render_destroy(r);
-	return true;
-}
-
 int main(void)
 {
 	setvbuf(stdout, NULL, _IOLBF, 0);
@@ -532,7 +517,7 @@ int main(void)
 	uniform.brightness = GEOMETRY_BRIGHTNESS_UNIFORM;
 	for (int i = 0; i < 2; i++) {
 		const char *b = backends[i];
-		if (!have_backend(&small, b))
+		if (!rtest_have_gl(&small, b))
 			continue;
 		printf("%s:\n", b);
 		check_types("small", &small, b, true);

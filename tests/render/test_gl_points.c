@@ -190,28 +190,13 @@ static void check_backend(const char *gname, const struct geometry *g, const cha
 	render_destroy(p.cpu);
 }
 
-/* Whether the build has this backend: only OSMesa may be missing (ENOENT),
- * as in test_gl.c; any other failure to create a renderer fails. */
-static bool have_backend(const struct geometry *g, const char *backend)
-{
-	struct render_gl_options o = { .backend = backend, .threads = 2 };
-	struct renderer *r = render_gl_create(g, &o);
-	if (!r && errno == ENOENT && !strcmp(backend, "osmesa")) {
-		printf("%s: not in this build (no OSMesa), skipped\n", backend);
-		return false;
-	}
-	CHECK_MSG(r, "%s: render_gl_create failed: %s", backend, strerror(errno));
-	render_destroy(r);
-	return true;
-}
-
 int main(void)
 {
 	setvbuf(stdout, NULL, _IOLBF, 0); /* in order with the renderer's log lines */
 	static const char *const backends[] = { "egl", "osmesa" };
 	struct geometry small = rtest_small(), odd = rtest_odd();
 	for (int i = 0; i < 2; i++) {
-		if (!have_backend(&small, backends[i]))
+		if (!rtest_have_gl(&small, backends[i]))
 			continue;
 		check_backend("small", &small, backends[i]);
 		check_backend("odd", &odd, backends[i]);
