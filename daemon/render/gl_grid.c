@@ -258,6 +258,35 @@ static int add_draw(struct render_gl *r, const struct scene_draw *d, const struc
 	return 0;
 }
 
+/* What a volume needs of the textures (the grid draws' textures found or
+ * not): the bytes of those kept that it draws and of new ones in *need,
+ * of the new ones alone in *fresh. false: a grid larger than GL allows. */
+static bool textures_needed(struct render_gl *r, uint64_t now, uint64_t *need, uint64_t *fresh)
+{
+	bool fit = true;
+	*need = *fresh = 0;
+	for (uint32_t i = 0; i < r->grid_draw_count; i++) {
+		struct gl_grid_draw *gd = &r->grid_draws[i];
+		const struct scene_grid *g = gd->draw->grid;
+		gd->tex = find_texture(r, gd->draw);
+		if (gd->tex != UINT32_MAX) {
+			struct gl_grid_tex *t = &r->grid_tex[gd->tex];
+			*need += t->last == now ? 0 : t->bytes;
+			t->last = now;
+			continue;
+		}
+		bool again = false; /* a new grid an earlier draw counted */
+		for (uint32_t j = 0; j < i && !again; j++)
+			again = r->grid_draws[j].tex == UINT32_MAX && r->grid_draws[j].draw->grid == g &&
+				r->grid_draws[j].draw->grid_id == gd->draw->grid_id;
+		*need += again ? 0 : grid_bytes(g);
+		*fresh += again ? 0 : grid_bytes(g);
+		for (int a = 0; a < 3; a++)
+			fit &= g->n[a] <= (uint32_t)r->max_3d;
+	}
+	return fit;
+}
+
 int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
 {
 	uint64_t now = ++r->grid_renders;
@@ -279,27 +308,8 @@ int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
 	}
 	/* What this volume needs: the textures kept that it draws, and new
 	 * ones (fresh). */
-	uint64_t need = 0, fresh = 0;
-	bool fit = true;
-	for (uint32_t i = 0; i < r->grid_draw_count; i++) {
-		struct gl_grid_draw *gd = &r->grid_draws[i];
-		const struct scene_grid *g = gd->draw->grid;
-		gd->tex = find_texture(r, gd->draw);
-		if (gd->tex != UINT32_MAX) {
-			struct gl_grid_tex *t = &r->grid_tex[gd->tex];
-			need += t->last == now ? 0 : t->bytes;
-			t->last = now;
-			continue;
-		}
-		bool again = false; /* a new grid an earlier draw counted */
-		for (uint32_t j = 0; j < i && !again; j++)
-			again = r->grid_draws[j].tex == UINT32_MAX && r->grid_draws[j].draw->grid == g &&
-				r->grid_draws[j].draw->grid_id == gd->draw->grid_id;
-		need += again ? 0 : grid_bytes(g);
-		fresh += again ? 0 : grid_bytes(g);
-		for (int a = 0; a < 3; a++)
-			fit &= g->n[a] <= (uint32_t)r->max_3d;
-	}
+	uint64_t need, fresh;
+	bool fit = textures_needed(r, now, &need, &fresh);
 	uint64_t budget = r->opts.max_grid_bytes ? r->opts.max_grid_bytes : GL_GRID_BUDGET;
 	if (!fit || need > budget) {
 		drop_textures(r, now, budget);
