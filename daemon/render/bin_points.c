@@ -197,6 +197,14 @@ _Static_assert(sizeof(struct slot_bucket) == 12 && offsetof(struct slot_bucket, 
 		       offsetof(struct slot_bucket, above) == 6 && offsetof(struct slot_bucket, near) == 8,
 	       "the vector paths gather a slot bucket as a 64-bit word (edge, below, above) and a float (near)");
 
+/* Mirrored, unturned, one colour: the vector paths stage a record and a
+ * key a point with no scalar work in their loop, and the records are
+ * counted by a pass over the keys afterwards (bin_points_stage()). */
+static inline bool stage_fast(const struct bin_set *b, const struct scene_draw *d)
+{
+	return b->geom.mirrored && !bin_draw_turn(b, d) && !d->prim_rgb;
+}
+
 /* Points j0 .. j1 - 1 four at a time, with exactly point_exact()'s
  * operations (no fused multiply-adds: each product and sum rounded as the
  * scalar code rounds it); a point the slope table flags as near a slot
@@ -232,9 +240,7 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
 			    size << 56;
 	const __m256i hi4 = _mm256_set1_epi64x((long long)hi);
-	/* mirrored, unturned, one colour: no per-point scalar work in the
-	 * loop, the records counted by a second pass over their keys */
-	const bool fast = mirrored && !turn && !d->prim_rgb;
+	const bool fast = stage_fast(b, d);
 	uint64_t j = j0;
 	for (; j + 4 <= j1; j += 4) {
 		const float *p = d->xyz + 3 * j;
@@ -331,10 +337,6 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 		stage_lanes(b, d, j, 4, (unsigned)ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
 			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
 	}
-	if (fast)
-		for (uint64_t i = 0; i < j - j0; i++)
-			if (keys[i] != PKEY_NONE)
-				hist[keys[i] & PKEY_IMAGE]++;
 	return j;
 }
 
@@ -375,7 +377,7 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
 			    size << 56;
 	const __m512i hi8 = _mm512_set1_epi64((long long)hi);
-	const bool fast = mirrored && !turn && !d->prim_rgb;
+	const bool fast = stage_fast(b, d);
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
 		const float *p = d->xyz + 3 * j;
@@ -464,10 +466,6 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 		stage_lanes(b, d, j, 8, ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
 			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
 	}
-	if (fast)
-		for (uint64_t i = 0; i < j - j0; i++)
-			if (keys[i] != PKEY_NONE)
-				hist[keys[i] & PKEY_IMAGE]++;
 	return j;
 }
 #endif
@@ -517,6 +515,10 @@ void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint6
 		j = stage_avx512(b, d, j0, j1, recs, keys, hist);
 	if (isa != BIN_POINTS_SCALAR) /* what is left, or all */
 		j = stage_avx2(b, d, j, j1, recs + slots * (j - j0), keys + slots * (j - j0), hist);
+	if (isa != BIN_POINTS_SCALAR && stage_fast(b, d)) /* the vector paths' records, counted */
+		for (uint64_t i = 0; i < j - j0; i++)
+			if (keys[i] != PKEY_NONE)
+				hist[keys[i] & PKEY_IMAGE]++;
 #endif
 	for (; j < j1; j++)
 		stage_exact(b, d, j, turn, recs, keys, j - j0, hist);
