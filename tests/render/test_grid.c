@@ -17,8 +17,7 @@
  * 5. Threads: 1 and 3 give the same volume; a singular transform lights
  *    nothing; the even brightness model thins only inside r0.
  * 7. The upright paths (the grid's up axis the display's): column by
- *    column (dark bricks skipped by their maxima, nearest integer samples
- *    coloured through a table of their values) and by tiles in every
+ *    column (dark bricks skipped by their maxima) and by tiles in every
  *    vector variant this machine runs (grid_tiles.h), each light the same
  *    canvas as the reference loop, byte for byte, for every sample type,
  *    both samplings, thresholds that skip most bricks or none, a lookup
