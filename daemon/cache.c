@@ -180,7 +180,7 @@ static struct entry *lookup_or_add(struct cache *c, uint64_t key)
 	return e;
 }
 
-/* The same but perhaps for the turn. */
+/* The same but perhaps for the turn and the lift. */
 static bool draw_alike(const struct scene_draw *a, const struct scene_draw *b)
 {
 	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->prim_rgb == b->prim_rgb &&
@@ -191,7 +191,7 @@ static bool draw_alike(const struct scene_draw *a, const struct scene_draw *b)
 enum change {
 	CHANGED,
 	SAME,   /* draw for draw the same */
-	TURNED, /* the same but for one turn, common to all its draws, that changed */
+	TURNED, /* the same but for one turn and lift, common to all its draws, that changed */
 };
 
 static enum change compare(const struct entry *e, const struct scene_draw *draws, uint32_t n)
@@ -200,9 +200,10 @@ static enum change compare(const struct entry *e, const struct scene_draw *draws
 		return CHANGED;
 	bool same_turn = true;
 	for (uint32_t i = 0; i < n; i++) {
-		if (!draw_alike(&e->draws[i], &draws[i]) || draws[i].turn != draws[0].turn)
+		if (!draw_alike(&e->draws[i], &draws[i]) || draws[i].turn != draws[0].turn ||
+		    draws[i].lift != draws[0].lift)
 			return CHANGED;
-		same_turn &= e->draws[i].turn == draws[i].turn;
+		same_turn &= e->draws[i].turn == draws[i].turn && e->draws[i].lift == draws[i].lift;
 	}
 	return same_turn ? SAME : TURNED;
 }
@@ -457,6 +458,7 @@ int cache_plan(struct cache *c, const struct snapshot *snap)
 		e->absent = 0;
 		e->first_draw = obj->first_draw;
 		e->turn = obj->draw_count ? draws[0].turn : 0;
+		e->lift = obj->draw_count ? draws[0].lift : 0;
 		e->role = decide(c, e, change, room);
 		if (place(c, e, draws, obj->draw_count) < 0)
 			return -ENOMEM;

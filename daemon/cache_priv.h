@@ -58,6 +58,7 @@ struct entry {
 	 * whole images is composed from it (cache.h). */
 	struct rle_volume *canvas;
 	uint32_t turn; /* its draws' turn in the planned scene */
+	int32_t lift;  /* and their lift */
 };
 
 struct cache {

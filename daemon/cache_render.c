@@ -25,8 +25,8 @@ static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 	return (struct scene){ .draw_count = n, .draws = draws };
 }
 
-/* The canvases to make (each object's draws with turn 0, rendered up to
- * the halftone), then every turned object composed at its turn into
+/* The canvases to make (each object's draws with turn and lift 0, rendered
+ * up to the halftone), then every turned object composed at its turn and lift into
  * c->turned_vol (the CPU renderer's halftone: RENDER_ENGINE_CPU). */
 static int render_turned(struct cache *c, struct renderer *r, const struct scene *scene)
 {
@@ -42,8 +42,10 @@ static int render_turned(struct cache *c, struct renderer *r, const struct scene
 			c->unturned_cap = e->draw_count;
 		}
 		memcpy(c->unturned, scene->draws + e->first_draw, e->draw_count * sizeof(*c->unturned));
-		for (uint32_t d = 0; d < e->draw_count; d++)
+		for (uint32_t d = 0; d < e->draw_count; d++) {
 			c->unturned[d].turn = 0;
+			c->unturned[d].lift = 0;
+		}
 		struct rle_volume *cv = rle_volume_new(c->prev->image_count, c->prev->mask_bytes,
 						       volume_tiles_per_image(c->prev), CANVAS_TILE_BYTES);
 		if (!cv)
@@ -53,11 +55,12 @@ static int render_turned(struct cache *c, struct renderer *r, const struct scene
 		int err = r->impl->render_canvas(r, &one, cv);
 		if (err < 0)
 			return err;
-		c->turned_src[n++] = (struct turned_source){ .canvas = cv, .turn = e->turn };
+		c->turned_src[n++] = (struct turned_source){ .canvas = cv, .turn = e->turn, .lift = e->lift };
 	}
-	for (uint32_t i = 0; i < c->turned_count; i++)
-		c->turned_src[n++] =
-			(struct turned_source){ .canvas = c->turneds[i]->canvas, .turn = c->turneds[i]->turn };
+	for (uint32_t i = 0; i < c->turned_count; i++) {
+		const struct entry *e = c->turneds[i];
+		c->turned_src[n++] = (struct turned_source){ .canvas = e->canvas, .turn = e->turn, .lift = e->lift };
+	}
 	int err = compose_turned(c->compose, c->turned_vol, c->turned_src, n);
 	c->turned_rendered = err == 0;
 	return err;

@@ -332,6 +332,24 @@ static void unstage(struct staged *st)
 	free(st->vtx);
 }
 
+/* v's bounding box; not bounded when a coordinate is not finite. */
+static void bound(struct vdata *v)
+{
+	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
+	bool finite = true;
+	for (uint32_t i = 0; i < v->count; i++) {
+		for (int a = 0; a < 3; a++) {
+			float x = v->xyz[3 * (size_t)i + a];
+			finite &= isfinite(x);
+			lo[a] = x < lo[a] ? x : lo[a];
+			hi[a] = x > hi[a] ? x : hi[a];
+		}
+	}
+	v->bounded = finite && v->count > 0;
+	memcpy(v->lo, lo, sizeof(lo));
+	memcpy(v->hi, hi, sizeof(hi));
+}
+
 /* Builds the result from the staged draw. */
 static enum draw_error build(const struct staged *st, uint32_t n, uint64_t max_vertices, struct vdata **out)
 {
@@ -360,6 +378,7 @@ static enum draw_error build(const struct staged *st, uint32_t n, uint64_t max_v
 	else
 		for (uint32_t p = 0; p < prims; p++)
 			emit_prim(&e, st, p);
+	bound(v);
 	*out = v;
 	return DRAW_OK;
 }

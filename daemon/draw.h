@@ -41,6 +41,10 @@ struct vdata {
 	uint8_t *prim_rgb; /* NULL, or 3 bytes per primitive (alpha applied) */
 	struct vgrid *grid;
 	struct scene_transfer transfer;
+	/* The vertices' bounding box, when every coordinate is finite
+	 * (bounded): where a lifted render may be shifted (snapshot.c). */
+	bool bounded;
+	float lo[3], hi[3];
 	float xyz[];
 };
 

@@ -34,11 +34,13 @@ struct stage_layer {
 	 * reference to the list), or NULL: no list. */
 	const struct draw_array *draws;
 	float transform[16]; /* as the client set it */
-	/* The same as a base turned about the axis by whole images
-	 * (turn.h): transform is, within TURN_TOLERANCE, base turned by
-	 * turn images. */
+	/* The same as a base turned about the axis by whole images and
+	 * moved along it by whole rows (turn.h): transform is, within
+	 * TURN_TOLERANCE, base turned by turn images and lifted by lift rows
+	 * of the volume (before calibration). */
 	float base[16];
 	uint32_t turn;
+	int32_t lift;
 	int32_t priority;
 	bool visible;
 	bool exclusive;

@@ -630,11 +630,15 @@ static void layer_commit(struct layer *y)
 	struct stage_layer *s = &y->committed;
 	s->draws = l ? &l->committed : NULL;
 	memcpy(s->transform, y->pending.transform, sizeof(s->transform));
-	/* A turn of the base by whole images keeps the base: the cache can
-	 * reuse the layer's render shifted (turn.h). */
-	if (!turn_find(s->base, s->transform, y->base.client->env->geom->images_per_rev, &s->turn)) {
+	/* A turn of the base by whole images, or a move along the axis by
+	 * whole rows, keeps the base: the cache can reuse the layer's render
+	 * shifted (turn.h). */
+	const struct geometry *g = y->base.client->env->geom;
+	if (!turn_find_lift(s->base, s->transform, g->images_per_rev, 2.0 * g->half_height / g->height, &s->turn,
+			    &s->lift)) {
 		memcpy(s->base, s->transform, sizeof(s->base));
 		s->turn = 0;
+		s->lift = 0;
 	}
 	s->priority = y->pending.priority;
 	s->visible = y->pending.visible;

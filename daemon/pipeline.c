@@ -199,7 +199,7 @@ static void start_render(struct pipeline *p)
 	if (calibrated)
 		calibration_transform(&p->calibration, pre);
 	if (snapshot_build(p->building, p->cfg.stage, p->cfg.max_scene_primitives,
-			   p->renderer->impl->render_canvas != NULL, calibrated ? pre : NULL) < 0) {
+			   p->renderer->impl->render_canvas ? &p->renderer->geom : NULL, calibrated ? pre : NULL) < 0) {
 		log_error("out of memory building the scene; retrying with the next change");
 		return;
 	}

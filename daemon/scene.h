@@ -81,6 +81,9 @@ struct scene_draw {
 				* x' = x cos a - z sin a, z' = x sin a + z cos a),
 				* as an image index shift (below); more than
 				* N-1 counts modulo N. 0: as it is. */
+	int16_t lift;                   /* rows: shown moved up the axis by lift
+				 * whole image rows (down when negative), as a
+				 * row shift (below). 0: as it is. */
 	const uint8_t *prim_rgb;        /* NULL, or one colour per primitive (3 bytes
 				  * each, alpha applied) used instead of rgb;
 				  * immutable while the scene lives */
@@ -95,7 +98,17 @@ struct scene_draw {
 	uint64_t grid_id;
 };
 
-/* A draw with turn m lights, in volume image k, exactly what it would light
+/* A draw with lift L lights, in row v of each image, what it would light
+ * with lift 0 in row v + L of that image, before the halftone; rows v + L
+ * outside the image light nothing. Turns and lifts commute (one moves
+ * images and columns, the other rows). The daemon lifts a draw only where
+ * its lifted and unlifted renders both lie wholly inside the image rows
+ * (snapshot.c), so that the shift loses nothing a render of the moved
+ * draw would show. The CPU renderer draws lifted draws into canvases of
+ * their own and merges them shifted (render_cpu.c); the GL renderers hand
+ * such scenes to their CPU fallback, as they do turns.
+ *
+ * A draw with turn m lights, in volume image k, exactly what it would light
  * with turn 0 in image j = k - m (docs/rendering.md, "Turns"): unmirrored,
  * j is taken mod N; mirrored (M = N/2 images a volume), j is brought into
  * [0, M) by adding or subtracting M, each time flipping the mirror, and
@@ -105,11 +118,20 @@ struct scene_draw {
  * gives its render at any turn, bit for bit, by shifting (and mirroring)
  * images, as long as its colours' halftone does not depend on the phase
  * (channels 0 or 255) or the unturned canvas is kept. The GL renderers
- * hand a scene with any turn to their CPU fallback (render_gl.h). */
+ * hand a scene with any turn or lift to their CPU fallback (render_gl.h):
+ * scene_has_turn() counts both. */
 static inline bool scene_has_turn(const struct scene_draw *draws, uint32_t n)
 {
 	for (uint32_t i = 0; i < n; i++)
-		if (draws[i].turn)
+		if (draws[i].turn || draws[i].lift)
+			return true;
+	return false;
+}
+
+static inline bool scene_has_lift(const struct scene_draw *draws, uint32_t n)
+{
+	for (uint32_t i = 0; i < n; i++)
+		if (draws[i].lift)
 			return true;
 	return false;
 }

@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "draw.h"
+#include "geometry.h"
 #include "mat4.h"
 #include "stage.h"
 
@@ -46,8 +47,77 @@ static int add_object(struct snapshot *snap, const struct stage_layer *y)
  * of a grid cannot take a new grid at a freed one's address for it. */
 static uint64_t grid_ids;
 
-static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool turns, const float *pre)
+/* Rows of margin a lifted draw keeps from the image's top and bottom: a
+ * point's square reaches 8 rows from its centre, and the conservative
+ * raster a row beyond a primitive's edge. */
+#define LIFT_MARGIN_ROWS 10
+
+/* Lowest and highest y of a draw of d under m (its box, or a grid's).
+ * False when d has no finite box. */
+static bool draw_y_range(const struct vdata *d, const float m[16], double *lo, double *hi)
 {
+	float box[2][3];
+	if (d->grid) {
+		for (int a = 0; a < 3; a++) {
+			box[0][a] = 0;
+			box[1][a] = (float)d->grid->grid.n[a] * d->grid->grid.spacing[a];
+		}
+	} else if (d->bounded) {
+		memcpy(box[0], d->lo, sizeof(box[0]));
+		memcpy(box[1], d->hi, sizeof(box[1]));
+	} else {
+		return false;
+	}
+	*lo = *hi = m[13];
+	for (int a = 0; a < 3; a++) {
+		double p = (double)m[a * 4 + 1] * box[0][a], q = (double)m[a * 4 + 1] * box[1][a];
+		*lo += p < q ? p : q;
+		*hi += p < q ? q : p;
+	}
+	return true;
+}
+
+/* Whether y's lift can be drawn as a row shift (scene.h, scene_draw.lift):
+ * every draw lies LIFT_MARGIN_ROWS inside the image rows both unlifted and
+ * lifted, so the shifted render of the base loses nothing and brings in
+ * nothing a render of the moved draws would not show, and the calibration
+ * does not scale rows (pre's y scale is 1). */
+static bool lift_fits(const struct stage_layer *y, const struct geometry *g, const float *pre)
+{
+	if (pre && pre[5] != 1.0f)
+		return false;
+	double h = g->half_height, row_h = 2.0 * h / g->height, margin = LIFT_MARGIN_ROWS * row_h;
+	double up = y->lift * row_h;
+	for (uint32_t i = 0; i < y->draws->count; i++) {
+		const struct list_item *d = &y->draws->items[i];
+		float m[16];
+		double lo, hi;
+		mat4_mul(m, y->base, d->transform);
+		if (pre)
+			mat4_mul(m, pre, m);
+		if (!draw_y_range(d->data, m, &lo, &hi))
+			return false;
+		if (lo + (up < 0 ? up : 0) < margin - h || hi + (up > 0 ? up : 0) > h - margin)
+			return false;
+	}
+	return true;
+}
+
+static int add_layer(struct snapshot *snap, const struct stage_layer *y, const struct geometry *turns, const float *pre)
+{
+	/* With turns, the layer's base and its turn by whole images, and its
+	 * lift by whole rows (layer.h): the renderer shifts images and rows
+	 * instead of moving vertices, and the cache reuses what it rendered.
+	 * A lift that cannot be a row shift is put back into the transform. */
+	float base[16];
+	int32_t lift = 0;
+	if (turns) {
+		memcpy(base, y->base, sizeof(base));
+		if (y->lift && lift_fits(y, turns, pre))
+			lift = y->lift;
+		else
+			base[13] += (float)(y->lift * 2.0 * turns->half_height / turns->height);
+	}
 	const struct draw_array *a = y->draws;
 	if (a->count && add_object(snap, y) < 0)
 		return -ENOMEM;
@@ -72,13 +142,11 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 			sd->transfer = d->data->transfer;
 			sd->grid_id = g->id;
 		}
-		/* With turns, the layer's base and its turn by whole images
-		 * (layer.h): the renderer shifts images instead of turning
-		 * vertices, and the cache reuses what it rendered. */
-		mat4_mul(sd->transform, turns ? y->base : y->transform, d->transform);
+		mat4_mul(sd->transform, turns ? base : y->transform, d->transform);
 		if (pre)
 			mat4_mul(sd->transform, pre, sd->transform);
 		sd->turn = turns ? (uint16_t)y->turn : 0;
+		sd->lift = (int16_t)lift;
 		for (int c = 0; c < 3; c++)
 			sd->rgb[c] = (uint8_t)((d->rgba[c] * d->rgba[3] + 127) / 255);
 		snap->data[snap->scene.draw_count++] = vdata_ref(d->data);
@@ -86,7 +154,8 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, bool tu
 	return 0;
 }
 
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns, const float *pre)
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, const struct geometry *turns,
+		   const float *pre)
 {
 	snap->scene.draw_count = 0;
 	snap->scene.object_count = 0;
@@ -117,7 +186,8 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
 {
 	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->point_size == b->point_size &&
-	       a->turn == b->turn && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       a->turn == b->turn && a->lift == b->lift &&
+	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
 	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0 && (a->prim != SCENE_GRID || scene_grid_same(a, b));
 }
 

@@ -9,6 +9,7 @@
 
 #include "scene.h"
 
+struct geometry;
 struct stage;
 struct stage_layer;
 struct vdata;
@@ -28,14 +29,18 @@ struct snapshot {
 
 /* Fills snap from the layers the stage shows (stage_shown_layers()), in
  * their order, until budget primitives (max-scene-primitives): the layer
- * that would go over and every later one are left out, whole. turns: the
- * renderer draws turns natively (the CPU renderer), so a layer is drawn as
- * its base turned by whole images (scene_draw.turn) rather than by the
+ * that would go over and every later one are left out, whole. turns: NULL,
+ * or the renderer draws turns and lifts natively (the CPU renderer), in
+ * images and rows of this geometry, so a layer is drawn as its base turned
+ * by whole images (scene_draw.turn) and lifted by whole rows
+ * (scene_draw.lift, where the row shift loses nothing) rather than by the
  * transform the client gave, which it equals within TURN_TOLERANCE. 0 or
  * -ENOMEM. pre: NULL, or a transform applied after every layer's (the
  * calibration's, calibration_transform(): a turn and a vertical scale,
- * which commute with the layers' turns). */
-int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, bool turns, const float *pre);
+ * which commute with the layers' turns; a layer is lifted only while the
+ * scale is 1). */
+int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t budget, const struct geometry *turns,
+		   const float *pre);
 /* Whether a draws exactly what b draws: draw for draw the same primitive,
  * vertex data, transform and colour. Vertex data is compared by identity:
  * safe because b holds references to its data, so none of it can have been

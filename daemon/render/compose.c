@@ -630,32 +630,49 @@ static void mirror_canvas(const uint8_t *src, uint8_t *dst)
 	}
 }
 
-/* A turned source's coded canvas tile t (of code, avail bytes), mirrored
- * when asked, halftoned at image k's phase and ORed into w's dense image;
- * *count counts the tiles newly touched. Returns the coded bytes read, 0
- * when the code is broken. */
-static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t t, bool mirror,
-			const uint8_t *code, size_t avail, uint32_t *count)
+/* Canvas tile (row mask first) halftoned at image k's phase and ORed into
+ * tile t of w's dense image; *count counts the tiles newly touched. */
+static void halftone_into(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t t, const uint8_t *tile,
+			  uint32_t *count)
 {
-	uint8_t buf[CANVAS_TILE_BYTES], mirrored[HALFTONE_TILE_BYTES], packed[VOLUME_TILE_BYTES];
-	memset(buf, 0, sizeof(buf));
-	size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
-	if (!used)
-		return 0;
-	uint32_t rows;
-	memcpy(&rows, buf, sizeof(rows));
-	const uint8_t *canvas = buf + sizeof(rows);
-	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
-	if (mirror) {
-		mirror_canvas(canvas, mirrored);
-		canvas = mirrored;
-		t = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
-	}
-	if (c->halftone(canvas, rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
+	uint8_t packed[VOLUME_TILE_BYTES];
+	uint32_t rows, tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	memcpy(&rows, tile, sizeof(rows));
+	if (c->halftone(tile + sizeof(rows), rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
 		*count += !w->touched[t];
 		w->touched[t] = 1;
 		or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);
 	}
+}
+
+/* A turned source's coded canvas tile t (of code, avail bytes), mirrored
+ * when asked, lifted, halftoned at image k's phase and ORed into w's dense
+ * image; *count counts the tiles newly touched. Returns the coded bytes
+ * read, 0 when the code is broken. */
+static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t t, bool mirror, int32_t lift,
+			const uint8_t *code, size_t avail, uint32_t *count)
+{
+	uint8_t buf[CANVAS_TILE_BYTES], mirrored[CANVAS_TILE_BYTES], lifted[2][CANVAS_TILE_BYTES];
+	memset(buf, 0, sizeof(buf));
+	size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+	if (!used)
+		return 0;
+	const uint8_t *tile = buf;
+	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	if (mirror) {
+		memcpy(mirrored, buf, sizeof(uint32_t)); /* the row mask */
+		mirror_canvas(buf + sizeof(uint32_t), mirrored + sizeof(uint32_t));
+		tile = mirrored;
+		t = (t / tiles_x) * tiles_x + (tiles_x - 1 - t % tiles_x);
+	}
+	if (!lift) {
+		halftone_into(c, w, k, t, tile, count);
+		return used;
+	}
+	uint32_t ty[2];
+	unsigned parts = canvas_tile_lift(tile, t / tiles_x, lift, c->geom.height, lifted, ty);
+	for (unsigned i = 0; i < parts; i++)
+		halftone_into(c, w, k, ty[i] * tiles_x + t % tiles_x, lifted[i], count);
 	return used;
 }
 
@@ -675,7 +692,7 @@ static int turn_image(struct compose *c, struct compose_worker *w, uint32_t k)
 		for (uint32_t t = 0; t < c->tiles_per_image; t++) {
 			if (!bit(img->data, t))
 				continue;
-			size_t used = turn_tile(c, w, k, t, mirror, code, avail, &count);
+			size_t used = turn_tile(c, w, k, t, mirror, c->turned[s].lift, code, avail, &count);
 			if (!used)
 				return -EINVAL;
 			code += used;
@@ -696,6 +713,64 @@ int compose_turned(struct compose *c, struct volume *out, const struct turned_so
 	c->turned = src;
 	c->n = n;
 	return run_images(c, out, turn_image);
+}
+
+unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_t height,
+			  uint8_t out[2][CANVAS_TILE_BYTES], uint32_t out_ty[2])
+{
+	/* Row y of the tile lands on image row top + y: tile row first or
+	 * the next (floor division: top may be negative). */
+	int64_t top = (int64_t)ty * VOLUME_TILE - lift;
+	int64_t first = top >= 0 ? top / VOLUME_TILE : -((-top + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t rows, masks[2] = { 0, 0 };
+	memcpy(&rows, src, sizeof(rows));
+	memset(out, 0, 2 * (size_t)CANVAS_TILE_BYTES);
+	for (; rows; rows &= rows - 1) {
+		uint32_t y = (uint32_t)__builtin_ctz(rows);
+		int64_t v = top + y;
+		if (v < 0 || v >= height)
+			continue;
+		unsigned i = (unsigned)(v / VOLUME_TILE - first);
+		uint32_t dy = (uint32_t)(v % VOLUME_TILE);
+		masks[i] |= 1u << dy;
+		for (int p = 0; p < 3; p++)
+			memcpy(out[i] + sizeof(uint32_t) + p * HALFTONE_PLANE_BYTES + dy * HALFTONE_ROW_BYTES,
+			       src + sizeof(uint32_t) + p * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES,
+			       HALFTONE_ROW_BYTES);
+	}
+	unsigned n = 0;
+	for (unsigned i = 0; i < 2; i++) {
+		if (!masks[i])
+			continue;
+		if (n != i)
+			memcpy(out[n], out[i], CANVAS_TILE_BYTES);
+		memcpy(out[n], &masks[i], sizeof(uint32_t));
+		out_ty[n++] = (uint32_t)(first + i);
+	}
+	return n;
+}
+
+int rle_canvas_each(const struct rle_volume *r, uint32_t k, canvas_tile_fn fn, void *arg)
+{
+	const struct rle_image *img = &r->images[k];
+	if (!img->tile_count)
+		return 0;
+	size_t head = r->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
+	size_t avail = img->len - head;
+	const uint8_t *code = img->data + head;
+	uint8_t buf[CANVAS_TILE_BYTES];
+	for (uint32_t t = 0; t < r->tiles_per_image; t++) {
+		if (!bit(img->data, t))
+			continue;
+		memset(buf, 0, sizeof(buf));
+		size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+		if (!used)
+			return -EINVAL;
+		fn(arg, t, buf);
+		code += used;
+		avail -= used;
+	}
+	return 0;
 }
 
 int rle_volume_decode(const struct rle_volume *r, struct volume *out)

@@ -120,10 +120,12 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
  * turn: image k of it is image j = k - turn of the canvas, j brought into
  * the volume's images by adding or subtracting the image count M, each
  * time mirrored (columns u -> W-1-u) on a mirrored geometry (M = N/2), and
- * halftoned at image k's phase. */
+ * halftoned at image k's phase; and lifted by lift rows, as scene.h
+ * defines a draw's lift: row v of it is row v + lift of the canvas. */
 struct turned_source {
 	const struct rle_volume *canvas;
 	uint32_t turn;
+	int32_t lift;
 };
 
 /* Whether compose_turned() can turn canvases of this geometry: on a
@@ -132,6 +134,20 @@ bool compose_can_turn(const struct compose *c);
 /* out = the OR of the n turned sources (out is cleared first). 0 or
  * -ENOMEM/-EINVAL. */
 int compose_turned(struct compose *c, struct volume *out, const struct turned_source *src, unsigned n);
+
+/* The stored tiles of canvas image k of r, decoded one at a time: fn(arg,
+ * t, tile) gets tile index t and the whole canvas tile (CANVAS_TILE_BYTES,
+ * its row mask first). 0, or -EINVAL when the code is broken. */
+typedef void (*canvas_tile_fn)(void *arg, uint32_t t, const uint8_t *tile);
+int rle_canvas_each(const struct rle_volume *r, uint32_t k, canvas_tile_fn fn, void *arg);
+
+/* Canvas tile src, at tile row ty of an image height rows high, lifted by
+ * lift rows (its row v lands on row v - lift): the at most two canvas tiles
+ * its rows land in, in out[i] (row mask first, zero where nothing landed)
+ * with their tile rows in out_ty[i]; rows that leave the image are dropped.
+ * Returns how many (0 .. 2). */
+unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_t height,
+			  uint8_t out[2][CANVAS_TILE_BYTES], uint32_t out_ty[2]);
 
 /* dirty |= the footprint of src (its masks), image by image. */
 void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src);

@@ -6,7 +6,10 @@
  * canvas, and halftone and pack only the tiles something touched. A turned
  * draw's primitives are sectioned by the wedge of the image they show
  * unturned, and written mirrored where that image is shown mirrored
- * (scene.h, geometry_turn_source()). */
+ * (scene.h, geometry_turn_source()). Lifted draws (scene.h,
+ * scene_draw.lift) are rendered first, unlifted, into a canvas volume per
+ * lift, which each image's pass merges shifted by rows before the
+ * halftone (render_lifted()). */
 #include "render_cpu.h"
 
 #include <errno.h>
@@ -46,6 +49,16 @@ struct render_cpu {
 	struct volume *out;
 	struct rle_volume *canvas_out; /* render_canvas(): canvases, not packed images */
 	atomic_uint next_image;
+	/* A render with lifted draws: the canvases of each lift (what its
+	 * draws light unlifted), merged into every image shifted; and the
+	 * scene's draws by lift, each with lift 0, lift 0 first. */
+	struct lifted_part {
+		int32_t lift;
+		struct rle_volume *canvas;
+	} * lifted;
+	uint32_t lifted_count;
+	struct scene_draw *by_lift;
+	uint32_t by_lift_cap;
 	/* render_canvas()'s work space, one per worker (made at its first
 	 * call): an image's touched tiles with their row masks, and its mask. */
 	struct canvas_stage {
@@ -198,6 +211,52 @@ static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 	return 0;
 }
 
+/* Per-channel MAX of canvas tile src (row mask first) into tile t of c. */
+static void max_canvas_tile(struct section_canvas *c, uint32_t t, const uint8_t *src)
+{
+	uint32_t rows;
+	memcpy(&rows, src, sizeof(rows));
+	c->rows[t] |= rows;
+	uint8_t *dst = c->rgb + (size_t)t * HALFTONE_TILE_BYTES;
+	src += sizeof(rows);
+	for (; rows; rows &= rows - 1) {
+		size_t y = (size_t)__builtin_ctz(rows) * HALFTONE_ROW_BYTES;
+		for (size_t p = 0; p < 3 * HALFTONE_PLANE_BYTES; p += HALFTONE_PLANE_BYTES)
+			for (size_t i = 0; i < HALFTONE_ROW_BYTES; i++)
+				dst[p + y + i] = dst[p + y + i] < src[p + y + i] ? src[p + y + i] : dst[p + y + i];
+	}
+}
+
+struct merge {
+	struct section_canvas *c;
+	int32_t lift;
+	uint64_t tiles;
+};
+
+static void merge_tile(void *arg, uint32_t t, const uint8_t *tile)
+{
+	struct merge *m = arg;
+	uint8_t out[2][CANVAS_TILE_BYTES];
+	uint32_t ty[2], tx = t % m->c->tiles_x;
+	unsigned n = canvas_tile_lift(tile, t / m->c->tiles_x, m->lift, m->c->geom.height, out, ty);
+	for (unsigned i = 0; i < n; i++)
+		max_canvas_tile(m->c, ty[i] * m->c->tiles_x + tx, out[i]);
+	m->tiles += n;
+}
+
+/* Image k of every lifted canvas merged into w's canvas, shifted by its
+ * lift; returns the tiles merged (0: the canvas is as it was). */
+static uint64_t merge_lifted(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
+{
+	struct merge m = { .c = &w->canvas };
+	for (uint32_t i = 0; i < r->lifted_count; i++) {
+		m.lift = r->lifted[i].lift;
+		if (rle_canvas_each(r->lifted[i].canvas, k, merge_tile, &m) < 0 && w->err == 0)
+			w->err = -EINVAL;
+	}
+	return m.tiles;
+}
+
 /* Images are handed out one at a time; each image's result depends on
  * nothing but the scene, so any split gives identical output. */
 static void image_job(void *arg, unsigned index)
@@ -210,6 +269,8 @@ static void image_job(void *arg, unsigned index)
 			break;
 		int64_t t0 = now_ns();
 		uint64_t drawn = raster_image(r, w, k);
+		if (r->lifted_count)
+			drawn += merge_lifted(r, w, k);
 		int64_t t1 = now_ns();
 		/* Nothing drawn: the canvas is all zero, the image empty. */
 		int err;
@@ -252,23 +313,20 @@ static int collect(struct render_cpu *r)
 	return err;
 }
 
-/* Renders scene into out, or into canvas (render_canvas()). */
-static int render_to(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
+/* One pass: scene (no lifts) binned and drawn, image by image, into out or
+ * canvas, with r->lifted merged; the stats add up over passes. */
+static int render_pass(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
 {
 	struct renderer *base = &r->base;
 	int64_t start = now_ns();
-	int err = 0;
-	memset(&base->stats, 0, sizeof(base->stats));
-	base->stats.engine = RENDER_ENGINE_CPU;
-	base->stats.threads = pool_workers(r->pool);
-	err = bin_build(&r->bins, scene, r->pool);
+	int err = bin_build(&r->bins, scene, r->pool);
 	if (err == 0)
 		err = prepare_grids(r, scene);
 	int64_t binned = now_ns();
-	base->stats.bin_ns = (uint64_t)(binned - start);
+	base->stats.bin_ns += (uint64_t)(binned - start);
 	if (err < 0)
 		return err;
-	base->stats.prims = r->bins.prim_count + r->bins.point_count;
+	base->stats.prims += r->bins.prim_count + r->bins.point_count;
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		r->workers[i] = (struct cpu_worker){ .canvas = c };
@@ -276,13 +334,143 @@ static int render_to(struct render_cpu *r, const struct scene *scene, struct vol
 	r->out = out;
 	r->canvas_out = canvas;
 	atomic_store(&r->next_image, 0);
-	if (!r->grid_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
+	if (!r->grid_count && !r->lifted_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
 		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
 	else
 		pool_run(r->pool, image_job, r);
 	r->out = NULL;
 	r->canvas_out = NULL;
-	err = collect(r);
+	return collect(r);
+}
+
+static void free_stage(struct render_cpu *r)
+{
+	for (unsigned i = 0; i < r->stages; i++) {
+		free(r->stage[i].tiles);
+		free(r->stage[i].mask);
+		free(r->stage[i].rle.buf);
+	}
+	free(r->stage);
+	r->stage = NULL;
+	r->stages = 0;
+}
+
+/* render_canvas()'s work space, made at first need (freed with the
+ * renderer). 0 or -ENOMEM. */
+static int ensure_stage(struct render_cpu *r)
+{
+	if (r->stage)
+		return 0;
+	const struct geometry *g = &r->base.geom;
+	uint32_t tiles = ((g->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((g->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	unsigned n = pool_workers(r->pool);
+	r->stage = calloc(n, sizeof(*r->stage));
+	if (!r->stage)
+		return -ENOMEM;
+	r->stages = n;
+	for (unsigned i = 0; i < n; i++) {
+		r->stage[i].tiles = malloc((size_t)tiles * CANVAS_TILE_BYTES);
+		r->stage[i].mask = malloc((tiles + 7) / 8);
+		if (!r->stage[i].tiles || !r->stage[i].mask) {
+			free_stage(r); /* tried again at the next need */
+			return -ENOMEM;
+		}
+	}
+	return 0;
+}
+
+/* The lifted canvases of the last render freed. */
+static void drop_lifted(struct render_cpu *r)
+{
+	for (uint32_t i = 0; i < r->lifted_count; i++)
+		rle_volume_free(r->lifted[i].canvas);
+	r->lifted_count = 0;
+}
+
+/* Room for n draws in r->by_lift and n lifts in r->lifted. */
+static int grow_lifted(struct render_cpu *r, uint32_t n)
+{
+	if (n <= r->by_lift_cap)
+		return 0;
+	struct scene_draw *d = realloc(r->by_lift, n * sizeof(*d));
+	if (d)
+		r->by_lift = d;
+	struct lifted_part *l = realloc(r->lifted, n * sizeof(*l));
+	if (l)
+		r->lifted = l;
+	if (!d || !l)
+		return -ENOMEM;
+	r->by_lift_cap = n;
+	return 0;
+}
+
+/* The smallest lift of scene's draws above after; 0: none. */
+static int32_t next_lift(const struct scene *scene, int32_t after)
+{
+	int32_t best = 0;
+	for (uint32_t i = 0; i < scene->draw_count; i++) {
+		int32_t l = scene->draws[i].lift;
+		if (l && l > after && (!best || l < best))
+			best = l;
+	}
+	return best;
+}
+
+/* Renders each lift's draws of scene, unlifted, into a canvas of its own
+ * (r->lifted); *rest: the unlifted draws. 0 or negative errno. */
+static int render_lifted(struct render_cpu *r, const struct scene *scene, struct scene *rest)
+{
+	const struct geometry *g = &r->base.geom;
+	uint32_t tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
+	uint32_t tiles = tiles_x * ((g->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	if (grow_lifted(r, scene->draw_count) < 0 || ensure_stage(r) < 0)
+		return -ENOMEM;
+	uint32_t m = 0;
+	for (uint32_t i = 0; i < scene->draw_count; i++)
+		if (!scene->draws[i].lift)
+			r->by_lift[m++] = scene->draws[i];
+	*rest = (struct scene){ .draw_count = m, .draws = r->by_lift };
+	for (int32_t lift = next_lift(scene, INT32_MIN); lift; lift = next_lift(scene, lift)) {
+		uint32_t first = m;
+		for (uint32_t i = 0; i < scene->draw_count; i++) {
+			if (scene->draws[i].lift != lift)
+				continue;
+			r->by_lift[m] = scene->draws[i];
+			r->by_lift[m++].lift = 0;
+		}
+		struct rle_volume *cv = rle_volume_new(r->bins.images, (tiles + 7) / 8, tiles, CANVAS_TILE_BYTES);
+		if (!cv)
+			return -ENOMEM;
+		r->lifted[r->lifted_count++] = (struct lifted_part){ lift, cv };
+		struct scene part = { .draw_count = m - first, .draws = r->by_lift + first };
+		uint32_t merged = r->lifted_count;
+		r->lifted_count = 0; /* a part merges nothing */
+		int err = render_pass(r, &part, NULL, cv);
+		r->lifted_count = merged;
+		rle_volume_sum(cv);
+		if (err < 0)
+			return err;
+	}
+	return 0;
+}
+
+/* Renders scene into out, or into canvas (render_canvas()). */
+static int render_to(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
+{
+	struct renderer *base = &r->base;
+	int64_t start = now_ns();
+	memset(&base->stats, 0, sizeof(base->stats));
+	base->stats.engine = RENDER_ENGINE_CPU;
+	base->stats.threads = pool_workers(r->pool);
+	int err = 0;
+	struct scene rest;
+	if (scene && scene_has_lift(scene->draws, scene->draw_count)) {
+		err = render_lifted(r, scene, &rest);
+		scene = &rest;
+	}
+	if (err == 0)
+		err = render_pass(r, scene, out, canvas);
+	drop_lifted(r);
 	base->stats.total_ns = (uint64_t)(now_ns() - start);
 	return err;
 }
@@ -304,19 +492,8 @@ static int cpu_render_canvas(struct renderer *base, const struct scene *scene, s
 	uint32_t tiles = tiles_x * ((base->geom.height + VOLUME_TILE - 1) / VOLUME_TILE);
 	if (out->tile_bytes != CANVAS_TILE_BYTES || out->image_count != r->bins.images || out->tiles_per_image != tiles)
 		return -EINVAL;
-	if (!r->stage) {
-		unsigned n = pool_workers(r->pool);
-		r->stage = calloc(n, sizeof(*r->stage));
-		r->stages = r->stage ? n : 0;
-		for (unsigned i = 0; r->stage && i < n; i++) {
-			r->stage[i].tiles = malloc((size_t)tiles * CANVAS_TILE_BYTES);
-			r->stage[i].mask = malloc(out->mask_bytes);
-			if (!r->stage[i].tiles || !r->stage[i].mask)
-				return -ENOMEM; /* freed with the renderer */
-		}
-		if (!r->stage)
-			return -ENOMEM;
-	}
+	if (ensure_stage(r) < 0)
+		return -ENOMEM;
 	int err = render_to(r, scene, NULL, out);
 	rle_volume_sum(out);
 	return err;
@@ -329,12 +506,10 @@ static void cpu_destroy(struct renderer *base)
 	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++)
 		section_canvas_finish(&r->workers[i].canvas);
 	free(r->workers);
-	for (unsigned i = 0; i < r->stages; i++) {
-		free(r->stage[i].tiles);
-		free(r->stage[i].mask);
-		free(r->stage[i].rle.buf);
-	}
-	free(r->stage);
+	free_stage(r);
+	drop_lifted(r);
+	free(r->lifted);
+	free(r->by_lift);
 	free(r->wedges);
 	free_grid_jobs(r);
 	free(r->grids);

@@ -30,8 +30,9 @@ def layer_of(c, verts, colour, mode='lines'):
 
 
 def script(d, frames=12):
-    """Three static layers of one client, one layer of another turning and
-    moving every frame; the capture after the last frame, and the
+    """Three static layers of one client; of another, one layer turning and
+    moving every frame, one turning by whole images and one moving up and
+    down the axis by whole rows; the capture after the last frame, and the
     composition event of a status taken then."""
     a, b = d.conn(), d.conn()
     for i, colour in enumerate((0xffffffff, 0xff8000ff, 0x40c0ffff)):
@@ -41,11 +42,17 @@ def script(d, frames=12):
     mover = layer_of(b, MOVING, 0x00ff80ff, 'triangles')
     # A turntable: turned by whole images every frame (composed from its
     # canvas with the CPU renderer).
-    images = next(e for e in b.log if e.name == 'display.device')['images_per_rev']
+    device = next(e for e in b.log if e.name == 'display.device')
+    images = device['images_per_rev']
     spinner = layer_of(b, [(x + 0.4, y, z - 0.2) for x, y, z in STATIC], 0xc0c0c0ff)
+    # A bobber: moved along the axis by whole rows (lifted: composed from
+    # its canvas shifted by rows).
+    row = 2 * device['half_height'] / device['height']
+    bobber = layer_of(b, [(0.5 * x - 0.3, 0.5 * y, 0.5 * z + 0.1) for x, y, z in STATIC], 0xff40ffff, 'triangles')
     for f in range(frames):
         b.req(mover, 'layer.set_transform', rot_y(0.37 * f, (0.3 * math.cos(f), 0.1, 0.3 * math.sin(f))))
         b.req(spinner, 'layer.set_transform', rot_y(2 * math.pi * 3 * f / images))
+        b.req(bobber, 'layer.set_transform', rot_y(0.2, (0.0, row * (f % 7 - 3), 0.0)))
         b.frame_commit()
     cap = svol_planes(b.capture())
     b.req(1, 'display.get_status')
@@ -68,10 +75,10 @@ def composition_exact():
     check(lit(cap_on) > 0, 'the scene lights voxels')
     check(cap_on == cap_off, 'the composed volume is the volume rendered whole, bit for bit')
     check(comp['flags'] & CACHE, f'cache on: {comp}')
-    check(comp['objects'] == 5 and comp['cached'] >= 4,
-          f'five layers followed, the static three and the turntable cached: {comp}')
+    check(comp['objects'] == 6 and comp['cached'] >= 5,
+          f'six layers followed, the static three, the turntable and the bobber cached: {comp}')
     check(comp['hits'] >= 3 * 8, f'the static layers were reused: {comp}')
-    check(comp['objects_reused'] >= 4 and comp['objects_rendered'] >= 1, f'the last volume: {comp}')
+    check(comp['objects_reused'] >= 5 and comp['objects_rendered'] >= 1, f'the last volume: {comp}')
     check(0 < comp['cache_bytes'] <= comp['cache_budget'], f'within the budget: {comp}')
     check(comp_off['flags'] == 0 and comp_off['hits'] == 0, f'cache off: {comp_off}')
     print(f'  composition: {comp}')

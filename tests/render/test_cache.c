@@ -56,6 +56,7 @@ struct tobj {
 	uint8_t rgb[MAX_DRAWS][3];
 	uint8_t point_size;
 	uint16_t turn; /* scene_draw.turn of its draws */
+	int16_t lift;  /* and .lift */
 };
 
 struct world {
@@ -179,12 +180,16 @@ static const char *mutate(struct world *w)
 		return "create";
 	}
 	switch (rnd() % 10) {
-	case 8:
-	case 9: /* turned by whole images, as a layer's turn (turn.h) */
+	case 8: /* turned by whole images, as a layer's turn (turn.h) */
 		if (!w->turns)
 			return "unchanged";
 		o->turn = (uint16_t)((o->turn + 1 + rnd() % 7) % w->geom->images_per_rev);
 		return "spin";
+	case 9: /* moved along the axis by whole rows, as a layer's lift */
+		if (!w->turns)
+			return "unchanged";
+		o->lift = (int16_t)((int)(rnd() % 41) - 20);
+		return "bob";
 	case 0:
 		random_transform(o->transform);
 		return "move";
@@ -230,6 +235,7 @@ static void build(struct world *w)
 				.xyz = o->data[d]->xyz,
 				.point_size = o->point_size,
 				.turn = o->turn,
+				.lift = o->lift,
 				.prim_rgb = o->data[d]->prim_rgb,
 			};
 			if (sd->prim == SCENE_GRID) {
@@ -280,9 +286,12 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 		const char *what = "unchanged";
 		for (unsigned i = 0; i < changes; i++)
 			what = mutate(&w);
-		/* A turntable: the first object turns a step every volume. */
+		/* A turntable: the first object turns a step every volume;
+		 * the second bobs up and down a row at a time. */
 		if (w.turns && w.obj[0].alive)
 			w.obj[0].turn = (uint16_t)((w.obj[0].turn + 1) % g->images_per_rev);
+		if (w.turns && w.obj[1].alive)
+			w.obj[1].lift = (int16_t)(abs((int)(s % 24) - 12) - 6);
 		build(&w);
 		CHECK_EQ(cache_plan(c, &w.snap), 0);
 		struct volume *composed = outs[s % 3];

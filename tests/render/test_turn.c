@@ -1,26 +1,31 @@
-/* Turns (scene.h, scene_draw.turn) on the CPU renderer, the reference, and
- * on the GL renderers, which hand a scene with a turn to their CPU fallback.
+/* Turns and lifts (scene.h, scene_draw.turn and .lift) on the CPU renderer,
+ * the reference, and on the GL renderers, which hand a scene with a turn or
+ * a lift to their CPU fallback.
  *
  * The definition (scene.h): a draw with turn m lights in volume image k
  * what it lights unturned in image j = k - m, taken mod N unmirrored; on a
  * mirrored device j is brought into [0, M) by adding or subtracting M, each
  * time flipping the mirror, and with odd flips the columns are mirrored
- * (u -> W-1-u). Rows never change; the halftone keeps image k's phase.
+ * (u -> W-1-u). Rows never change; the halftone keeps image k's phase. A
+ * draw with lift L lights in row v what it lights unlifted in row v + L
+ * (nothing where that is outside the image), before the halftone.
  *
  * 1. Saturated colours (channels 0 or 255, whose halftone does not depend
  *    on the phase): the turned render is the unturned one with its images
  *    shifted and mirrored, pixel for pixel (volume_pixel()), for one turn on
- *    every draw and for a different turn on each draw (their union).
- * 2. Any colours: turned image k is lit exactly where the draws covering
- *    the source pixel (lit unturned in white) give a value above image k's
- *    threshold there.
- * 3. A renderer that drew turns draws an unturned scene as a fresh one, and
- *    any thread count gives the same volume.
+ *    every draw and for a different turn on each draw (their union); the
+ *    same with lifts, rows shifted too.
+ * 2. Any colours: turned and lifted image k is lit exactly where the draws
+ *    covering the source pixel (lit unturned and unlifted in white) give a
+ *    value above image k's threshold there.
+ * 3. A renderer that drew turns and lifts draws an unmoved scene as a fresh
+ *    one, and any thread count gives the same volume.
  * 4. Geometry: a draw with turn m lights, within one voxel both ways
  *    (bench/coverage.h: coverage 100%, no stray voxel), what the same draw
- *    turned by m * 2 pi / N through its transform lights.
+ *    turned by m * 2 pi / N through its transform lights; a draw with lift
+ *    L inside the image what it lights moved up by L rows.
  * 5. GL (EGL, OSMesa where built and where a context can be made): a scene
- *    with a turned draw renders on the CPU fallback (stats.engine
+ *    with a turned or lifted draw renders on the CPU fallback (stats.engine
  *    RENDER_ENGINE_CPU), equal to the CPU renderer's volume; one without
  *    stays on GL.
  *
@@ -202,30 +207,46 @@ static size_t at(const struct geometry *g, uint32_t k, uint32_t u, uint32_t v)
 	return (((size_t)k * g->height + v) * g->width + u) * 3;
 }
 
-/* OR into want the unturned pixels src (of one draw, or all draws turned
- * alike) shown at turn m. */
-static void expect_shifted(const struct geometry *g, const uint8_t *src, uint32_t m, uint8_t *want)
+/* Row v + lift, when it is one of the image's. */
+static bool lifted_row(const struct geometry *g, uint32_t v, int32_t lift, uint32_t *src)
+{
+	int64_t r = (int64_t)v + lift;
+	*src = (uint32_t)r;
+	return r >= 0 && r < g->height;
+}
+
+/* OR into want the unturned, unlifted pixels src (of one draw, or all
+ * draws moved alike) shown at turn m and lift L. */
+static void expect_shifted(const struct geometry *g, const uint8_t *src, uint32_t m, int32_t lift, uint8_t *want)
 {
 	uint32_t W = g->width;
 	for (uint32_t k = 0; k < images_of(g); k++) {
 		bool mirror;
-		uint32_t j = source_image(g, k, m, &mirror);
+		uint32_t j = source_image(g, k, m, &mirror), sv;
 		for (uint32_t v = 0; v < g->height; v++)
-			for (uint32_t u = 0; u < W; u++)
+			for (uint32_t u = 0; lifted_row(g, v, lift, &sv) && u < W; u++)
 				for (int c = 0; c < 3; c++)
-					want[at(g, k, u, v) + c] |= src[at(g, j, mirror ? W - 1 - u : u, v) + c];
+					want[at(g, k, u, v) + c] |= src[at(g, j, mirror ? W - 1 - u : u, sv) + c];
 	}
 }
 
-/* Renders s's draws with turns[i] on draw i (2 threads). */
-static struct volume *render_turned(const struct geometry *g, const struct tscene *s, const uint32_t *turns)
+/* Renders s's draws with turns[i] and lifts[i] (NULL: none) on draw i (2
+ * threads). */
+static struct volume *render_moved(const struct geometry *g, const struct tscene *s, const uint32_t *turns,
+				   const int32_t *lifts)
 {
 	struct scene_draw d[MAX_DRAWS];
 	for (uint32_t i = 0; i < s->n; i++) {
 		d[i] = s->draws[i];
 		d[i].turn = (uint16_t)turns[i];
+		d[i].lift = lifts ? (int16_t)lifts[i] : 0;
 	}
 	return rtest_render(g, d, s->n, 2);
+}
+
+static struct volume *render_turned(const struct geometry *g, const struct tscene *s, const uint32_t *turns)
+{
+	return render_moved(g, s, turns, NULL);
 }
 
 /* got equals want everywhere; reports the first difference. */
@@ -242,6 +263,41 @@ static void check_dense(const struct geometry *g, const uint8_t *got, const uint
 		}
 	}
 	CHECK_MSG(lit > 1000, "%s: only %zu voxels lit", what, lit);
+}
+
+/* 1b. Saturated colours, every draw lifted alike (and turned): the unmoved
+ * volume src with its rows shifted, bit for bit. want: scratch. */
+static void check_lift_shift(const char *name, const struct geometry *g, const struct tscene *s, const uint8_t *src,
+			     uint8_t *want)
+{
+	int32_t H = (int32_t)g->height;
+	const int32_t lifts[] = { 1, -1, 5, -31, 32, 33, H / 2, -(H / 2 + 9), H };
+	for (size_t t = 0; t < sizeof(lifts) / sizeof(lifts[0]); t++) {
+		uint32_t m = t % 3 == 2 ? 7 : 0, turns[MAX_DRAWS];
+		int32_t all[MAX_DRAWS];
+		for (uint32_t i = 0; i < MAX_DRAWS; i++) {
+			turns[i] = m;
+			all[i] = lifts[t];
+		}
+		struct volume *vol = render_moved(g, s, turns, all);
+		uint8_t *got = dense_read(vol);
+		memset(want, 0, at(g, images_of(g), 0, 0));
+		expect_shifted(g, src, m, lifts[t], want);
+		char what[64];
+		snprintf(what, sizeof(what), "%s lift %d turn %u", name, lifts[t], m);
+		if (lifts[t] == H) { /* everything lifted out of the image */
+			CHECK_MSG(memcmp(got, want, at(g, images_of(g), 0, 0)) == 0, "%s: lit", what);
+			CHECK_MSG(vol->images[0].tile_count == 0, "%s: tiles", what);
+		} else {
+			check_dense(g, got, want, what);
+		}
+		CHECK_MSG(rtest_padding_clear(vol), "%s: padding", what);
+		printf("%s: saturated, every draw lifted %d rows and turned %u: the unmoved volume shifted, bit for "
+		       "bit\n",
+		       name, lifts[t], m);
+		free(got);
+		volume_destroy(vol);
+	}
 }
 
 /* 1. Saturated colours: shifted and mirrored, bit for bit. */
@@ -264,7 +320,7 @@ static void check_shift(const char *name, const struct geometry *g)
 		struct volume *vol = render_turned(g, &s, all);
 		uint8_t *got = dense_read(vol);
 		memset(want, 0, bytes);
-		expect_shifted(g, src, m % N, want);
+		expect_shifted(g, src, m % N, 0, want);
 		char what[64];
 		snprintf(what, sizeof(what), "%s turn %u", name, m);
 		check_dense(g, got, want, what);
@@ -275,28 +331,32 @@ static void check_shift(const char *name, const struct geometry *g)
 		volume_destroy(vol);
 	}
 
-	/* A turn of its own on each draw: the union of each draw's own
-	 * unturned render, shifted. */
+	check_lift_shift(name, g, &s, src, want);
+	/* A turn of its own on each draw (and from round 3 a lift): the union
+	 * of each draw's own unmoved render, shifted. */
 	struct rng rng = rng_seed(99 + N);
-	for (int round = 0; round < 3; round++) {
+	for (int round = 0; round < 5; round++) {
 		uint32_t mixed[MAX_DRAWS];
+		int32_t lifts[MAX_DRAWS] = { 0 };
 		memset(want, 0, bytes);
 		for (uint32_t i = 0; i < s.n; i++) {
 			mixed[i] = round == 0 && i % 2 == 0 ? 0 : (uint32_t)(rng_next(&rng) % N);
+			if (round >= 3)
+				lifts[i] = (int32_t)(rng_next(&rng) % (2 * g->height + 1)) - (int32_t)g->height;
 			struct volume *one = rtest_render(g, &s.draws[i], 1, 1);
 			uint8_t *d = dense_read(one);
-			expect_shifted(g, d, mixed[i], want);
+			expect_shifted(g, d, mixed[i], lifts[i], want);
 			free(d);
 			volume_destroy(one);
 		}
-		struct volume *vol = render_turned(g, &s, mixed);
+		struct volume *vol = render_moved(g, &s, mixed, lifts);
 		uint8_t *got = dense_read(vol);
 		char what[64];
 		snprintf(what, sizeof(what), "%s mixed turns %d", name, round);
 		check_dense(g, got, want, what);
 		char list[96];
-		printf("%s: saturated, a turn per draw (%s): each draw's unturned volume shifted, bit for bit\n", name,
-		       turn_list(mixed, s.n, list, sizeof(list)));
+		printf("%s: saturated, a turn per draw (%s)%s: each draw's unmoved volume shifted, bit for bit\n", name,
+		       turn_list(mixed, s.n, list, sizeof(list)), round >= 3 ? " and a lift per draw" : "");
 		free(got);
 		volume_destroy(vol);
 	}
@@ -322,11 +382,15 @@ static void check_halftone(const char *name, const struct geometry *g)
 		volume_destroy(vol);
 	}
 	struct rng rng = rng_seed(7 + N);
-	for (int round = 0; round < 4; round++) {
+	for (int round = 0; round < 6; round++) {
 		uint32_t turns[MAX_DRAWS];
-		for (uint32_t i = 0; i < s.n; i++)
+		int32_t lifts[MAX_DRAWS] = { 0 };
+		for (uint32_t i = 0; i < s.n; i++) {
 			turns[i] = round == 0 ? 0 : round == 1 ? M + 3 : (uint32_t)(rng_next(&rng) % N);
-		struct volume *vol = render_turned(g, &s, turns);
+			if (round >= 4) /* rows within the halftone's period and beyond it */
+				lifts[i] = (int32_t)(rng_next(&rng) % 81) - 40;
+		}
+		struct volume *vol = render_moved(g, &s, turns, lifts);
 		uint8_t *got = dense_read(vol);
 		uint64_t lit = 0;
 		for (uint32_t k = 0; k < M; k++) {
@@ -335,8 +399,9 @@ static void check_halftone(const char *name, const struct geometry *g)
 					uint8_t value[3] = { 0, 0, 0 };
 					for (uint32_t i = 0; i < s.n; i++) {
 						bool mirror;
-						uint32_t j = source_image(g, k, turns[i], &mirror);
-						if (!cover[i][at(g, j, mirror ? W - 1 - u : u, v)])
+						uint32_t j = source_image(g, k, turns[i], &mirror), sv;
+						if (!lifted_row(g, v, lifts[i], &sv) ||
+						    !cover[i][at(g, j, mirror ? W - 1 - u : u, sv)])
 							continue;
 						for (int c = 0; c < 3; c++)
 							if (value[c] < s.draws[i].rgb[c])
@@ -358,9 +423,10 @@ static void check_halftone(const char *name, const struct geometry *g)
 		}
 		CHECK_MSG(lit > 1000, "%s round %d: only %llu lit", name, round, (unsigned long long)lit);
 		char list[96];
-		printf("%s: any colours, turns %s: image k is the halftone at k's phase of the covering draws' "
+		printf("%s: any colours, turns %s%s: image k is the halftone at k's phase of the covering draws' "
 		       "colours (%llu voxels lit)\n",
-		       name, turn_list(turns, s.n, list, sizeof(list)), (unsigned long long)lit);
+		       name, turn_list(turns, s.n, list, sizeof(list)), round >= 4 ? ", lifts -40..40" : "",
+		       (unsigned long long)lit);
 		free(got);
 		volume_destroy(vol);
 	}
@@ -375,7 +441,8 @@ static void check_reuse(const char *name, const struct geometry *g)
 	struct tscene s;
 	build_scene(&s, g, 0x5eed, true);
 	uint32_t zero[MAX_DRAWS] = { 0 }, turns[MAX_DRAWS] = { 3, 0, 5, 1, 0, 7, 2, 9 };
-	struct volume *flat = render_turned(g, &s, zero), *turned = render_turned(g, &s, turns);
+	int32_t lifts[MAX_DRAWS] = { 0, 4, -9, 4, 0, 40, -1, 4 };
+	struct volume *flat = render_turned(g, &s, zero), *turned = render_moved(g, &s, turns, lifts);
 	struct scene_draw d[MAX_DRAWS];
 	memcpy(d, s.draws, sizeof(d));
 	struct scene sc = { .draw_count = s.n, .draws = d };
@@ -384,18 +451,22 @@ static void check_reuse(const char *name, const struct geometry *g)
 	for (unsigned threads = 1; threads <= 3; threads++) {
 		struct renderer *r = render_cpu_create(g, threads);
 		CHECK(r);
-		for (uint32_t i = 0; i < s.n; i++)
+		for (uint32_t i = 0; i < s.n; i++) {
 			d[i].turn = (uint16_t)turns[i];
+			d[i].lift = (int16_t)lifts[i];
+		}
 		CHECK(render_volume(r, &sc, vol) == 0);
 		CHECK_MSG(rtest_same(vol, turned), "%s: turned, %u threads", name, threads);
-		for (uint32_t i = 0; i < s.n; i++)
+		for (uint32_t i = 0; i < s.n; i++) {
 			d[i].turn = 0;
+			d[i].lift = 0;
+		}
 		CHECK(render_volume(r, &sc, vol) == 0);
 		CHECK_MSG(rtest_same(vol, flat), "%s: unturned after turned, %u threads", name, threads);
 		render_destroy(r);
 	}
-	printf("%s: 1, 2 and 3 threads give the same turned volume; a renderer that drew turns draws an "
-	       "unturned scene as a fresh one\n",
+	printf("%s: 1, 2 and 3 threads give the same turned and lifted volume; a renderer that drew them "
+	       "draws an unmoved scene as a fresh one\n",
 	       name);
 	volume_destroy(vol);
 	volume_destroy(flat);
@@ -476,7 +547,44 @@ static void check_geometry(const char *name, const struct geometry *g)
 	tscene_free(&s);
 }
 
-/* 5. The GL renderers hand turned scenes to the CPU renderer. */
+/* 4b. A lift is the move up the axis by whole rows, to within one voxel,
+ * for draws that stay inside the image (where the daemon lifts): the small
+ * triangles (|y| <= 0.9 h + 0.01) and points of size 1 inside 0.8 h. */
+static void check_lift_geometry(const char *name, const struct geometry *g)
+{
+	struct tscene s;
+	build_scene(&s, g, 0x11f7 + g->images_per_rev, true);
+	struct scene_draw d[2] = { s.draws[s.n - 1], s.draws[2] };
+	struct rtest_mesh *pts = &s.mesh[2];
+	uint32_t kept = 0;
+	for (uint32_t p = 0; p < pts->count; p++)
+		if (fabsf(pts->xyz[3 * p + 1]) <= 0.8f * (float)g->half_height)
+			memmove(pts->xyz + 3 * kept++, pts->xyz + 3 * p, 3 * sizeof(float));
+	pts->count = d[1].count = kept;
+	double row_h = 2.0 * g->half_height / g->height;
+	const int32_t lifts[] = { 1, -1, 2, -2 }; /* inside the image on both geometries */
+	for (size_t t = 0; t < sizeof(lifts) / sizeof(lifts[0]); t++) {
+		struct scene_draw lifted[2], moved[2];
+		for (int i = 0; i < 2; i++) {
+			lifted[i] = moved[i] = d[i];
+			lifted[i].lift = (int16_t)lifts[t];
+			moved[i].transform[13] += (float)(lifts[t] * row_h);
+		}
+		struct volume *a = rtest_render(g, lifted, 2, 2), *b = rtest_render(g, moved, 2, 2);
+		char what[64];
+		snprintf(what, sizeof(what), "%s lift %d", name, lifts[t]);
+		check_within_one(what, b, a);
+		check_within_one(what, a, b);
+		printf("%s: lift %d: within one voxel of the draws moved up %d rows through their transforms, both "
+		       "ways%s\n",
+		       name, lifts[t], lifts[t], rtest_same(a, b) ? ", identical" : "");
+		volume_destroy(a);
+		volume_destroy(b);
+	}
+	tscene_free(&s);
+}
+
+/* 5. The GL renderers hand turned and lifted scenes to the CPU renderer. */
 static void check_gl(const char *name, const struct geometry *g, const char *backend)
 {
 	struct render_gl_options o = { .backend = backend, .threads = 2, .no_fallback = true };
@@ -498,10 +606,17 @@ static void check_gl(const char *name, const struct geometry *g, const char *bac
 	CHECK_MSG(r->stats.engine == RENDER_ENGINE_CPU, "%s %s: turned scene not on the CPU", name, backend);
 	CHECK_MSG(rtest_same(vol, cpu), "%s %s: not the CPU renderer's volume", name, backend);
 	s.draws[3].turn = 0;
+	s.draws[1].lift = -6;
+	volume_destroy(cpu);
+	cpu = rtest_render(g, s.draws, s.n, 2);
+	CHECK(render_volume(r, &sc, vol) == 0);
+	CHECK_MSG(r->stats.engine == RENDER_ENGINE_CPU, "%s %s: lifted scene not on the CPU", name, backend);
+	CHECK_MSG(rtest_same(vol, cpu), "%s %s: lifted, not the CPU renderer's volume", name, backend);
+	s.draws[1].lift = 0;
 	CHECK(render_volume(r, &sc, vol) == 0);
 	CHECK_MSG(r->stats.engine == RENDER_ENGINE_GL, "%s %s: not back on GL", name, backend);
-	printf("%s %s: a scene with a turned draw renders on the CPU fallback, the CPU renderer's volume; the "
-	       "next without one on GL\n",
+	printf("%s %s: a scene with a turned or a lifted draw renders on the CPU fallback, the CPU renderer's "
+	       "volume; the next without one on GL\n",
 	       name, backend);
 	volume_destroy(cpu);
 	volume_destroy(vol);
@@ -522,6 +637,7 @@ int main(void)
 		check_halftone(geoms[i].name, geoms[i].g);
 		check_reuse(geoms[i].name, geoms[i].g);
 		check_geometry(geoms[i].name, geoms[i].g);
+		check_lift_geometry(geoms[i].name, geoms[i].g);
 		check_gl(geoms[i].name, geoms[i].g, "egl");
 		check_gl(geoms[i].name, geoms[i].g, "osmesa");
 	}

@@ -1,6 +1,8 @@
-/* daemon/turn: a transform turned about the axis by whole images is
- * recognised against its base, with the number of images; anything else
- * (another angle, a turn about another axis, a move, a scale) is not. */
+/* daemon/turn: a transform turned about the axis by whole images, and moved
+ * along it by whole rows where rows are asked for, is recognised against its
+ * base, with the number of images and rows; anything else (another angle, a
+ * turn about another axis, a move off the axis or by part of a row, a scale)
+ * is not. */
 #include <math.h>
 #include <string.h>
 
@@ -32,6 +34,45 @@ static void turned(float t[16], const float b_in[16], double a)
 		t[c * 4 + 2] = (float)(sin(a) * b[c * 4] + cos(a) * b[c * 4 + 2]);
 		t[c * 4 + 3] = b[c * 4 + 3];
 	}
+}
+
+/* Moves along the axis by whole rows, with and without a turn. */
+static void check_lifts(const float base[16], uint32_t n)
+{
+	const double row = 2.0 * 0.9 / 768; /* a row of perspecta-like rows */
+	float t[16];
+	uint32_t m;
+	int32_t lift;
+	CHECK(turn_find_lift(base, base, n, row, &m, &lift) && m == 0 && lift == 0);
+	for (long k = -700; k <= 700; k += 61) {
+		turned(t, base, 2 * M_PI * 5 / n);
+		t[13] = (float)(base[13] + k * row);
+		CHECK(turn_find_lift(base, t, n, row, &m, &lift));
+		CHECK_EQ(m, 5u);
+		CHECK_EQ(lift, (int32_t)k);
+		/* Without rows asked for, a move is no turn. */
+		CHECK(k == 0 || !turn_find(base, t, n, &m));
+	}
+	/* A third of a row, or a move off the axis: no. */
+	memcpy(t, base, sizeof(t));
+	t[13] += (float)(4.33 * row);
+	CHECK(!turn_find_lift(base, t, n, row, &m, &lift));
+	memcpy(t, base, sizeof(t));
+	t[13] += (float)(4 * row);
+	t[12] += 0.001f;
+	CHECK(!turn_find_lift(base, t, n, row, &m, &lift));
+	/* A client's float moves, a row a frame for 600 frames: each is
+	 * recognised against the base. */
+	memcpy(t, base, sizeof(t));
+	for (int f = 1; f <= 600; f++) {
+		t[13] += (float)row;
+		CHECK(turn_find_lift(base, t, n, row, &m, &lift));
+		CHECK(m == 0 && lift == f);
+	}
+	/* Beyond the largest lift: no. */
+	memcpy(t, base, sizeof(t));
+	t[13] += (float)((TURN_MAX_LIFT + 1) * row);
+	CHECK(!turn_find_lift(base, t, n, row, &m, &lift));
 }
 
 int main(void)
@@ -79,5 +120,6 @@ int main(void)
 		CHECK(turn_find(base, cur, n, &m));
 		CHECK_EQ(m, (uint32_t)(f % (int)n));
 	}
+	check_lifts(base, n);
 	return check_done();
 }
