@@ -13,10 +13,11 @@
  *   its own and its volume kept, run-length coded (compose.h);
  * - use: while it stays unchanged the volume is composed from the entry
  *   and the object is not rendered; an object that only turns about the
- *   axis by whole images (its layer's turn, turn.h and scene_draw.turn) is
- *   composed from its canvas, its render unturned before the halftone,
- *   which compose_turned() shifts to the turn and halftones at each
- *   image's own phase (made once, when the object is seen turning, by a
+ *   axis by whole images or moves along it by whole rows (its layer's turn
+ *   and lift, turn.h, scene_draw.turn and .lift) is composed from its
+ *   canvas, its render unturned and unlifted before the halftone, which
+ *   compose_turned() shifts to the turn and lift and halftones at each
+ *   image's own phase (made once, when the object is seen moving so, by a
  *   renderer that renders canvases: the CPU renderer);
  * - idle: a changed object loses its volume; if that volume did not pay
  *   (not a single hit), the object must stay unchanged longer before
