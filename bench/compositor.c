@@ -3,7 +3,7 @@
  * around the CPU renderer), at perspecta, against full renders of the
  * same scenes in the same run. See bench/README.md.
  *
- *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] DRAGON.ply */
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] DRAGON.ply */
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -65,6 +65,7 @@ struct opts {
 	unsigned volumes;
 	double seconds;
 	const char *profile, *dragon;
+	const char *only; /* NULL, "dragon" or "s4": the rows to run */
 };
 
 struct result {
@@ -352,10 +353,15 @@ static int parse(int argc, char **argv, struct opts *o)
 			o->seconds = atof(argv[++i]);
 		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
 			o->profile = argv[++i];
+		else if (!strcmp(argv[i], "--only") && i + 1 < argc &&
+			 (!strcmp(argv[i + 1], "dragon") || !strcmp(argv[i + 1], "s4")))
+			o->only = argv[++i];
 		else if (argv[i][0] != '-')
 			o->dragon = argv[i];
 		else {
-			fprintf(stderr, "usage: %s [--volumes N] [--seconds S] [--profile P] [DRAGON.ply]\n", argv[0]);
+			fprintf(stderr,
+				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] [DRAGON.ply]\n",
+				argv[0]);
 			return 2;
 		}
 	}
@@ -398,8 +404,10 @@ int main(int argc, char **argv)
 	be.orb->rng = rng_seed(0x5350494e444c4534u);
 	for (uint32_t i = 0; i < MAX_OBJECTS; i++)
 		bench_orbit_random(&be.orb->o[i], &be.orb->rng, be.g.half_height);
-	bench_dragon(&be);
-	bench_s4(&be);
+	if (!be.o.only || !strcmp(be.o.only, "dragon"))
+		bench_dragon(&be);
+	if (!be.o.only || !strcmp(be.o.only, "s4"))
+		bench_s4(&be);
 	free(be.orb);
 	cache_destroy(be.cache);
 	pool_destroy(be.pool);

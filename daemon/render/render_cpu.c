@@ -257,6 +257,22 @@ static uint64_t merge_lifted(struct render_cpu *r, struct cpu_worker *w, uint32_
 	return m.tiles;
 }
 
+/* Whether image k has nothing to draw: no point, no primitive binned in
+ * its windows, no grid, no lifted canvas. A small object lies in a few
+ * images of the volume; the rest cost this test and no clock reads. */
+static bool image_empty(const struct render_cpu *r, uint32_t k)
+{
+	const struct bin_set *b = &r->bins;
+	if (r->grid_count || r->lifted_count || b->point_start[k + 1] != b->point_start[k])
+		return false;
+	struct bin_run runs[2 * BIN_MAX_CLASSES];
+	unsigned n = bin_runs(b, k, runs);
+	for (unsigned j = 0; j < n; j++)
+		if (runs[j].begin != runs[j].end)
+			return false;
+	return true;
+}
+
 /* Images are handed out one at a time; each image's result depends on
  * nothing but the scene, so any split gives identical output. */
 static void image_job(void *arg, unsigned index)
@@ -267,6 +283,12 @@ static void image_job(void *arg, unsigned index)
 		uint32_t k = atomic_fetch_add(&r->next_image, 1);
 		if (k >= r->bins.images)
 			break;
+		if (image_empty(r, k)) {
+			int err = r->canvas_out ? rle_volume_set_image(r->canvas_out, k, NULL, NULL, 0, NULL) : 0;
+			if (err < 0 && w->err == 0)
+				w->err = err;
+			continue;
+		}
 		int64_t t0 = now_ns();
 		uint64_t drawn = raster_image(r, w, k);
 		if (r->lifted_count)
