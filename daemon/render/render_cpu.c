@@ -59,6 +59,9 @@ struct render_cpu {
 	uint32_t lifted_count;
 	struct scene_draw *by_lift;
 	uint32_t by_lift_cap;
+	/* A small scene's images reached (mark_used()), when marked. */
+	uint8_t *used;
+	bool marked;
 	/* render_canvas()'s work space, one per worker (made at its first
 	 * call): an image's touched tiles with their row masks, and its mask. */
 	struct canvas_stage {
@@ -68,6 +71,21 @@ struct render_cpu {
 	unsigned stages;
 };
 
+/* The first tile from t on that something touched (rows non-zero), or
+ * tiles: four at a time through the untouched (most, for a small object). */
+static uint32_t next_touched(const uint32_t *rows, uint32_t t, uint32_t tiles)
+{
+	for (uint64_t a, b; t + 4 <= tiles; t += 4) {
+		memcpy(&a, rows + t, sizeof(a));
+		memcpy(&b, rows + t + 2, sizeof(b));
+		if (a | b)
+			break;
+	}
+	while (t < tiles && !rows[t])
+		t++;
+	return t;
+}
+
 /* Copies the touched tiles of image k's canvas, with their row masks, into
  * r->canvas_out (coded) and leaves the canvas all zero again. */
 static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canvas_stage *st, uint32_t k)
@@ -75,9 +93,7 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 	struct section_canvas *c = &w->canvas;
 	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
 	memset(st->mask, 0, r->canvas_out->mask_bytes);
-	for (uint32_t t = 0; t < tiles; t++) {
-		if (!c->rows[t])
-			continue;
+	for (uint32_t t = next_touched(c->rows, 0, tiles); t < tiles; t = next_touched(c->rows, t + 1, tiles)) {
 		uint8_t *dst = st->tiles + (size_t)n++ * CANVAS_TILE_BYTES;
 		memcpy(dst, &c->rows[t], sizeof(uint32_t));
 		memcpy(dst + sizeof(uint32_t), c->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES);
@@ -95,9 +111,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 	struct section_canvas *c = &w->canvas;
 	int err = 0;
 	uint32_t tiles = c->tiles_x * c->tiles_y;
-	for (uint32_t t = 0; t < tiles; t++) {
-		if (!c->rows[t])
-			continue;
+	for (uint32_t t = next_touched(c->rows, 0, tiles); t < tiles; t = next_touched(c->rows, t + 1, tiles)) {
 		w->canvas_tiles++;
 		/* Halftoned straight into the volume's storage. */
 		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
@@ -282,6 +296,28 @@ static bool image_empty(const struct render_cpu *r, uint32_t k)
 	return true;
 }
 
+/* A small scene (what the calling thread renders alone): the images its
+ * points and primitives reach, a bit each in r->used, so that the others
+ * (most of them, for a small object) cost a bit test (image_job()). Grids
+ * and lifted canvases reach every image: then not marked. */
+static void mark_used(struct render_cpu *r)
+{
+	const struct bin_set *b = &r->bins;
+	uint32_t M = b->images;
+	r->marked = !r->grid_count && !r->lifted_count;
+	if (!r->marked)
+		return;
+	memset(r->used, 0, (M + 7) / 8);
+	for (uint32_t i = 0; i < b->prim_count; i++) {
+		const struct bin_prim *p = &b->prims[i];
+		for (uint32_t j = 0, k = p->first; j < p->count && j < M; j++, k = k + 1 < M ? k + 1 : 0)
+			r->used[k / 8] |= (uint8_t)(1u << (k % 8));
+	}
+	for (uint32_t k = 0; k < M; k++)
+		if (b->point_start[k + 1] != b->point_start[k])
+			r->used[k / 8] |= (uint8_t)(1u << (k % 8));
+}
+
 /* Images are handed out one at a time; each image's result depends on
  * nothing but the scene, so any split gives identical output. */
 static void image_job(void *arg, unsigned index)
@@ -292,7 +328,7 @@ static void image_job(void *arg, unsigned index)
 		uint32_t k = atomic_fetch_add(&r->next_image, 1);
 		if (k >= r->bins.images)
 			break;
-		if (image_empty(r, k)) {
+		if (r->marked ? !(r->used[k / 8] >> (k % 8) & 1) : image_empty(r, k)) {
 			int err = r->canvas_out ? rle_volume_set_image(r->canvas_out, k, NULL, NULL, 0, NULL) : 0;
 			if (err < 0 && w->err == 0)
 				w->err = err;
@@ -365,10 +401,13 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	r->out = out;
 	r->canvas_out = canvas;
 	atomic_store(&r->next_image, 0);
-	if (!r->grid_count && !r->lifted_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3)
+	r->marked = false;
+	if (!r->grid_count && !r->lifted_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3) {
+		mark_used(r);
 		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
-	else
+	} else {
 		pool_run(r->pool, image_job, r);
+	}
 	r->out = NULL;
 	r->canvas_out = NULL;
 	return collect(r);
@@ -542,6 +581,7 @@ static void cpu_destroy(struct renderer *base)
 	free(r->lifted);
 	free(r->by_lift);
 	free(r->wedges);
+	free(r->used);
 	free_grid_jobs(r);
 	free(r->grids);
 	brightness_tables_finish(&r->thr);
@@ -611,7 +651,8 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->workers = calloc(n, sizeof(*r->workers));
 	uint32_t images = geometry_images_per_volume(geom);
 	r->wedges = calloc(images, sizeof(*r->wedges));
-	if (!r->workers || !r->wedges || bin_init(&r->bins, geom) < 0)
+	r->used = calloc((images + 7) / 8, 1);
+	if (!r->workers || !r->wedges || !r->used || bin_init(&r->bins, geom) < 0)
 		goto err_free;
 	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
 		goto err_free;
