@@ -404,20 +404,21 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 
 /* Turns the per-thread counts into per-thread offsets, key-major, and the
  * per-key starts; returns the totals. */
-static void prefix(struct bin_set *b, uint64_t *prims, uint64_t *points)
+/* Keys [from, to) of prefix(): each key's start in start[key - from],
+ * each thread's histogram entry its own start; returns the total. */
+static uint64_t prefix_keys(struct bin_work *w, uint32_t keys, uint32_t from, uint32_t to, uint32_t *start)
 {
-	struct bin_work *w = b->work;
-	uint32_t pk = prim_keys(b), keys = pk + b->images;
 	uint64_t run = 0;
-	for (uint32_t key = 0; key < keys; key++) {
-		if (key == pk) {
-			*prims = run;
-			run = 0;
+	if (w->threads == 1) { /* small scenes: a key is one histogram entry */
+		for (uint32_t key = from; key < to; key++) {
+			uint32_t n = w->hist[key];
+			start[key - from] = w->hist[key] = (uint32_t)run;
+			run += n;
 		}
-		if (key < pk)
-			b->prim_start[key] = (uint32_t)run;
-		else
-			b->point_start[key - pk] = (uint32_t)run;
+		return run;
+	}
+	for (uint32_t key = from; key < to; key++) {
+		start[key - from] = (uint32_t)run;
 		for (unsigned t = 0; t < w->threads; t++) {
 			uint32_t *h = &w->hist[(size_t)t * keys + key];
 			uint32_t n = *h;
@@ -425,7 +426,15 @@ static void prefix(struct bin_set *b, uint64_t *prims, uint64_t *points)
 			run += n;
 		}
 	}
-	*points = run;
+	return run;
+}
+
+static void prefix(struct bin_set *b, uint64_t *prims, uint64_t *points)
+{
+	struct bin_work *w = b->work;
+	uint32_t pk = prim_keys(b), keys = pk + b->images;
+	*prims = prefix_keys(w, keys, 0, pk, b->prim_start);
+	*points = prefix_keys(w, keys, pk, keys, b->point_start);
 	b->prim_start[pk] = (uint32_t)*prims;
 	b->point_start[b->images] = (uint32_t)*points;
 }
