@@ -161,9 +161,12 @@ struct section_weight {
  * into c->weighted in the canvas's own order (plane i at i * weighted_plane,
  * column u at byte (u & ~31) + halftone_pos(u & 31)): brightness_apply()'s
  * rule, the weight worked out once per column for every row of the
- * polygon. Returns whether any value is not zero. */
-static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
-			  const uint8_t rgb[3])
+ * polygon. Returns WEIGH_DARK where every value is zero, WEIGH_SAME where
+ * every one is rgb's (a weight of 1 throughout), else WEIGH_LIT. */
+enum weighed { WEIGH_DARK, WEIGH_LIT, WEIGH_SAME };
+
+static enum weighed weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
+				  const uint8_t rgb[3])
 {
 	if (!wt->ready) {
 		brightness_weight_of(wt->m, wt->v, wt->n, wt->dx, wt->dz, &wt->w);
@@ -174,7 +177,7 @@ static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 	 * brightness_apply() returns it; no branch per channel. */
 	const float cf[3] = { rgb[0], rgb[1], rgb[2] };
 	const size_t plane = c->weighted_plane;
-	uint8_t any = 0;
+	uint8_t any = 0, diff = 0;
 	for (uint32_t u = a; u <= b; u++) {
 		float w = rate[u] * inv;
 		w = w > kw ? kw : w;
@@ -185,8 +188,9 @@ static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 		out[plane] = g;
 		out[2 * plane] = bl;
 		any |= r | g | bl;
+		diff |= (r ^ rgb[0]) | (g ^ rgb[1]) | (bl ^ rgb[2]);
 	}
-	return any != 0;
+	return !any ? WEIGH_DARK : diff ? WEIGH_LIT : WEIGH_SAME;
 }
 
 /* Per-channel MAX of canvas row bytes [ja, jb] with src's. */
@@ -433,9 +437,13 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 		if (lo <= hi && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi) {
 			uint32_t a = u0 > wt->m->band_lo ? u0 : wt->m->band_lo;
 			uint32_t b = u1 < wt->m->band_hi ? u1 : wt->m->band_hi;
-			bool lit = weigh_columns(c, wt, a, b, rgb);
-			raster_rows(c, q, n, rgb, a, b, lit, mirror, true);
-			return;
+			enum weighed lit = weigh_columns(c, wt, a, b, rgb);
+			/* Unchanged colours (and some lit): the plain spans'
+			 * bytes and rows, without the weighted ones' work. */
+			if (lit != WEIGH_SAME) {
+				raster_rows(c, q, n, rgb, a, b, lit == WEIGH_LIT, mirror, true);
+				return;
+			}
 		}
 	}
 	raster_rows(c, q, n, rgb, 0, 0, false, mirror, false);
