@@ -232,6 +232,22 @@ static void print_row(const struct bench_scene *s, const struct variant *v, cons
 	fflush(stdout);
 }
 
+/* A scene's frame 0 as DIR/SCENE.svol (the reference) or
+ * DIR/SCENE.VARIANT.svol (variant: NULL for the reference), for spindlectl
+ * preview and for comparing outputs across builds (cmp). */
+static int save_volume(const char *dir, const char *scene, const char *variant, const struct volume *vol)
+{
+	char path[4096];
+	snprintf(path, sizeof(path), "%s/%s%s%s.svol", dir, scene, variant ? "." : "", variant ? variant : "");
+	FILE *f = fopen(path, "wb");
+	int r = f ? svol_write(f, vol) : -errno;
+	if (f && fclose(f) != 0 && r == 0)
+		r = -errno;
+	if (r < 0)
+		fprintf(stderr, "spindle-bench: %s: %s\n", path, strerror(-r));
+	return r;
+}
+
 /* Measures one variant on scene s and compares its frame 0 with ref. */
 static int run_variant(struct variant *v, struct bench_scene *s, const struct volume *ref, const struct options *o)
 {
@@ -241,26 +257,14 @@ static int run_variant(struct variant *v, struct bench_scene *s, const struct vo
 	int err = measure(v, s, o, &m);
 	if (err == 0)
 		err = render_frame(v, s, 0, &ms);
+	if (err == 0 && o->save_dir)
+		err = save_volume(o->save_dir, s->info->name, v->name, v->out);
 	if (err == 0 && (err = coverage_compare(ref, v->out, &c)) < 0)
 		fprintf(stderr, "spindle-bench: coverage: %s\n", strerror(-err));
 	if (err == 0)
 		print_row(s, v, &m, &c, v->out);
 	free(m.ms);
 	return err;
-}
-
-/* The reference volume as DIR/SCENE.svol, for spindlectl preview. */
-static int save_volume(const char *dir, const char *scene, const struct volume *vol)
-{
-	char path[4096];
-	snprintf(path, sizeof(path), "%s/%s.svol", dir, scene);
-	FILE *f = fopen(path, "wb");
-	int r = f ? svol_write(f, vol) : -errno;
-	if (f && fclose(f) != 0 && r == 0)
-		r = -errno;
-	if (r < 0)
-		fprintf(stderr, "spindle-bench: %s: %s\n", path, strerror(-r));
-	return r;
 }
 
 static int run_scene(const char *name, const struct geometry *g, struct variant *vars, int nvars, struct variant *ref,
@@ -281,7 +285,7 @@ static int run_scene(const char *name, const struct geometry *g, struct variant 
 	double ms;
 	r = render_frame(ref, &s, 0, &ms);
 	if (r == 0 && o->save_dir)
-		r = save_volume(o->save_dir, name, ref->out);
+		r = save_volume(o->save_dir, name, NULL, ref->out);
 	for (int i = 0; r == 0 && i < nvars; i++)
 		r = run_variant(&vars[i], &s, ref->out, o);
 	bench_scene_free(&s);

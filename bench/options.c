@@ -31,7 +31,8 @@ static void usage(FILE *f)
 		"  --quick              tiny counts, for a smoke run\n"
 		"  --no-micro           skip the memcpy and halftone table\n"
 		"  --micro-only         only the memcpy and halftone table\n"
-		"  --save DIR           write each scene's reference frame 0 as DIR/SCENE.svol\n",
+		"  --save DIR           write each scene's reference frame 0 as DIR/SCENE.svol,\n"
+		"                       and each variant's as DIR/SCENE.VARIANT.svol\n",
 		REFERENCE_VARIANT, BENCH_DATA_DIR);
 }
 

@@ -13,10 +13,12 @@ void brightness_map_finish(struct brightness_map *m)
 	free(m->line_rate);
 	free(m->n);
 	free(m->phase);
+	free(m->solid);
 	m->rate = NULL;
 	m->line_rate = NULL;
 	m->n = NULL;
 	m->phase = NULL;
+	m->solid = NULL;
 }
 
 /* The pattern's offset at radius index i, row class y (0..15), in 0..M-1.
@@ -36,6 +38,31 @@ static uint16_t phase_of(uint32_t i, uint32_t y, uint32_t images)
 	return (uint16_t)((f * images) >> 16);
 }
 
+/* Whether (c * mul) >> 16 (mul BRIGHTNESS_KEEP: c) is w's value of every
+ * byte c at column u. */
+static bool solid_exact(const struct brightness_map *m, const struct brightness_weight *w, uint32_t u, uint32_t mul)
+{
+	for (uint32_t c = 0; c < 256; c++)
+		if ((c * mul) >> 16 != brightness_apply(m, w, u, (uint8_t)c))
+			return false;
+	return true;
+}
+
+/* brightness_map.solid[u]: KEEP, or m from ceil(65536 w) or a neighbour,
+ * checked against brightness_apply() for every byte (with n / M weights at
+ * M <= 256 images per volume, ceil(65536 n / M) always is). */
+static uint32_t solid_mul_of(const struct brightness_map *m, uint32_t u)
+{
+	const struct brightness_weight w = { m->rate, m->wall, 1.0f };
+	if (solid_exact(m, &w, u, BRIGHTNESS_KEEP))
+		return BRIGHTNESS_KEEP;
+	double base = ceil(fmin(m->rate[u], m->wall) * 65536.0);
+	for (double c = base - 1.0; c <= base + 1.0; c += 1.0)
+		if (c >= 0.0 && c <= 65535.0 && solid_exact(m, &w, u, (uint32_t)c))
+			return (uint32_t)c;
+	return BRIGHTNESS_FLOAT;
+}
+
 int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 {
 	*m = (struct brightness_map){ .model = g->brightness, .width = g->width, .band_lo = 1, .band_hi = 0 };
@@ -45,7 +72,8 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	m->n = malloc(g->width * sizeof(*m->n));
 	uint32_t radii = g->width / 2 + 1;
 	m->phase = malloc(radii * 16 * sizeof(*m->phase));
-	if (!m->rate || !m->line_rate || !m->n || !m->phase) {
+	m->solid = malloc(g->width * sizeof(*m->solid));
+	if (!m->rate || !m->line_rate || !m->n || !m->phase || !m->solid) {
 		brightness_map_finish(m);
 		return -ENOMEM;
 	}
@@ -77,6 +105,8 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 			m->band_hi = u;
 		}
 	}
+	for (uint32_t u = 0; u < g->width; u++)
+		m->solid[u] = solid_mul_of(m, u);
 	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
 	if (brightness_active(m)) {
 		m->band_s =

@@ -59,7 +59,16 @@ struct brightness_map {
 	uint16_t *n;      /* per column: images of M a crossing primitive lights */
 	uint16_t *phase;  /* per radius index i and row v % 16: the pattern's
 			    * offset, phase[i * 16 + v % 16] in 0..M-1 */
+	uint32_t *solid;  /* per column: brightness_solid_mul() */
 };
+
+/* brightness_map.solid[u]: how a solid (a grid, crossing every slice: a
+ * crossing weight of 1) weighs column u. BRIGHTNESS_KEEP: every byte as it
+ * is; m <= 65535: (c * m) >> 16 is brightness_apply()'s value of every
+ * byte c, so that a vector can weigh 32 bytes by one 16-bit multiply;
+ * BRIGHTNESS_FLOAT: no such m, only brightness_apply()'s floats. */
+#define BRIGHTNESS_KEEP 65536u
+#define BRIGHTNESS_FLOAT UINT32_MAX
 
 /* Makes g's map (g->brightness). Returns 0 or -ENOMEM. */
 int brightness_map_init(struct brightness_map *m, const struct geometry *g);

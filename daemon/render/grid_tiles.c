@@ -45,6 +45,11 @@ struct tile_tf {
 	/* NULL, or the brightness model's weight of each lane of the tile
 	 * column (1 where it keeps the colour): grid.c's light() per lane. */
 	const float *weight;
+	/* NULL, or the same weights as 16-bit multipliers (brightness.h,
+	 * BRIGHTNESS_KEEP): byte c of lane l becomes (c * mul[l]) >> 16, or
+	 * stays c where bit l of keep is set (mul[l] 0); weight is then NULL. */
+	const uint16_t *mul;
+	uint32_t keep;
 };
 
 /* What brightness_apply() makes of colour bytes px under the lanes'
@@ -54,6 +59,15 @@ static inline void weigh_lanes(uint8_t px[3][LANES], const float *weight)
 	for (int c = 0; c < 3; c++)
 		for (uint32_t l = 0; l < LANES; l++)
 			px[c][l] = (uint8_t)((float)px[c][l] * weight[l] + 1e-3f);
+}
+
+/* weigh_lanes() by tf->mul: exactly the same bytes (brightness.h). */
+static inline void mul_lanes(uint8_t px[3][LANES], const struct tile_tf *tf)
+{
+	for (int c = 0; c < 3; c++)
+		for (uint32_t l = 0; l < LANES; l++)
+			if (!(tf->keep >> l & 1))
+				px[c][l] = (uint8_t)((px[c][l] * (uint32_t)tf->mul[l]) >> 16);
 }
 
 /* The image's rows and the samples they read. */
@@ -118,6 +132,8 @@ static inline __attribute__((always_inline)) void row_generic(const float *a, co
 		return;
 	if (tf->weight)
 		weigh_lanes(px, tf->weight);
+	else if (tf->mul)
+		mul_lanes(px, tf);
 	for (int c = 0; c < 3; c++) {
 		u8v cur, add;
 		memcpy(&cur, dst + c * HALFTONE_PLANE_BYTES, sizeof(cur));
@@ -167,6 +183,24 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) __m
 	}
 	__m256i w = _mm256_packus_epi16(_mm256_packus_epi32(q[0], q[1]), _mm256_packus_epi32(q[2], q[3]));
 	return _mm256_permutevar8x32_epi32(w, _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7));
+}
+
+/* mul_lanes() of one plane's 32 bytes in AVX2: 16-bit lanes, one
+ * multiply per 16 bytes, the KEEP lanes blended back. */
+__attribute__((target("avx2"))) static inline __attribute__((always_inline)) __m256i mul_avx2(__m256i px,
+											      const struct tile_tf *tf)
+{
+	__m256i w[2];
+	for (int h = 0; h < 2; h++) {
+		__m256i q = _mm256_cvtepu8_epi16(h ? _mm256_extracti128_si256(px, 1) : _mm256_castsi256_si128(px));
+		__m256i m = _mm256_loadu_si256((const __m256i *)(const void *)(tf->mul + 16 * h));
+		__m256i bits = _mm256_setr_epi16(1, 2, 4, 8, 16, 32, 64, 128, 256, 512, 1024, 2048, 4096, 8192, 16384,
+						 (short)32768);
+		__m256i keep = _mm256_set1_epi16((short)(uint16_t)(tf->keep >> (16 * h)));
+		keep = _mm256_cmpeq_epi16(_mm256_and_si256(keep, bits), bits);
+		w[h] = _mm256_blendv_epi8(_mm256_mulhi_epu16(q, m), q, keep);
+	}
+	return _mm256_permute4x64_epi64(_mm256_packus_epi16(w[0], w[1]), 0xd8);
 }
 
 /* row_generic() in AVX2: 4 vectors of 8 lanes, packed to bytes. */
@@ -229,6 +263,9 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) voi
 	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx2(px[c], tf->weight);
+	else if (tf->mul)
+		for (int c = 0; c < 3; c++)
+			px[c] = mul_avx2(px[c], tf);
 	for (int c = 0; c < 3; c++) {
 		__m256i *p = (__m256i *)(void *)(dst + c * HALFTONE_PLANE_BYTES);
 		_mm256_storeu_si256(p, _mm256_max_epu8(_mm256_loadu_si256(p), px[c]));
@@ -268,6 +305,16 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 		out[h] = _mm512_cvtusepi32_epi8(_mm512_cvttps_epi32(x));
 	}
 	return _mm256_inserti128_si256(_mm256_castsi128_si256(out[0]), out[1], 1);
+}
+
+/* mul_lanes() of one plane's 32 bytes in AVX-512: 32 16-bit lanes, one
+ * multiply, the KEEP lanes moved back. */
+__attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((always_inline)) __m256i mul_avx512(
+	__m256i px, const struct tile_tf *tf)
+{
+	__m512i q = _mm512_cvtepu8_epi16(px);
+	__m512i w = _mm512_mulhi_epu16(q, _mm512_loadu_si512(tf->mul));
+	return _mm512_cvtepi16_epi8(_mm512_mask_mov_epi16(w, tf->keep, q));
 }
 
 /* row_generic() in AVX-512: 2 vectors of 16 lanes, narrowed to bytes. */
@@ -317,6 +364,9 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx512(px[c], tf->weight);
+	else if (tf->mul)
+		for (int c = 0; c < 3; c++)
+			px[c] = mul_avx512(px[c], tf);
 	for (int c = 0; c < 3; c++) {
 		__m256i *p = (__m256i *)(void *)(dst + c * HALFTONE_PLANE_BYTES);
 		_mm256_storeu_si256(p, _mm256_max_epu8(_mm256_loadu_si256(p), px[c]));
@@ -506,19 +556,27 @@ static inline __attribute__((always_inline)) void tile_rows(
 typedef void tiles_fn(struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror,
 		      const struct tile_span *sp, const struct tile_tf *tf, float *buf);
 
-/* The lanes' weights of tile column tu under map m (NULL: none): NULL
- * when every lane keeps its colour. */
-static const float *tile_weights(const struct brightness_map *m, uint32_t width, uint32_t tu, float *weight)
+/* The lanes' weights of tile column tu under map m (NULL: none) into
+ * tf: NULL both when every lane keeps its colour, else the multipliers
+ * where every lane has one (brightness_map.solid), else the floats. */
+static void tile_weights(const struct brightness_map *m, uint32_t width, uint32_t tu, float *weight, uint16_t *mul,
+			 struct tile_tf *tf)
 {
-	bool any = false;
+	bool any = false, exact = true;
+	tf->keep = 0;
 	for (uint32_t p = 0; m && p < LANES; p++) {
 		uint32_t out = tu * VOLUME_TILE + (p ^ 7);
 		float w = out < width ? m->rate[out] : 1.0f; /* brightness_apply(), a crossing weight of 1 */
 		w = w > m->wall ? m->wall : w;
 		weight[p] = w < 1.0f ? w : 1.0f;
 		any |= w < 1.0f;
+		uint32_t k = out < width ? m->solid[out] : BRIGHTNESS_KEEP;
+		exact &= k != BRIGHTNESS_FLOAT;
+		mul[p] = k < BRIGHTNESS_KEEP ? (uint16_t)k : 0;
+		tf->keep |= (uint32_t)(k == BRIGHTNESS_KEEP) << p;
 	}
-	return any ? weight : NULL;
+	tf->weight = any && !exact ? weight : NULL;
+	tf->mul = any && exact ? mul : NULL;
 }
 
 #define TILES_VARIANT(name, attr, rowfn)                                                                              \
@@ -528,11 +586,12 @@ static const float *tile_weights(const struct brightness_map *m, uint32_t width,
 		for (uint32_t tu = 0; tu < c->tiles_x; tu++) {                                                        \
 			uint32_t lit[4096 / SCENE_GRID_BRICK + 1];                                                    \
 			float weight[LANES];                                                                          \
+			uint16_t mul[LANES];                                                                          \
 			struct tile_tf tw = *draw_tf;                                                                 \
 			const struct tile_tf *tf = &tw;                                                               \
 			if (!tile_lanes(c, job, dir, mirror, tu, sp, draw_tf, buf, lit))                              \
 				continue;                                                                             \
-			tw.weight = tile_weights(sp->bright, c->geom.width, tu, weight);                              \
+			tile_weights(sp->bright, c->geom.width, tu, weight, mul, &tw);                                \
 			if (tf->lut && tf->tri)                                                                       \
 				tile_rows(c, tu, sp, tf, buf, lit, rowfn, true, true);                                \
 			else if (tf->lut)                                                                             \
@@ -639,6 +698,8 @@ bool grid_draw_tiles(struct section_canvas *c, const struct grid_job *job, const
 		x->lut,
 		x->lut_count,
 		NULL,
+		NULL,
+		0,
 	};
 	pthread_once(&pick_once, pick_best);
 	picked(c, job, dir, mirror, &sp, &tf, c->scratch);

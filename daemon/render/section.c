@@ -21,7 +21,8 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	if (frexp(2.0 * g->half_height, &e) == 0.5)
 		c->row_scale = 1.0 / (2.0 * g->half_height); /* exact */
 	c->weighted_plane = c->tiles_x * VOLUME_TILE;
-	c->weighted = malloc((size_t)c->weighted_plane * 3);
+	/* Zeroed: the vector spans read whole half rows of it (masked). */
+	c->weighted = calloc((size_t)c->weighted_plane, 3);
 	if (!c->rgb || !c->rows || !c->weighted) {
 		section_canvas_finish(c);
 		return -ENOMEM;
@@ -160,9 +161,12 @@ struct section_weight {
  * into c->weighted in the canvas's own order (plane i at i * weighted_plane,
  * column u at byte (u & ~31) + halftone_pos(u & 31)): brightness_apply()'s
  * rule, the weight worked out once per column for every row of the
- * polygon. Returns whether any value is not zero. */
-static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
-			  const uint8_t rgb[3])
+ * polygon. Returns WEIGH_DARK where every value is zero, WEIGH_SAME where
+ * every one is rgb's (a weight of 1 throughout), else WEIGH_LIT. */
+enum weighed { WEIGH_DARK, WEIGH_LIT, WEIGH_SAME };
+
+static enum weighed weigh_columns(struct section_canvas *c, struct section_weight *wt, uint32_t a, uint32_t b,
+				  const uint8_t rgb[3])
 {
 	if (!wt->ready) {
 		brightness_weight_of(wt->m, wt->v, wt->n, wt->dx, wt->dz, &wt->w);
@@ -173,7 +177,7 @@ static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 	 * brightness_apply() returns it; no branch per channel. */
 	const float cf[3] = { rgb[0], rgb[1], rgb[2] };
 	const size_t plane = c->weighted_plane;
-	uint8_t any = 0;
+	uint8_t any = 0, diff = 0;
 	for (uint32_t u = a; u <= b; u++) {
 		float w = rate[u] * inv;
 		w = w > kw ? kw : w;
@@ -184,8 +188,9 @@ static bool weigh_columns(struct section_canvas *c, struct section_weight *wt, u
 		out[plane] = g;
 		out[2 * plane] = bl;
 		any |= r | g | bl;
+		diff |= (r ^ rgb[0]) | (g ^ rgb[1]) | (bl ^ rgb[2]);
 	}
-	return any != 0;
+	return !any ? WEIGH_DARK : diff ? WEIGH_LIT : WEIGH_SAME;
 }
 
 /* Per-channel MAX of canvas row bytes [ja, jb] with src's. */
@@ -193,6 +198,45 @@ static inline void max_from(uint8_t *row, const uint8_t *src, uint32_t ja, uint3
 {
 	for (uint32_t j = ja; j <= jb; j++)
 		row[j] = row[j] < src[j] ? src[j] : row[j];
+}
+
+/* max_pixels() with each byte's value from src (the same canvas order),
+ * both halves of the row whatever a and b: no branch at all, where
+ * max_from()'s loops of 1 to 8 bytes, or a loop over the halves,
+ * mispredict. */
+static inline void max_pixels_from(uint8_t *r, const uint8_t *src, uint32_t a, uint32_t b)
+{
+	span_half lo = { 0 }, hi = { 0 };
+	lo += (uint8_t)a;
+	hi += (uint8_t)b;
+	for (uint32_t h = 0; h < 2; h++) {
+		span_half row, val, lit;
+		memcpy(&row, r + 16 * h, sizeof(row));
+		memcpy(&val, src + 16 * h, sizeof(val));
+		lit = (span_half)((span_pixel[h] >= lo) & (span_pixel[h] <= hi)) & val;
+		row = row ^ ((row ^ lit) & (span_half)(row < lit));
+		memcpy(r + 16 * h, &row, sizeof(row));
+	}
+}
+
+/* Pixels pa..pb of one plane of a canvas tile row: MAX with src's bytes
+ * (the general path byte by byte, as span_bytes() for section_span()). */
+static inline void weighted_pixels(const struct section_canvas *c, uint8_t *r, const uint8_t *src, uint32_t pa,
+				   uint32_t pb)
+{
+	if (!c->general) {
+		max_pixels_from(r, src, pa, pb);
+		return;
+	}
+	uint32_t ga = pa & ~7u, gb = pb & ~7u;
+	if (ga == gb) {
+		max_from(r, src, ga + 7 - (pb & 7), ga + 7 - (pa & 7));
+	} else {
+		max_from(r, src, ga, ga + 7 - (pa & 7));
+		if (gb > ga + 8)
+			max_from(r, src, ga + 8, gb - 1);
+		max_from(r, src, gb + 7 - (pb & 7), gb + 7);
+	}
 }
 
 /* Columns u0..u1 of row v: those in [a, b] with their weighted colour
@@ -214,9 +258,8 @@ static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool
 		uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES + at;
 		const uint8_t *sr = c->weighted + (lo & ~31u) + at;
 		for (int i = 0; i < 3; i++) {
-			uint8_t value = sr[(size_t)i * c->weighted_plane];
-			if (px[i * HALFTONE_PLANE_BYTES] < value)
-				px[i * HALFTONE_PLANE_BYTES] = value;
+			uint8_t value = sr[(size_t)i * c->weighted_plane], was = px[i * HALFTONE_PLANE_BYTES];
+			px[i * HALFTONE_PLANE_BYTES] = was < value ? value : was;
 		}
 		c->rows[t] |= 1u << y;
 		return;
@@ -226,19 +269,10 @@ static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool
 		uint32_t pa = u % VOLUME_TILE, pb = (u | 31) < hi ? 31 : hi % VOLUME_TILE;
 		uint8_t *base = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + y * HALFTONE_ROW_BYTES;
 		const uint8_t *src = c->weighted + (u & ~31u);
-		uint32_t ga = pa & ~7u, gb = pb & ~7u;
-		for (int i = 0; i < 3; i++) {
-			uint8_t *r = base + i * HALFTONE_PLANE_BYTES;
-			const uint8_t *sr = src + (size_t)i * c->weighted_plane;
-			if (ga == gb) {
-				max_from(r, sr, ga + 7 - (pb & 7), ga + 7 - (pa & 7));
-			} else {
-				max_from(r, sr, ga, ga + 7 - (pa & 7));
-				if (gb > ga + 8)
-					max_from(r, sr, ga + 8, gb - 1);
-				max_from(r, sr, gb + 7 - (pb & 7), gb + 7);
-			}
-		}
+		for (int i = 0; i < 3; i++) /* a channel of 0 weighs 0 everywhere: no MAX */
+			if (rgb[i])
+				weighted_pixels(c, base + i * HALFTONE_PLANE_BYTES, src + (size_t)i * c->weighted_plane,
+						pa, pb);
 		c->rows[t] |= 1u << y;
 		u += pb - pa + 1;
 	}
@@ -403,9 +437,13 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 		if (lo <= hi && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi) {
 			uint32_t a = u0 > wt->m->band_lo ? u0 : wt->m->band_lo;
 			uint32_t b = u1 < wt->m->band_hi ? u1 : wt->m->band_hi;
-			bool lit = weigh_columns(c, wt, a, b, rgb);
-			raster_rows(c, q, n, rgb, a, b, lit, mirror, true);
-			return;
+			enum weighed lit = weigh_columns(c, wt, a, b, rgb);
+			/* Unchanged colours (and some lit): the plain spans'
+			 * bytes and rows, without the weighted ones' work. */
+			if (lit != WEIGH_SAME) {
+				raster_rows(c, q, n, rgb, a, b, lit == WEIGH_LIT, mirror, true);
+				return;
+			}
 		}
 	}
 	raster_rows(c, q, n, rgb, 0, 0, false, mirror, false);
@@ -488,21 +526,27 @@ static void section_lobe_mirrored(struct section_canvas *c, const struct section
 	lobe_body(c, w, v, n, d1, d2, sign, rgb, wt, true);
 }
 
+/* The range [*lo, *hi] of d1[i] + d2[i] over the vertices: 2 sin(D / 2)
+ * times their s (linear), which both the band and the lobes are read from. */
+static inline void s_range(const double *d1, const double *d2, int n, double *lo, double *hi)
+{
+	*lo = INFINITY;
+	*hi = -INFINITY;
+	for (int i = 0; i < n; i++) {
+		*lo = dmin(*lo, d1[i] + d2[i]);
+		*hi = dmax(*hi, d1[i] + d2[i]);
+	}
+}
+
 /* The weights' state for v in w's image, or NULL when the model is EXACT
  * or v lies wholly outside the band in this image (its pieces' s ranges lie
- * within its vertices'; d1[i] + d2[i], the distances to the wedge's planes,
- * is 2 sin(D / 2) s of vertex i: brightness_map.band_d). */
+ * within its vertices'; [lo, hi] from s_range(): brightness_map.band_d). */
 static inline struct section_weight *weight_start(const struct section_canvas *c, const struct section_wedge *w,
-						  const double (*v)[3], int n, const double *d1, const double *d2,
+						  const double (*v)[3], int n, double lo, double hi,
 						  struct section_weight *wt)
 {
 	if (!c->bright || !brightness_active(c->bright))
 		return NULL;
-	double lo = INFINITY, hi = -INFINITY;
-	for (int i = 0; i < n; i++) {
-		lo = dmin(lo, d1[i] + d2[i]);
-		hi = dmax(hi, d1[i] + d2[i]);
-	}
 	if (hi < -c->bright->band_d || lo > c->bright->band_d)
 		return NULL;
 	*wt = (struct section_weight){ .m = c->bright, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
@@ -510,23 +554,18 @@ static inline struct section_weight *weight_start(const struct section_canvas *c
 }
 
 /* Which lobes the clipping can leave a piece in: bit 0 s >= 0, bit 1
- * s < 0. d1 + d2 is linear (2 sin(D / 2) s): where it is below -m at
- * every vertex, m = 1e-12 of the largest |x|, |z| (X), no point of the
- * primitive has d1 >= 0 and d2 >= 0, and none of the clip's either: the
- * first plane keeps vertices with d2 < -m, and its cut points p + t (q - p)
- * have |d1| and the error of their d2 under 50 ulps of X (t = dp / (dp -
- * dq) divides by a difference of opposite signs: no cancellation), so their
- * d2 stays below 0 and the second plane keeps nothing. Likewise above m for
- * the s < 0 lobe. Most primitives lie in one lobe; the other's clip would
+ * s < 0. d1 + d2 is linear (2 sin(D / 2) s; [lo, hi] from s_range()):
+ * where it is below -m at every vertex, m = 1e-12 of the largest |x|, |z|
+ * (X), no point of the primitive has d1 >= 0 and d2 >= 0, and none of the
+ * clip's either: the first plane keeps vertices with d2 < -m, and its cut
+ * points p + t (q - p) have |d1| and the error of their d2 under 50 ulps of
+ * X (t = dp / (dp - dq) divides by a difference of opposite signs: no
+ * cancellation), so their d2 stays below 0 and the second plane keeps
+ * nothing. Likewise above m for the s < 0 lobe. Most primitives lie in one lobe; the other's clip would
  * cost about as much as the piece. */
-static inline unsigned lobes_reached(const struct section_canvas *c, const double (*v)[3], int n, const double *d1,
-				     const double *d2)
+static inline unsigned lobes_reached(const struct section_canvas *c, const double (*v)[3], int n, double lo, double hi)
 {
-	double lo = INFINITY, hi = -INFINITY, xz = 0.0;
-	for (int i = 0; i < n; i++) {
-		lo = dmin(lo, d1[i] + d2[i]);
-		hi = dmax(hi, d1[i] + d2[i]);
-	}
+	double xz = 0.0;
 	if (c->general || (lo <= 0.0 && hi >= 0.0))
 		return 3;
 	for (int i = 0; i < n; i++)
@@ -538,13 +577,14 @@ static inline unsigned lobes_reached(const struct section_canvas *c, const doubl
 void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 		  const uint8_t rgb[3])
 {
-	double d1[3], d2[3];
+	double d1[3], d2[3], lo, hi;
 	for (int i = 0; i < n; i++) {
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
-	unsigned lobes = lobes_reached(c, v, n, d1, d2);
+	s_range(d1, d2, n, &lo, &hi);
+	struct section_weight state, *wt = weight_start(c, w, v, n, lo, hi, &state);
+	unsigned lobes = lobes_reached(c, v, n, lo, hi);
 	if (lobes & 1)
 		section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
 	if (lobes & 2)
@@ -558,13 +598,14 @@ void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w
 		section_prim(c, w, v, n, rgb);
 		return;
 	}
-	double d1[3], d2[3];
+	double d1[3], d2[3], lo, hi;
 	for (int i = 0; i < n; i++) {
 		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
 		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
 	}
-	struct section_weight state, *wt = weight_start(c, w, v, n, d1, d2, &state);
-	unsigned lobes = lobes_reached(c, v, n, d1, d2);
+	s_range(d1, d2, n, &lo, &hi);
+	struct section_weight state, *wt = weight_start(c, w, v, n, lo, hi, &state);
+	unsigned lobes = lobes_reached(c, v, n, lo, hi);
 	if (lobes & 1)
 		section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
 	if (lobes & 2)
