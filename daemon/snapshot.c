@@ -103,21 +103,24 @@ static bool lift_fits(const struct stage_layer *y, const struct geometry *g, con
 	return true;
 }
 
+/* With turns, a layer is drawn as its base turned by whole images and
+ * lifted by whole rows (layer.h): the renderer shifts images and rows
+ * instead of moving vertices, and the cache reuses what it rendered. The
+ * base into base, and the lift; a lift that cannot be a row shift is put
+ * back into the base (a move up the axis). */
+static int32_t layer_base(const struct stage_layer *y, const struct geometry *turns, const float *pre, float base[16])
+{
+	memcpy(base, y->base, sizeof(y->base));
+	if (y->lift && lift_fits(y, turns, pre))
+		return y->lift;
+	base[13] += (float)(y->lift * 2.0 * turns->half_height / turns->height);
+	return 0;
+}
+
 static int add_layer(struct snapshot *snap, const struct stage_layer *y, const struct geometry *turns, const float *pre)
 {
-	/* With turns, the layer's base and its turn by whole images, and its
-	 * lift by whole rows (layer.h): the renderer shifts images and rows
-	 * instead of moving vertices, and the cache reuses what it rendered.
-	 * A lift that cannot be a row shift is put back into the transform. */
 	float base[16];
-	int32_t lift = 0;
-	if (turns) {
-		memcpy(base, y->base, sizeof(base));
-		if (y->lift && lift_fits(y, turns, pre))
-			lift = y->lift;
-		else
-			base[13] += (float)(y->lift * 2.0 * turns->half_height / turns->height);
-	}
+	int32_t lift = turns ? layer_base(y, turns, pre, base) : 0;
 	const struct draw_array *a = y->draws;
 	if (a->count && add_object(snap, y) < 0)
 		return -ENOMEM;
