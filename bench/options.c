@@ -26,7 +26,7 @@ static void usage(FILE *f)
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
 		"  --warmup N           warm-up volumes before measuring (default 2)\n"
 		"  --bunny PATH         bunny PLY (default %s/bunny.ply)\n"
-		"  --dragon PATH        dragon_vrip.ply (S3-dragon is skipped without it)\n"
+		"  --dragon PATH        dragon_vrip.ply (S3-dragon and S3-dragon-x4 are skipped without it)\n"
 		"  --dragon-res2 PATH   dragon_vrip_res2.ply (S3-dragon-res2 likewise)\n"
 		"  --quick              tiny counts, for a smoke run\n"
 		"  --no-micro           skip the memcpy and halftone table\n"

