@@ -28,11 +28,14 @@
 #include "pool.h"
 #include "section.h"
 
+/* One per thread, each on cache lines of its own: a worker's counters
+ * beside the next one's canvas fields would bounce a line between the
+ * cores on every primitive. */
 struct cpu_worker {
 	struct section_canvas canvas;
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
-};
+} __attribute__((aligned(64)));
 
 struct render_cpu {
 	struct renderer base;
@@ -162,7 +165,7 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 {
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
-	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
+	uint64_t drawn = b->point_start[k + 1] - b->point_start[k], sectioned = 0;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i]);
 	struct bin_run runs[2 * BIN_MAX_CLASSES];
@@ -184,10 +187,11 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 				section_prim_mirror(c, &r->wedges[src], (const double(*)[3])v, p->nverts, p->rgb,
 						    mirror);
 			}
-			w->prim_images++;
-			drawn++;
+			sectioned++;
 		}
 	}
+	w->prim_images += sectioned;
+	drawn += sectioned;
 	for (uint32_t i = 0; i < r->grid_count; i++) {
 		const struct grid_job *job = &r->grids[i];
 		bool mirror = false;
@@ -648,7 +652,9 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->base.geom = *geom;
 	r->halftone = halftone;
 	unsigned n = pick_threads(geom, threads);
-	r->workers = calloc(n, sizeof(*r->workers));
+	r->workers = aligned_alloc(64, n * sizeof(*r->workers));
+	if (r->workers)
+		memset(r->workers, 0, n * sizeof(*r->workers));
 	uint32_t images = geometry_images_per_volume(geom);
 	r->wedges = calloc(images, sizeof(*r->wedges));
 	r->used = calloc((images + 7) / 8, 1);
