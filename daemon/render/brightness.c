@@ -63,6 +63,30 @@ static uint32_t solid_mul_of(const struct brightness_map *m, uint32_t u)
 	return BRIGHTNESS_FLOAT;
 }
 
+/* Column u's images per crossing (n), weights and place in the band. */
+static void set_column(struct brightness_map *m, const struct geometry *g, uint32_t u, double d_angle, double density)
+{
+	double M = m->images, r = fabs(u + 0.5 - g->width / 2.0);
+	double even = fmin(M, fmax(1.0, floor(M * r * d_angle + 0.5))), n = M;
+	if (g->brightness == GEOMETRY_BRIGHTNESS_EVEN)
+		n = even;
+	double rate = n / M;
+	if (g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM) {
+		/* The weight unrounded: at a few images per volume rounding n
+		 * would miss the density by up to a half. */
+		rate = fmin(1.0, density * r * d_angle);
+		n = fmin(M, fmax(1.0, floor(M * rate + 0.5)));
+	}
+	m->n[u] = (uint16_t)n;
+	m->rate[u] = (float)rate;
+	m->line_rate[u] = g->brightness == GEOMETRY_BRIGHTNESS_EXACT ? 1.0f : (float)(even / M);
+	if (n < M || m->wall < 1.0f) {
+		if (m->band_lo > m->band_hi)
+			m->band_lo = u;
+		m->band_hi = u;
+	}
+}
+
 int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 {
 	*m = (struct brightness_map){ .model = g->brightness, .width = g->width, .band_lo = 1, .band_hi = 0 };
@@ -80,33 +104,15 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	for (uint32_t i = 0; i < radii; i++)
 		for (uint32_t y = 0; y < 16; y++)
 			m->phase[i * 16 + y] = phase_of(i, y, m->images);
-	double d_angle = 2.0 * M_PI / g->images_per_rev, M = m->images;
+	double d_angle = 2.0 * M_PI / g->images_per_rev;
 	/* UNIFORM's density: a crossing surface's at the rim. */
 	double density = geometry_r0_px(g) / (g->width / 2.0);
 	m->wall = g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM ? (float)density : 1.0f;
-	for (uint32_t u = 0; u < g->width; u++) {
-		double r = fabs(u + 0.5 - g->width / 2.0);
-		double even = fmin(M, fmax(1.0, floor(M * r * d_angle + 0.5))), n = M;
-		if (g->brightness == GEOMETRY_BRIGHTNESS_EVEN)
-			n = even;
-		double rate = n / M;
-		if (g->brightness == GEOMETRY_BRIGHTNESS_UNIFORM) {
-			/* The weight unrounded: at a few images per volume
-			 * rounding n would miss the density by up to a half. */
-			rate = fmin(1.0, density * r * d_angle);
-			n = fmin(M, fmax(1.0, floor(M * rate + 0.5)));
-		}
-		m->n[u] = (uint16_t)n;
-		m->rate[u] = (float)rate;
-		m->line_rate[u] = g->brightness == GEOMETRY_BRIGHTNESS_EXACT ? 1.0f : (float)(even / M);
-		if (n < M || m->wall < 1.0f) {
-			if (m->band_lo > m->band_hi)
-				m->band_lo = u;
-			m->band_hi = u;
-		}
-	}
 	for (uint32_t u = 0; u < g->width; u++)
-		m->solid[u] = solid_mul_of(m, u);
+		set_column(m, g, u, d_angle, density);
+	/* Outside the band every weight is 1: every byte stays. */
+	for (uint32_t u = 0; u < g->width; u++)
+		m->solid[u] = u >= m->band_lo && u <= m->band_hi ? solid_mul_of(m, u) : BRIGHTNESS_KEEP;
 	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
 	if (brightness_active(m)) {
 		m->band_s =

@@ -136,6 +136,29 @@ static void drop_textures(struct render_gl *r, uint64_t now, uint64_t room)
 
 /* Makes and uploads the texture of d's grid as entry r->grid_tex_count.
  * 0, -EFBIG (GL_OUT_OF_MEMORY), -ENOMEM or -EIO. */
+/* The bound 3-D texture's storage and g's samples in it; GL's error. */
+static GLenum fill_texture(const struct gl_api *gl, const struct scene_grid *g, const struct grid_format *f)
+{
+	gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+	gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+	gl->TexStorage3D(GL_TEXTURE_3D, 1, f->internal, (GLsizei)g->n[1], (GLsizei)g->n[0], (GLsizei)g->n[2]);
+	GLenum e = gl->GetError();
+	if (e != GL_NO_ERROR)
+		return e;
+	/* In slabs of whole k planes of at most 64 MiB: drivers may copy what
+	 * they are given through a staging buffer first. */
+	uint64_t plane = (uint64_t)g->n[0] * g->n[1] * f->bytes;
+	uint32_t step = plane >= (64u << 20) ? 1 : (uint32_t)((64u << 20) / plane);
+	gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+	for (uint32_t k = 0; k < g->n[2]; k += step) {
+		uint32_t depth = g->n[2] - k < step ? g->n[2] - k : step;
+		gl->TexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, (GLint)k, (GLsizei)g->n[1], (GLsizei)g->n[0], (GLsizei)depth,
+				  f->format, f->type, (const uint8_t *)g->data + k * plane);
+	}
+	gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
+	return gl->GetError();
+}
+
 static int make_texture(struct render_gl *r, const struct scene_draw *d)
 {
 	const struct gl_api *gl = r->gl;
@@ -161,24 +184,7 @@ static int make_texture(struct render_gl *r, const struct scene_draw *d)
 	gl->GenTextures(1, &t->tex);
 	gl->ActiveTexture(GL_TEXTURE0 + GL_GRID_UNIT);
 	gl->BindTexture(GL_TEXTURE_3D, t->tex);
-	gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-	gl->TexParameteri(GL_TEXTURE_3D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-	gl->TexStorage3D(GL_TEXTURE_3D, 1, f.internal, (GLsizei)g->n[1], (GLsizei)g->n[0], (GLsizei)g->n[2]);
-	e = gl->GetError();
-	if (e == GL_NO_ERROR) {
-		/* In slabs of whole k planes of at most 64 MiB: drivers may copy
-		 * what they are given through a staging buffer first. */
-		uint64_t plane = (uint64_t)g->n[0] * g->n[1] * f.bytes;
-		uint32_t step = plane >= (64u << 20) ? 1 : (uint32_t)((64u << 20) / plane);
-		gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-		for (uint32_t k = 0; k < g->n[2]; k += step) {
-			uint32_t depth = g->n[2] - k < step ? g->n[2] - k : step;
-			gl->TexSubImage3D(GL_TEXTURE_3D, 0, 0, 0, (GLint)k, (GLsizei)g->n[1], (GLsizei)g->n[0],
-					  (GLsizei)depth, f.format, f.type, (const uint8_t *)g->data + k * plane);
-		}
-		gl->PixelStorei(GL_UNPACK_ALIGNMENT, 4);
-		e = gl->GetError();
-	}
+	e = fill_texture(gl, g, &f);
 	gl->ActiveTexture(GL_TEXTURE0);
 	if (e != GL_NO_ERROR) {
 		gl->DeleteTextures(1, &t->tex);
@@ -336,6 +342,34 @@ int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
 	return luts ? upload_luts(r, luts) : 0;
 }
 
+/* The m-gon poly (in (s, y) of the image plane) clipped to one face of
+ * the grid's box, in sample units (face: axis face / 2, its low side for
+ * even face); returns its new vertex count. */
+static int clip_face(double poly[16][2], int m, int face, const double off[3], const double dir[3], const double up[3],
+		     const uint32_t n[3])
+{
+	int a = face >> 1;
+	double sign = face & 1 ? -1.0 : 1.0, bound = face & 1 ? n[a] - 0.5 : -0.5;
+	double out[16][2];
+	int o = 0;
+	for (int i = 0; i < m; i++) {
+		const double *p = poly[i], *q = poly[(i + 1) % m];
+		double ep = sign * (off[a] + p[0] * dir[a] + p[1] * up[a] - bound);
+		double eq = sign * (off[a] + q[0] * dir[a] + q[1] * up[a] - bound);
+		if (ep >= 0) {
+			out[o][0] = p[0];
+			out[o++][1] = p[1];
+		}
+		if ((ep >= 0) != (eq >= 0) && o < 16) {
+			double t = ep / (ep - eq);
+			out[o][0] = p[0] + t * (q[0] - p[0]);
+			out[o++][1] = p[1] + t * (q[1] - p[1]);
+		}
+	}
+	memcpy(poly, out, sizeof(out[0]) * (size_t)o);
+	return o;
+}
+
 /* The pixels of an image of g whose centres may lie in the box -0.5 <=
  * f < n - 0.5, f = off + s dir + y up: the image's plane rectangle
  * clipped to the box's six faces, its bounds widened by a pixel: columns
@@ -346,28 +380,8 @@ static bool grid_rect(const struct geometry *g, const double off[3], const doubl
 	double h = g->half_height;
 	double poly[16][2] = { { -1, -h }, { 1, -h }, { 1, h }, { -1, h } };
 	int m = 4;
-	for (int face = 0; face < 6 && m > 0; face++) {
-		int a = face >> 1;
-		double sign = face & 1 ? -1.0 : 1.0, bound = face & 1 ? n[a] - 0.5 : -0.5;
-		double out[16][2];
-		int o = 0;
-		for (int i = 0; i < m; i++) {
-			const double *p = poly[i], *q = poly[(i + 1) % m];
-			double ep = sign * (off[a] + p[0] * dir[a] + p[1] * up[a] - bound);
-			double eq = sign * (off[a] + q[0] * dir[a] + q[1] * up[a] - bound);
-			if (ep >= 0) {
-				out[o][0] = p[0];
-				out[o++][1] = p[1];
-			}
-			if ((ep >= 0) != (eq >= 0) && o < 16) {
-				double t = ep / (ep - eq);
-				out[o][0] = p[0] + t * (q[0] - p[0]);
-				out[o++][1] = p[1] + t * (q[1] - p[1]);
-			}
-		}
-		memcpy(poly, out, sizeof(out[0]) * (size_t)o);
-		m = o;
-	}
+	for (int face = 0; face < 6 && m > 0; face++)
+		m = clip_face(poly, m, face, off, dir, up, n);
 	if (m == 0)
 		return false;
 	double s0 = poly[0][0], s1 = s0, y0 = poly[0][1], y1 = y0;

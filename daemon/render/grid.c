@@ -328,6 +328,55 @@ static void column_light(struct section_canvas *c, const struct canvas_column *c
  * once (trilinear) and then read by every row through the rows' table,
  * bricks whose samples stay below the threshold skipped. The same pixels and colours as the reference loop below, which
  * computes every pixel's f the same way. */
+/* Mixes along x and z the samples of col's lit bricks b0..b1 and their
+ * neighbours (the bricks the rows read, within jlo..jhi) into mixed. */
+static void mix_bricks(struct column *col, const struct scene_grid *gr, const bool *dark, uint32_t b0, uint32_t b1,
+		       uint32_t jlo, uint32_t jhi, float *mixed)
+{
+	for (uint32_t b = b0; b <= b1; b++) {
+		if (dark[b] && !(b > b0 && !dark[b - 1]) && !(b < b1 && !dark[b + 1]))
+			continue;
+		uint32_t j0 = b * SCENE_GRID_BRICK, j1 = j0 + SCENE_GRID_BRICK - 1;
+		j0 = j0 > jlo ? j0 : jlo;
+		grid_column_mix(col, gr, j0, j1 < jhi ? j1 : jhi, mixed + j0, 1);
+	}
+}
+
+/* Column col's rows, lit into canvas column out. */
+static void column_rows(struct section_canvas *c, const struct grid_job *job, struct column *col, const bool *dark,
+			const float *mixed, uint32_t out, const struct brightness_map *m)
+{
+	const struct scene_draw *d = job->draw;
+	const struct scene_grid *gr = d->grid;
+	const struct grid_rows *rows = job->rows;
+	bool tri = d->transfer.sampling == SCENE_TRILINEAR;
+	uint32_t tu = out / VOLUME_TILE;
+	struct canvas_column cc = {
+		c->rgb + (size_t)tu * HALFTONE_TILE_BYTES + halftone_pos(out % VOLUME_TILE),
+		c->rows + tu,
+		(size_t)c->tiles_x * HALFTONE_TILE_BYTES,
+		c->tiles_x,
+	};
+	for (uint32_t v = rows->v0; v < rows->v1; v++) {
+		const struct grid_row *r = &rows->row[v];
+		if (dark[r->j0 / SCENE_GRID_BRICK] && dark[r->j1 / SCENE_GRID_BRICK])
+			continue;
+		float rgba[4] = { 0 }, val;
+		if (!tri) {
+			val = value_at(gr, col->i[0], r->j0, col->k[0], rgba);
+		} else if (gr->type != SCENE_GRID_RGBA8) {
+			val = lerp(mixed[r->j0], mixed[r->j1], r->t);
+		} else {
+			col->t[1] = r->t;
+			const uint32_t j[2] = { r->j0, r->j1 };
+			val = trilinear_rgba(gr, col->i, j, col->k, col->t, rgba);
+		}
+		uint8_t rgb[3];
+		if (transfer(d, val, rgba, rgb))
+			column_light(c, &cc, m, out, v, rgb);
+	}
+}
+
 static void draw_upright(struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror,
 			 const struct brightness_map *m)
 {
@@ -355,39 +404,9 @@ static void draw_upright(struct section_canvas *c, const struct grid_job *job, c
 		grid_column_setup(&col, gr, fx, fz, tri);
 		if (grid_column_dark(&col, gr, &d->transfer, b0, b1, dark))
 			continue;
-		if (tri && gr->type != SCENE_GRID_RGBA8) /* the bricks rows read: lit ones and their neighbours */
-			for (uint32_t b = b0; b <= b1; b++)
-				if (!dark[b] || (b > b0 && !dark[b - 1]) || (b < b1 && !dark[b + 1])) {
-					uint32_t j0 = b * SCENE_GRID_BRICK, j1 = j0 + SCENE_GRID_BRICK - 1;
-					j0 = j0 > jlo ? j0 : jlo;
-					grid_column_mix(&col, gr, j0, j1 < jhi ? j1 : jhi, mixed + j0, 1);
-				}
-		uint32_t out = mirror ? g->width - 1 - u : u;
-		uint32_t tu = out / VOLUME_TILE;
-		struct canvas_column cc = {
-			c->rgb + (size_t)tu * HALFTONE_TILE_BYTES + halftone_pos(out % VOLUME_TILE),
-			c->rows + tu,
-			(size_t)c->tiles_x * HALFTONE_TILE_BYTES,
-			c->tiles_x,
-		};
-		for (uint32_t v = rows->v0; v < rows->v1; v++) {
-			const struct grid_row *r = &rows->row[v];
-			if (dark[r->j0 / SCENE_GRID_BRICK] && dark[r->j1 / SCENE_GRID_BRICK])
-				continue;
-			float rgba[4] = { 0 }, val;
-			if (!tri) {
-				val = value_at(gr, col.i[0], r->j0, col.k[0], rgba);
-			} else if (gr->type != SCENE_GRID_RGBA8) {
-				val = lerp(mixed[r->j0], mixed[r->j1], r->t);
-			} else {
-				col.t[1] = r->t;
-				const uint32_t j[2] = { r->j0, r->j1 };
-				val = trilinear_rgba(gr, col.i, j, col.k, col.t, rgba);
-			}
-			uint8_t rgb[3];
-			if (transfer(d, val, rgba, rgb))
-				column_light(c, &cc, m, out, v, rgb);
-		}
+		if (tri && gr->type != SCENE_GRID_RGBA8)
+			mix_bricks(&col, gr, dark, b0, b1, jlo, jhi, mixed);
+		column_rows(c, job, &col, dark, mixed, mirror ? g->width - 1 - u : u, m);
 	}
 }
 

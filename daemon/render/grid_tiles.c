@@ -475,16 +475,15 @@ static inline void lane_prefetch(const struct lane *l, const struct scene_grid *
 		}
 }
 
-/* Tile column tu's lanes set up: their samples mixed into buf ((jhi -
- * jlo + 1) LANES floats), and lit[b] the lanes whose brick b may light.
- * false: none may. */
-static inline __attribute__((always_inline)) bool tile_lanes(
+/* The lanes of tile column tu whose pixel column crosses the grid's box
+ * (their columns set up in lanes, their bricks' darkness found), and of
+ * them those with a lit brick, into on; returns how many. */
+static inline __attribute__((always_inline)) uint32_t lanes_on(
 	struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror, uint32_t tu,
-	const struct tile_span *sp, const struct tile_tf *tf, float *buf, uint32_t *lit)
+	const struct tile_span *sp, const struct tile_tf *tf, struct lane lanes[LANES], uint32_t on[LANES])
 {
 	const struct geometry *g = &c->geom;
 	const struct scene_grid *gr = job->draw->grid;
-	struct lane lanes[LANES];
 	uint32_t inside[LANES], count = 0, nb = scene_grid_bricks(gr->n[1]);
 	for (uint32_t p = 0; p < LANES; p++) {
 		uint32_t out = tu * VOLUME_TILE + (p ^ 7); /* lane p: canvas byte p, column halftone_pos(p) */
@@ -501,13 +500,26 @@ static inline __attribute__((always_inline)) bool tile_lanes(
 			__builtin_prefetch(gr->brick_max + l->col.line[i] / gr->n[1] * nb + sp->b0);
 		inside[count++] = p;
 	}
-	uint32_t on[LANES], n_in = count;
+	uint32_t n_in = count;
 	count = 0;
 	for (uint32_t i = 0; i < n_in; i++) {
 		struct lane *l = &lanes[inside[i]];
 		if (!grid_column_dark(&l->col, gr, &job->draw->transfer, sp->b0, sp->b1, l->dark))
 			on[count++] = inside[i];
 	}
+	return count;
+}
+
+/* Tile column tu's lanes set up: their samples mixed into buf ((jhi -
+ * jlo + 1) LANES floats), and lit[b] the lanes whose brick b may light.
+ * false: none may. */
+static inline __attribute__((always_inline)) bool tile_lanes(
+	struct section_canvas *c, const struct grid_job *job, const double dir[3], bool mirror, uint32_t tu,
+	const struct tile_span *sp, const struct tile_tf *tf, float *buf, uint32_t *lit)
+{
+	const struct scene_grid *gr = job->draw->grid;
+	struct lane lanes[LANES];
+	uint32_t on[LANES], count = lanes_on(c, job, dir, mirror, tu, sp, tf, lanes, on);
 	if (!count)
 		return false;
 	memset(lit + sp->b0, 0, (sp->b1 - sp->b0 + 1) * sizeof(lit[0]));

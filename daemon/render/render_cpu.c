@@ -159,17 +159,16 @@ static void free_grid_jobs(struct render_cpu *r)
 	r->grid_count = 0;
 }
 
-/* Draws image k's points, primitives and grids on the canvas; returns how
- * many (0: the canvas is untouched). */
-static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
+/* Draws image k's points, primitives (its n runs, image_runs()) and grids
+ * on the canvas; returns how many (0: the canvas is untouched). */
+static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k, const struct bin_run *runs,
+			     unsigned n)
 {
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k], sectioned = 0;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i]);
-	struct bin_run runs[2 * BIN_MAX_CLASSES];
-	unsigned n = bin_runs(b, k, runs);
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
 			const struct bin_prim *p = &b->prims[i];
@@ -284,20 +283,24 @@ static uint64_t merge_lifted(struct render_cpu *r, struct cpu_worker *w, uint32_
 	return m.tiles;
 }
 
-/* Whether image k has nothing to draw: no point, no primitive binned in
- * its windows, no grid, no lifted canvas. A small object lies in a few
- * images of the volume; the rest cost this test and no clock reads. */
-static bool image_empty(const struct render_cpu *r, uint32_t k)
+/* Image k's runs of primitives (bin_runs()) into runs, their count in *n;
+ * false when the image has nothing to draw: no point, no primitive, no
+ * grid, no lifted canvas. A small object lies in a few images of the
+ * volume; the rest cost a bit test (mark_used()) or this look at the runs,
+ * and no clock reads. */
+static bool image_runs(const struct render_cpu *r, uint32_t k, struct bin_run *runs, unsigned *n)
 {
 	const struct bin_set *b = &r->bins;
-	if (r->grid_count || r->lifted_count || b->point_start[k + 1] != b->point_start[k])
+	*n = 0;
+	if (r->marked && !(r->used[k / 8] >> (k % 8) & 1))
 		return false;
-	struct bin_run runs[2 * BIN_MAX_CLASSES];
-	unsigned n = bin_runs(b, k, runs);
-	for (unsigned j = 0; j < n; j++)
+	*n = bin_runs(b, k, runs);
+	if (r->marked || r->grid_count || r->lifted_count || b->point_start[k + 1] != b->point_start[k])
+		return true;
+	for (unsigned j = 0; j < *n; j++)
 		if (runs[j].begin != runs[j].end)
-			return false;
-	return true;
+			return true;
+	return false;
 }
 
 /* A small scene (what the calling thread renders alone): the images its
@@ -332,14 +335,16 @@ static void image_job(void *arg, unsigned index)
 		uint32_t k = atomic_fetch_add(&r->next_image, 1);
 		if (k >= r->bins.images)
 			break;
-		if (r->marked ? !(r->used[k / 8] >> (k % 8) & 1) : image_empty(r, k)) {
+		struct bin_run runs[2 * BIN_MAX_CLASSES];
+		unsigned n;
+		if (!image_runs(r, k, runs, &n)) {
 			int err = r->canvas_out ? rle_volume_set_image(r->canvas_out, k, NULL, NULL, 0, NULL) : 0;
 			if (err < 0 && w->err == 0)
 				w->err = err;
 			continue;
 		}
 		int64_t t0 = now_ns();
-		uint64_t drawn = raster_image(r, w, k);
+		uint64_t drawn = raster_image(r, w, k, runs, n);
 		if (r->lifted_count)
 			drawn += merge_lifted(r, w, k);
 		int64_t t1 = now_ns();

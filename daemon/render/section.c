@@ -574,8 +574,11 @@ static inline unsigned lobes_reached(const struct section_canvas *c, const doubl
 	return (hi < -m ? 0u : 1u) | (lo > m ? 0u : 2u);
 }
 
-void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
-		  const uint8_t rgb[3])
+/* The body of section_prim() and section_prim_mirror(), mirror a
+ * constant in each. */
+static inline __attribute__((always_inline)) void prim_body(struct section_canvas *c, const struct section_wedge *w,
+							    const double (*v)[3], int n, const uint8_t rgb[3],
+							    bool mirror)
 {
 	double d1[3], d2[3], lo, hi;
 	for (int i = 0; i < n; i++) {
@@ -585,29 +588,27 @@ void section_prim(struct section_canvas *c, const struct section_wedge *w, const
 	s_range(d1, d2, n, &lo, &hi);
 	struct section_weight state, *wt = weight_start(c, w, v, n, lo, hi, &state);
 	unsigned lobes = lobes_reached(c, v, n, lo, hi);
-	if (lobes & 1)
-		section_lobe(c, w, v, n, d1, d2, 1.0, rgb, wt);
-	if (lobes & 2)
-		section_lobe(c, w, v, n, d1, d2, -1.0, rgb, wt);
+	for (int l = 0; l < 2; l++) {
+		if (!(lobes >> l & 1))
+			continue;
+		if (mirror)
+			section_lobe_mirrored(c, w, v, n, d1, d2, l ? -1.0 : 1.0, rgb, wt);
+		else
+			section_lobe(c, w, v, n, d1, d2, l ? -1.0 : 1.0, rgb, wt);
+	}
+}
+
+void section_prim(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+		  const uint8_t rgb[3])
+{
+	prim_body(c, w, v, n, rgb, false);
 }
 
 void section_prim_mirror(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 			 const uint8_t rgb[3], bool mirror)
 {
-	if (!mirror) {
-		section_prim(c, w, v, n, rgb);
-		return;
-	}
-	double d1[3], d2[3], lo, hi;
-	for (int i = 0; i < n; i++) {
-		d1[i] = w->n1x * v[i][0] + w->n1z * v[i][2];
-		d2[i] = w->n2x * v[i][0] + w->n2z * v[i][2];
-	}
-	s_range(d1, d2, n, &lo, &hi);
-	struct section_weight state, *wt = weight_start(c, w, v, n, lo, hi, &state);
-	unsigned lobes = lobes_reached(c, v, n, lo, hi);
-	if (lobes & 1)
-		section_lobe_mirrored(c, w, v, n, d1, d2, 1.0, rgb, wt);
-	if (lobes & 2)
-		section_lobe_mirrored(c, w, v, n, d1, d2, -1.0, rgb, wt);
+	if (mirror)
+		prim_body(c, w, v, n, rgb, true);
+	else
+		prim_body(c, w, v, n, rgb, false);
 }
