@@ -228,31 +228,6 @@ static int prepare_grids(struct render_cpu *r, const struct scene *scene)
 	return 0;
 }
 
-/* Half a canvas row, for a MAX of 16 bytes at a time. */
-typedef uint8_t half_row __attribute__((vector_size(16)));
-
-/* Per-channel MAX of canvas tile src (row mask first) into tile t of c. */
-static void max_canvas_tile(struct section_canvas *c, uint32_t t, const uint8_t *src)
-{
-	uint32_t rows;
-	memcpy(&rows, src, sizeof(rows));
-	c->rows[t] |= rows;
-	uint8_t *dst = c->rgb + (size_t)t * HALFTONE_TILE_BYTES;
-	src += sizeof(rows);
-	for (; rows; rows &= rows - 1) {
-		size_t y = (size_t)__builtin_ctz(rows) * HALFTONE_ROW_BYTES;
-		for (size_t p = 0; p < 3 * HALFTONE_PLANE_BYTES; p += HALFTONE_PLANE_BYTES) {
-			for (size_t h = 0; h < HALFTONE_ROW_BYTES; h += sizeof(half_row)) {
-				half_row a, b;
-				memcpy(&a, dst + p + y + h, sizeof(a));
-				memcpy(&b, src + p + y + h, sizeof(b));
-				a = a ^ ((a ^ b) & (half_row)(a < b)); /* MAX */
-				memcpy(dst + p + y + h, &a, sizeof(a));
-			}
-		}
-	}
-}
-
 struct merge {
 	struct section_canvas *c;
 	int32_t lift;
@@ -266,7 +241,7 @@ static void merge_tile(void *arg, uint32_t t, const uint8_t *tile)
 	uint32_t ty[2], tx = t % m->c->tiles_x;
 	unsigned n = canvas_tile_lift(tile, t / m->c->tiles_x, m->lift, m->c->geom.height, out, ty);
 	for (unsigned i = 0; i < n; i++)
-		max_canvas_tile(m->c, ty[i] * m->c->tiles_x + tx, out[i]);
+		section_canvas_max_tile(m->c, ty[i] * m->c->tiles_x + tx, out[i]);
 	m->tiles += n;
 }
 

@@ -87,6 +87,27 @@ typedef uint8_t span_half __attribute__((vector_size(16)));
 static const span_half span_pixel[2] = { { 7, 6, 5, 4, 3, 2, 1, 0, 15, 14, 13, 12, 11, 10, 9, 8 },
 					 { 23, 22, 21, 20, 19, 18, 17, 16, 31, 30, 29, 28, 27, 26, 25, 24 } };
 
+void section_canvas_max_tile(struct section_canvas *c, uint32_t t, const uint8_t *src)
+{
+	uint32_t rows;
+	memcpy(&rows, src, sizeof(rows));
+	c->rows[t] |= rows;
+	uint8_t *dst = c->rgb + (size_t)t * HALFTONE_TILE_BYTES;
+	src += sizeof(rows);
+	for (; rows; rows &= rows - 1) {
+		size_t y = (size_t)__builtin_ctz(rows) * HALFTONE_ROW_BYTES;
+		for (size_t p = y; p < 3 * HALFTONE_PLANE_BYTES; p += HALFTONE_PLANE_BYTES) {
+			for (size_t h = 0; h < HALFTONE_ROW_BYTES; h += sizeof(span_half)) {
+				span_half a, b;
+				memcpy(&a, dst + p + h, sizeof(a));
+				memcpy(&b, src + p + h, sizeof(b));
+				a = a ^ ((a ^ b) & (span_half)(a < b)); /* MAX */
+				memcpy(dst + p + h, &a, sizeof(a));
+			}
+		}
+	}
+}
+
 /* Per-byte MAX of value into the bytes of pixels a..b (a <= b <= 31) of a
  * canvas tile row, without a branch per pixel: the halves holding them
  * are read and written whole, their other bytes unchanged. */

@@ -56,6 +56,10 @@ struct section_wedge {
 int section_canvas_init(struct section_canvas *c, const struct geometry *g);
 void section_canvas_finish(struct section_canvas *c);
 
+/* Per-channel MAX of a canvas tile (compose.h, CANVAS_TILE_BYTES: its row
+ * mask, then the planes) into tile t of c. */
+void section_canvas_max_tile(struct section_canvas *c, uint32_t t, const uint8_t *src);
+
 /* Zeroes the rows of tile t that rows[t] flags, and the flags. */
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
 
