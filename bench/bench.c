@@ -24,6 +24,7 @@
 struct measurement {
 	uint32_t n;
 	double *ms;              /* per volume, sorted after measuring */
+	double *cpu_ms;          /* per volume, process CPU time, sorted likewise */
 	struct render_stats sum; /* render_stats summed over the volumes */
 	uint64_t tiles, sparse_bytes;
 	double total_s;
@@ -129,39 +130,77 @@ static int cmp_double(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-/* Warm-up volumes (fewer if one alone takes the whole time budget), then
- * measured volumes until o->volumes or o->seconds, at least one. Frames
- * start at 1: frame 0 is the coverage frame. */
-static int measure(struct variant *v, struct bench_scene *s, const struct options *o, struct measurement *m)
+static int measure_start(const struct options *o, struct measurement *m)
 {
-	uint64_t frame = 1;
-	double ms;
 	memset(m, 0, sizeof(*m));
-	for (uint32_t i = 0; i < o->warmup; i++) {
-		if (render_frame(v, s, frame++, &ms) < 0)
-			return -1;
-		if (ms > o->seconds * 1e3)
-			break;
-	}
 	m->ms = calloc(o->volumes, sizeof(*m->ms));
-	if (!m->ms)
+	m->cpu_ms = calloc(o->volumes, sizeof(*m->cpu_ms));
+	return m->ms && m->cpu_ms ? 0 : -1;
+}
+
+/* One measured volume (frame) of v into m. */
+static int measure_volume(struct variant *v, struct bench_scene *s, uint64_t frame, struct measurement *m)
+{
+	double cpu = process_cpu_s();
+	if (render_frame(v, s, frame, &m->ms[m->n]) < 0)
 		return -1;
-	int64_t start = now_ns();
-	double cpu_start = process_cpu_s();
-	while (m->n < o->volumes) {
-		if (render_frame(v, s, frame++, &m->ms[m->n]) < 0)
-			return -1;
-		stats_add(&m->sum, &v->r->stats);
-		m->tiles += volume_tile_count(v->out);
-		m->sparse_bytes += volume_sparse_bytes(v->out);
-		m->n++;
-		if ((double)(now_ns() - start) >= o->seconds * 1e9)
-			break;
-	}
-	m->cpu_s = process_cpu_s() - cpu_start;
-	for (uint32_t i = 0; i < m->n; i++)
-		m->total_s += m->ms[i] / 1e3;
+	m->cpu_ms[m->n] = (process_cpu_s() - cpu) * 1e3;
+	m->cpu_s += m->cpu_ms[m->n] / 1e3;
+	m->total_s += m->ms[m->n] / 1e3;
+	stats_add(&m->sum, &v->r->stats);
+	m->tiles += volume_tile_count(v->out);
+	m->sparse_bytes += volume_sparse_bytes(v->out);
+	m->n++;
+	return 0;
+}
+
+static void measure_finish(struct measurement *m)
+{
 	qsort(m->ms, m->n, sizeof(*m->ms), cmp_double);
+	qsort(m->cpu_ms, m->n, sizeof(*m->cpu_ms), cmp_double);
+}
+
+static void measure_free(struct measurement *m)
+{
+	free(m->ms);
+	free(m->cpu_ms);
+}
+
+/* Warm-up volumes of each variant (fewer if one alone takes the whole
+ * time budget). Frames start at 1: frame 0 is the coverage frame. */
+static int warm_up(struct variant *v, int nvars, struct bench_scene *s, const struct options *o)
+{
+	double ms;
+	for (int i = 0; i < nvars; i++)
+		for (uint32_t f = 1; f <= o->warmup; f++) {
+			if (render_frame(&v[i], s, f, &ms) < 0)
+				return -1;
+			if (ms > o->seconds * 1e3)
+				break;
+		}
+	return 0;
+}
+
+/* Measured volumes until o->volumes or o->seconds, at least one: each
+ * variant's run of them in turn, or (o->interleave) one volume of each
+ * variant in turn, the same frames for all, so that the drift of a shared
+ * machine falls on every variant alike (o->seconds then is per variant). */
+static int measure(struct variant *v, int nvars, struct bench_scene *s, const struct options *o, struct measurement *m)
+{
+	uint64_t first = o->warmup + 1;
+	for (int i = 0; i < nvars; i++)
+		if (measure_start(o, &m[i]) < 0)
+			return -1;
+	int64_t start = now_ns();
+	bool again = true;
+	for (uint32_t n = 0; again && n < o->volumes; n++) {
+		for (int i = 0; i < nvars; i++)
+			if (measure_volume(&v[i], s, first + n, &m[i]) < 0)
+				return -1;
+		again = (double)(now_ns() - start) < o->seconds * nvars * 1e9;
+	}
+	for (int i = 0; i < nvars; i++)
+		measure_finish(&m[i]);
 	return 0;
 }
 
@@ -197,10 +236,10 @@ static const char *fmt_prims(char *buf, size_t size, const struct bench_scene *s
 
 static void print_table_header(void)
 {
-	printf("| scene | primitives | variant | volumes | vol/s | median ms | p99 ms | cores used "
+	printf("| scene | primitives | variant | volumes | vol/s | median ms | p99 ms | cores used | cpu ms "
 	       "| bin ms | raster ms (sum) | pack ms (sum) | tiles/vol | occupancy "
 	       "| sparse MB/vol | of dense | identical | coverage | stray |\n");
-	printf("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|--:|--:|\n");
+	printf("|---|---|---|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|--:|:-:|--:|--:|\n");
 }
 
 /* "100.0000%", or "n/a" when there is nothing to take the fraction of. */
@@ -216,18 +255,18 @@ static const char *fmt_fraction(char *buf, size_t size, double f, const uint64_t
 static void print_row(const struct bench_scene *s, const struct variant *v, const struct measurement *m,
 		      const struct coverage *c, const struct volume *vol)
 {
-	char p[96], b[10][32];
+	char p[96], b[11][32];
 	double n = m->n, images = vol->image_count * (double)volume_tiles_per_image(vol);
 	double dense = vol->image_count * (double)volume_dense_image_bytes(vol);
 	double tiles = m->tiles / n, sparse = m->sparse_bytes / n;
-	printf("| %s | %s | %s | %u | %s | %s | %s | %.2f | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
+	printf("| %s | %s | %s | %u | %s | %s | %s | %.2f | %s | %s | %s | %s | %s | %.2f%% | %s | %.2f%% "
 	       "| %s | %s | %s |\n",
 	       s->info->name, fmt_prims(p, sizeof(p), s), v->name, m->n, fmt_num(b[0], 32, n / m->total_s),
 	       fmt_num(b[1], 32, percentile(m, 0.5)), fmt_num(b[2], 32, percentile(m, 0.99)), m->cpu_s / m->total_s,
-	       fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6), fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6),
-	       fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6), fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)),
-	       100 * tiles / images, fmt_num(b[7], 32, sparse / 1e6), 100 * sparse / dense, c->identical ? "yes" : "no",
-	       fmt_fraction(b[8], 32, coverage_score(c), c->ref_lit),
+	       fmt_num(b[10], 32, m->cpu_ms[(m->n - 1) / 2]), fmt_num(b[3], 32, m->sum.bin_ns / n / 1e6),
+	       fmt_num(b[4], 32, m->sum.raster_ns / n / 1e6), fmt_num(b[5], 32, m->sum.pack_ns / n / 1e6),
+	       fmt_count(b[6], 32, (uint64_t)(tiles + 0.5)), 100 * tiles / images, fmt_num(b[7], 32, sparse / 1e6),
+	       100 * sparse / dense, c->identical ? "yes" : "no", fmt_fraction(b[8], 32, coverage_score(c), c->ref_lit),
 	       fmt_fraction(b[9], 32, coverage_stray(c), c->test_lit));
 	fflush(stdout);
 }
@@ -248,22 +287,41 @@ static int save_volume(const char *dir, const char *scene, const char *variant, 
 	return r;
 }
 
-/* Measures one variant on scene s and compares its frame 0 with ref. */
-static int run_variant(struct variant *v, struct bench_scene *s, const struct volume *ref, const struct options *o)
+/* Compares variant v's frame 0 of scene s with ref and prints its row. */
+static int report_variant(struct variant *v, struct bench_scene *s, const struct volume *ref, const struct options *o,
+			  const struct measurement *m)
 {
-	struct measurement m;
 	struct coverage c;
 	double ms;
-	int err = measure(v, s, o, &m);
-	if (err == 0)
-		err = render_frame(v, s, 0, &ms);
+	int err = render_frame(v, s, 0, &ms);
 	if (err == 0 && o->save_dir)
 		err = save_volume(o->save_dir, s->info->name, v->name, v->out);
 	if (err == 0 && (err = coverage_compare(ref, v->out, &c)) < 0)
 		fprintf(stderr, "spindle-bench: coverage: %s\n", strerror(-err));
 	if (err == 0)
-		print_row(s, v, &m, &c, v->out);
-	free(m.ms);
+		print_row(s, v, m, &c, v->out);
+	return err;
+}
+
+/* Measures variants (all of them together with --interleave, else one at
+ * a time) on scene s and reports each. */
+static int run_variants(struct variant *vars, int nvars, struct bench_scene *s, const struct volume *ref,
+			const struct options *o)
+{
+	int group = o->interleave ? nvars : 1, err = 0;
+	struct measurement *m = calloc((size_t)nvars, sizeof(*m));
+	if (!m)
+		return -1;
+	for (int i = 0; err == 0 && i < nvars; i += group) {
+		err = warm_up(&vars[i], group, s, o);
+		if (err == 0)
+			err = measure(&vars[i], group, s, o, &m[i]);
+		for (int j = i; err == 0 && j < i + group; j++)
+			err = report_variant(&vars[j], s, ref, o, &m[j]);
+	}
+	for (int i = 0; i < nvars; i++)
+		measure_free(&m[i]);
+	free(m);
 	return err;
 }
 
@@ -286,8 +344,8 @@ static int run_scene(const char *name, const struct geometry *g, struct variant 
 	r = render_frame(ref, &s, 0, &ms);
 	if (r == 0 && o->save_dir)
 		r = save_volume(o->save_dir, name, NULL, ref->out);
-	for (int i = 0; r == 0 && i < nvars; i++)
-		r = run_variant(&vars[i], &s, ref->out, o);
+	if (r == 0)
+		r = run_variants(vars, nvars, &s, ref->out, o);
 	bench_scene_free(&s);
 	return r;
 }

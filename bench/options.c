@@ -24,6 +24,9 @@ static void usage(FILE *f)
 		"                       renders in that brightness model (default exact)\n"
 		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
+		"  --interleave         measure a scene's variants a volume each in turn, the same\n"
+		"                       frames for all (S seconds per variant), so that the drift\n"
+		"                       of a shared machine falls on each alike: for ratios\n"
 		"  --warmup N           warm-up volumes before measuring (default 2)\n"
 		"  --bunny PATH         bunny PLY (default %s/bunny.ply)\n"
 		"  --dragon PATH        dragon_vrip.ply (S3-dragon and S3-dragon-x4 are skipped without it)\n"
@@ -139,6 +142,7 @@ enum {
 	OPT_MICRO_ONLY,
 	OPT_WARMUP,
 	OPT_SAVE,
+	OPT_INTERLEAVE,
 };
 
 static const struct option long_opts[] = {
@@ -156,6 +160,7 @@ static const struct option long_opts[] = {
 	{ "no-micro", no_argument, NULL, OPT_NO_MICRO },
 	{ "micro-only", no_argument, NULL, OPT_MICRO_ONLY },
 	{ "save", required_argument, NULL, OPT_SAVE },
+	{ "interleave", no_argument, NULL, OPT_INTERLEAVE },
 	{ "help", no_argument, NULL, 'h' },
 	{ NULL, 0, NULL, 0 },
 };
@@ -241,6 +246,9 @@ int options_parse(int argc, char **argv, struct options *o)
 			break;
 		case OPT_SAVE:
 			o->save_dir = optarg;
+			break;
+		case OPT_INTERLEAVE:
+			o->interleave = true;
 			break;
 		case 'q': {
 			struct options keep = *o;

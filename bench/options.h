@@ -38,6 +38,7 @@ struct options {
 	uint32_t warmup;
 	struct bench_files files;
 	bool micro, renders;
+	bool interleave; /* a volume of each variant in turn (bench.c: measure()) */
 	uint32_t micro_tiles, micro_runs;
 	size_t memcpy_bytes;
 	const char *save_dir; /* write each scene's reference frame 0 here */

@@ -194,6 +194,12 @@ static enum weighed weigh_columns(struct section_canvas *c, struct section_weigh
 		wt->ready = true;
 	}
 	const float *rate = wt->w.rate, kw = wt->w.kw, inv = wt->w.inv_cross;
+	/* The rates rise with the distance from the axis: where the column
+	 * nearest it keeps its weight of 1, every column does. */
+	uint32_t near = wt->m->width / 2;
+	near = near < a ? a : near > b ? b : near;
+	if (kw >= 1.0f && rate[near] * inv >= 1.0f)
+		return WEIGH_SAME;
 	/* kw <= 1, so w <= 1: at w = 1, c * w + 1e-3 rounds down to c, as
 	 * brightness_apply() returns it; no branch per channel. */
 	const float cf[3] = { rgb[0], rgb[1], rgb[2] };
