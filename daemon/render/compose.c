@@ -1,4 +1,4 @@
-/* Composition of packed volumes by OR, and their run-length coded form
+/* Composition of packed volumes by OR, plain or run-length coded
  * (compose.h). */
 #include "compose.h"
 
@@ -11,202 +11,18 @@
 #include "halftone.h"
 #include "pool.h"
 
-#define MAX_LITERAL 128
-#define MAX_ZEROS 128
-
-/* Codes one tile of size bytes into out (room for size + size /
- * MAX_LITERAL + 1); returns the bytes written. */
-static size_t encode_tile(const uint8_t *tile, size_t size, uint8_t *out)
-{
-	size_t o = 0, i = 0;
-	while (i < size) {
-		size_t n = 0;
-		/* Zeros 8 at a time first: most of a tile is zero. */
-		for (uint64_t word; i + n + 8 <= size && n + 8 <= MAX_ZEROS; n += 8) {
-			memcpy(&word, tile + i + n, sizeof(word));
-			if (word)
-				break;
-		}
-		while (i + n < size && tile[i + n] == 0 && n < MAX_ZEROS)
-			n++;
-		if (n > 0) {
-			out[o++] = (uint8_t)(127 + n);
-			i += n;
-			continue;
-		}
-		/* Literals up to the next pair of zeros (a lone zero is cheaper
-		 * kept literal than coded). */
-		while (i + n < size && n < MAX_LITERAL &&
-		       !(tile[i + n] == 0 && (i + n + 1 == size || tile[i + n + 1] == 0)))
-			n++;
-		out[o++] = (uint8_t)(n - 1);
-		memcpy(out + o, tile + i, n);
-		o += n;
-		i += n;
-	}
-	return o;
-}
-
-/* ORs one coded tile of size bytes into dst; returns the coded bytes
- * read, or 0 when the code is broken (it never is for what encode_tile()
- * wrote). */
-static size_t or_coded(const uint8_t *in, size_t avail, uint8_t *dst, size_t size)
-{
-	size_t o = 0, i = 0;
-	while (o < size) {
-		if (i >= avail)
-			return 0;
-		uint8_t c = in[i++];
-		if (c >= 128) {
-			o += (size_t)c - 127;
-			continue;
-		}
-		size_t n = (size_t)c + 1;
-		if (i + n > avail || o + n > size)
-			return 0;
-		for (size_t j = 0; j < n; j++)
-			dst[o + j] |= in[i + j];
-		i += n;
-		o += n;
-	}
-	return o == size ? i : 0;
-}
-
 static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 {
-	return or_coded(in, avail, dst, VOLUME_TILE_BYTES);
+	return rle_or_coded(in, avail, dst, VOLUME_TILE_BYTES);
 }
 
-struct rle_volume *rle_volume_new(uint32_t image_count, uint32_t mask_bytes, uint32_t tiles_per_image,
-				  uint32_t tile_bytes)
-{
-	struct rle_volume *r = calloc(1, sizeof(*r));
-	if (!r)
-		return NULL;
-	r->image_count = image_count;
-	r->mask_bytes = mask_bytes;
-	r->tiles_per_image = tiles_per_image;
-	r->tile_bytes = tile_bytes;
-	r->images = calloc(image_count, sizeof(*r->images));
-	if (!r->images) {
-		free(r);
-		return NULL;
-	}
-	return r;
-}
-
-int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, const uint8_t *tiles, uint32_t count,
-			 struct rle_scratch *s)
-{
-	struct rle_image *img = &r->images[k];
-	free(img->data);
-	*img = (struct rle_image){ 0 };
-	if (!count)
-		return 0;
-	size_t head = r->mask_bytes + (size_t)count * sizeof(uint32_t);
-	size_t need = head + (size_t)count * (r->tile_bytes + r->tile_bytes / MAX_LITERAL + 1);
-	if (need > s->cap) {
-		uint8_t *t = realloc(s->buf, need);
-		if (!t)
-			return -ENOMEM;
-		s->buf = t;
-		s->cap = need;
-	}
-	memcpy(s->buf, mask, r->mask_bytes);
-	size_t len = head;
-	for (uint32_t i = 0; i < count; i++) {
-		uint32_t off = (uint32_t)(len - head);
-		memcpy(s->buf + r->mask_bytes + i * sizeof(uint32_t), &off, sizeof(off));
-		len += encode_tile(tiles + (size_t)i * r->tile_bytes, r->tile_bytes, s->buf + len);
-	}
-	uint8_t *data = malloc(len);
-	if (!data)
-		return -ENOMEM;
-	memcpy(data, s->buf, len);
-	*img = (struct rle_image){ .tile_count = count, .len = (uint32_t)len, .data = data };
-	return 0;
-}
-
-/* The bytes of a non-empty mask between which its set bits lie. */
-static struct rle_span mask_span(const uint8_t *mask, uint32_t bytes)
-{
-	uint32_t first = 0, last = bytes - 1;
-	while (first < last && !mask[first])
-		first++;
-	while (last > first && !mask[last])
-		last--;
-	return (struct rle_span){ first, last };
-}
-
-void rle_volume_sum(struct rle_volume *r)
-{
-	r->tiles = 0;
-	r->bytes = sizeof(*r) + r->image_count * sizeof(*r->images);
-	r->lit_count = 0;
-	for (uint32_t k = 0; k < r->image_count; k++) {
-		r->tiles += r->images[k].tile_count;
-		r->bytes += r->images[k].len;
-		r->lit_count += r->images[k].tile_count > 0;
-	}
-	r->packed_bytes = r->tiles * r->tile_bytes;
-	free(r->lit);
-	free(r->lit_span);
-	r->lit = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit));
-	r->lit_span = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit_span));
-	if (!r->lit || !r->lit_span) {
-		free(r->lit);
-		free(r->lit_span);
-		r->lit = NULL; /* patching then looks at every image */
-		r->lit_span = NULL;
-		return;
-	}
-	uint32_t n = 0;
-	for (uint32_t k = 0; k < r->image_count; k++)
-		if (r->images[k].tile_count) {
-			r->lit_span[n] = mask_span(r->images[k].data, r->mask_bytes);
-			r->lit[n++] = k;
-		}
-	r->bytes += r->lit_count * (sizeof(*r->lit) + sizeof(*r->lit_span));
-}
-
-struct rle_volume *rle_volume_encode(const struct volume *vol)
-{
-	struct rle_volume *r =
-		rle_volume_new(vol->image_count, vol->mask_bytes, volume_tiles_per_image(vol), VOLUME_TILE_BYTES);
-	if (!r)
-		return NULL;
-	struct rle_scratch s = { 0 };
-	for (uint32_t k = 0; k < vol->image_count; k++) {
-		const struct volume_image *img = &vol->images[k];
-		if (rle_volume_set_image(r, k, img->mask, img->tiles, img->tile_count, &s) < 0) {
-			free(s.buf);
-			rle_volume_free(r);
-			errno = ENOMEM;
-			return NULL;
-		}
-	}
-	free(s.buf);
-	rle_volume_sum(r);
-	return r;
-}
-
-void rle_volume_free(struct rle_volume *r)
-{
-	if (!r)
-		return;
-	for (uint32_t k = 0; r->images && k < r->image_count; k++)
-		free(r->images[k].data);
-	free(r->images);
-	free(r->lit);
-	free(r->lit_span);
-	free(r);
-}
-
-/* ---- composition ---- */
+/* Patches of at most this many dirty tiles run on the calling thread. */
+#define COMPOSE_FEW_TILES 256
 
 struct compose_worker {
 	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
 	uint8_t *touched; /* tiles_per_image flags */
+	uint8_t *run;     /* patch_shifted()'s changed run of tiles: tiles_per_image of them */
 	int err;
 };
 
@@ -215,7 +31,6 @@ struct compose {
 	unsigned workers;
 	uint32_t tiles_per_image, mask_bytes, image_count;
 	struct compose_worker *w;
-	struct volume *tmp; /* patching builds images here, then exchanges them */
 	struct geometry geom;
 	halftone_fn halftone;
 	struct brightness_tables thr; /* per volume image, made once */
@@ -254,7 +69,7 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	c->tiles_per_image = volume_tiles_per_image(probe);
 	c->mask_bytes = probe->mask_bytes;
 	c->image_count = probe->image_count;
-	c->tmp = probe;
+	volume_destroy(probe);
 	struct brightness_map bright;
 	if (brightness_map_init(&bright, geom) < 0)
 		goto fail;
@@ -273,7 +88,8 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	for (unsigned i = 0; i < c->workers; i++) {
 		c->w[i].tiles = calloc(c->tiles_per_image, VOLUME_TILE_BYTES);
 		c->w[i].touched = calloc(c->tiles_per_image, 1);
-		if (!c->w[i].tiles || !c->w[i].touched)
+		c->w[i].run = malloc((size_t)c->tiles_per_image * VOLUME_TILE_BYTES);
+		if (!c->w[i].tiles || !c->w[i].touched || !c->w[i].run)
 			goto fail;
 	}
 	return c;
@@ -290,13 +106,13 @@ void compose_destroy(struct compose *c)
 	for (unsigned i = 0; c->w && i < c->workers; i++) {
 		free(c->w[i].tiles);
 		free(c->w[i].touched);
+		free(c->w[i].run);
 	}
 	free(c->w);
 	brightness_tables_finish(&c->thr);
 	free(c->all_dirty);
 	free(c->img_first);
 	free(c->img_src);
-	volume_destroy(c->tmp);
 	free(c);
 }
 
@@ -354,15 +170,16 @@ static void image_job(void *arg, unsigned index)
 	}
 }
 
-/* fn on every image of c->out, on the pool's workers. */
-static int run_images(struct compose *c, struct volume *out, image_fn fn)
+/* fn on every image of c->out, on the pool's workers (alone: on this
+ * thread, as worker 0). */
+static int run_images(struct compose *c, struct volume *out, image_fn fn, bool alone)
 {
 	struct image_job j = { c, fn };
 	c->out = out;
 	atomic_store(&c->next_image, 0);
 	for (unsigned i = 0; i < c->workers; i++)
 		c->w[i].err = 0;
-	if (c->pool)
+	if (c->pool && !alone)
 		pool_run(c->pool, image_job, &j);
 	else
 		image_job(&j, 0);
@@ -450,80 +267,152 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 	return 0;
 }
 
-/* Appends tile t, a stored (so not all-zero) tile of another volume, to
- * image k of vol, whose room the caller has reserved. */
-static int keep_tile(struct volume *vol, uint32_t k, uint32_t t, const uint8_t *tile)
+/* The highest tile of a mask that is not empty. */
+static uint32_t last_tile(const uint8_t *mask, uint32_t bytes)
 {
-	memcpy(vol->images[k].tiles + (size_t)vol->images[k].tile_count * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
-	return volume_image_push(vol, k, t);
+	uint32_t b = bytes - 1;
+	while (!mask[b])
+		b--;
+	return b * 8 + 31 - (uint32_t)__builtin_clz(mask[b]);
 }
 
-/* Where every dirty tile of old is as present as it was (an object moving
- * over a static one), the gathered tiles are written over old's in place,
- * leaving w's dense image zero: true. Else nothing is done: false. */
-static bool patch_in_place(const struct compose *c, struct compose_worker *w, struct volume_image *old,
-			   const uint8_t *dirty)
+/* The stored index of tile t in an image with this mask: the set bits
+ * below t. */
+static uint32_t stored_index(const uint8_t *mask, uint32_t t)
 {
-	for (uint32_t b = 0; b < c->mask_bytes; b++)
-		for (uint32_t d = dirty[b]; d; d &= d - 1) {
-			uint32_t t = b * 8 + (uint32_t)__builtin_ctz(d);
-			if (w->touched[t] != bit(old->mask, t))
-				return false;
-		}
+	uint32_t i = 0;
+	for (uint32_t b = 0; b < t / 8; b++)
+		i += volume_mask_bits(mask[b]);
+	return i + volume_mask_bits(mask[t / 8] & ((1u << (t % 8)) - 1));
+}
+
+/* Writes the gathered (touched) dirty tiles that are still in w's dense
+ * image over old's, whose mask holds them, leaving the dense image zero. */
+static void write_touched(const struct compose *c, struct compose_worker *w, struct volume_image *old,
+			  const uint8_t *dirty)
+{
 	uint32_t base = 0; /* the stored index of the first tile of byte b */
 	for (uint32_t b = 0; b < c->mask_bytes; base += volume_mask_bits(old->mask[b]), b++)
 		for (uint32_t d = dirty[b] & old->mask[b]; d; d &= d - 1) {
 			uint32_t bitno = (uint32_t)__builtin_ctz(d), t = b * 8 + bitno;
+			if (!w->touched[t]) /* laid out already (lay_run()) */
+				continue;
 			uint32_t i = base + volume_mask_bits(old->mask[b] & ((1u << bitno) - 1));
 			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 			memcpy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
 			memset(tile, 0, VOLUME_TILE_BYTES);
 			w->touched[t] = 0;
 		}
-	return true;
+}
+
+/* The dirty tiles whose presence changes (old has them and the sources
+ * no longer do, or the other way): the first and last, and how many
+ * fewer or more tiles the image holds. False when there are none. */
+static bool presence_changes(const struct compose *c, const struct compose_worker *w, const struct volume_image *old,
+			     const uint8_t *dirty, uint32_t *first, uint32_t *last, int32_t *delta)
+{
+	bool any = false;
+	*delta = 0;
+	for (uint32_t b = 0; b < c->mask_bytes; b++)
+		for (uint32_t d = dirty[b]; d; d &= d - 1) {
+			uint32_t t = b * 8 + (uint32_t)__builtin_ctz(d);
+			bool had = bit(old->mask, t), has = w->touched[t];
+			if (had == has)
+				continue;
+			*first = any ? *first : t;
+			*last = t;
+			*delta += has ? 1 : -1;
+			any = true;
+		}
+	return any;
+}
+
+/* Lays out tiles first..last of old anew at dst (presence: the gathered
+ * tiles where dirty, else old's), from w's dense image and from old's
+ * stored tiles from index at on, and sets their mask bits. Returns the
+ * tiles laid out; *next: old's stored index after the run. */
+static uint32_t lay_run(struct compose_worker *w, struct volume_image *old, const uint8_t *dirty, uint32_t first,
+			uint32_t last, uint32_t at, uint8_t *dst, uint32_t *next)
+{
+	uint32_t i = at, n = 0;
+	for (uint32_t t = first; t <= last; t++) {
+		bool had = bit(old->mask, t), has = had;
+		uint8_t *to = dst + (size_t)n * VOLUME_TILE_BYTES;
+		if (bit(dirty, t)) {
+			has = w->touched[t];
+			if (has) {
+				uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+				memcpy(to, tile, VOLUME_TILE_BYTES);
+				memset(tile, 0, VOLUME_TILE_BYTES);
+				w->touched[t] = 0;
+			}
+		} else if (had) {
+			memcpy(to, old->tiles + (size_t)i * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
+		}
+		i += had;
+		n += has;
+		old->mask[t / 8] = (uint8_t)((old->mask[t / 8] & ~(1u << (t % 8))) | ((uint32_t)has << (t % 8)));
+	}
+	*next = i;
+	return n;
+}
+
+/* Image k of c->out patched in place: the tiles up to the first whose
+ * presence changes stay where they are, those after the last move by the
+ * change in count (one memmove), and only the run between is laid out
+ * anew (in w->run, then copied in; straight in place where old holds
+ * nothing from there on); the other gathered tiles are written over
+ * their places. A small object moving over a large static one so costs
+ * the tiles about it, not the whole image. 0 or -ENOMEM. */
+static int patch_shifted(const struct compose *c, struct compose_worker *w, uint32_t k, const uint8_t *dirty)
+{
+	struct volume_image *old = &c->out->images[k];
+	uint32_t first = 0, last = 0;
+	int32_t delta = 0;
+	if (presence_changes(c, w, old, dirty, &first, &last, &delta)) {
+		int err = volume_image_reserve(c->out, k, (uint32_t)((int32_t)old->tile_count + delta));
+		if (err < 0)
+			return err;
+		uint32_t at = stored_index(old->mask, first), next;
+		uint8_t *place = old->tiles + (size_t)at * VOLUME_TILE_BYTES;
+		bool direct = at == old->tile_count; /* nothing of old to move */
+		uint32_t n = lay_run(w, old, dirty, first, last, at, direct ? place : w->run, &next);
+		if (!direct) {
+			memmove(place + (size_t)n * VOLUME_TILE_BYTES, old->tiles + (size_t)next * VOLUME_TILE_BYTES,
+				(size_t)(old->tile_count - next) * VOLUME_TILE_BYTES);
+			memcpy(place, w->run, (size_t)n * VOLUME_TILE_BYTES);
+		}
+		old->tile_count = (uint32_t)((int32_t)old->tile_count + delta);
+		if (last + 1 >= old->next_tile)
+			old->next_tile = old->tile_count ? last_tile(old->mask, c->mask_bytes) + 1 : 0;
+		c->out->origin = 0;
+	}
+	write_touched(c, w, old, dirty);
+	return 0;
 }
 
 /* Image k of c->out anew: its dirty tiles composed from the sources
- * (gathered into w's dense image first), written over in place where the
- * tiles present stay the same, else the image built in c->tmp's image k
- * (clean tiles kept) and exchanged. */
+ * (gathered into w's dense image first), then patched in place. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
-	uint32_t dirty_count = 0;
-	for (uint32_t b = 0; b < c->mask_bytes; b++)
-		dirty_count += volume_mask_bits(dirty[b]);
-	if (!dirty_count)
+	bool any = false;
+	for (uint32_t b = 0; b < c->mask_bytes && !any; b++)
+		any = dirty[b] != 0;
+	if (!any)
 		return 0;
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
 		err = gather_dirty(c, w, &c->img_src[i], k, dirty);
-	struct volume_image *old = &c->out->images[k];
-	if (err == 0 && patch_in_place(c, w, old, dirty))
-		return 0;
-	volume_image_clear(c->tmp, k);
 	if (err == 0)
-		err = volume_image_reserve(c->tmp, k, old->tile_count + dirty_count);
-	uint32_t i = 0; /* old's next stored tile */
-	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
-		bool had = bit(old->mask, t);
-		if (!bit(dirty, t)) {
-			if (had && err == 0)
-				err = keep_tile(c->tmp, k, t, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
-			i += had;
-			continue;
-		}
-		i += had;
-		if (!w->touched[t])
-			continue;
-		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-		if (err == 0)
-			err = volume_image_append(c->tmp, k, t, tile); /* skips an all-zero tile */
-		memset(tile, 0, VOLUME_TILE_BYTES);
-		w->touched[t] = 0;
+		err = patch_shifted(c, w, k, dirty);
+	if (err < 0) { /* leave the dense image zero for the next */
+		for (uint32_t t = 0; t < c->tiles_per_image; t++)
+			if (w->touched[t]) {
+				memset(w->tiles + (size_t)t * VOLUME_TILE_BYTES, 0, VOLUME_TILE_BYTES);
+				w->touched[t] = 0;
+			}
 	}
-	if (err == 0)
-		volume_image_exchange(c->tmp, k, c->out, k);
 	return err;
 }
 
@@ -582,6 +471,25 @@ static int index_sources(struct compose *c)
 	return 0;
 }
 
+/* Whether so few tiles are dirty (a small object moving) that waking the
+ * pool's workers would cost more than patching them on this thread. */
+static bool few_dirty(const uint8_t *dirty, size_t bytes)
+{
+	uint32_t n = 0;
+	size_t i = 0;
+	for (; i + 8 <= bytes; i += 8) {
+		uint64_t word;
+		memcpy(&word, dirty + i, sizeof(word));
+		for (; word; word >>= 8)
+			n += volume_mask_bits(word & 0xff);
+		if (n > COMPOSE_FEW_TILES)
+			return false;
+	}
+	for (; i < bytes; i++)
+		n += volume_mask_bits(dirty[i]);
+	return n <= COMPOSE_FEW_TILES;
+}
+
 int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
 		  unsigned n)
 {
@@ -593,7 +501,7 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
 	c->dirty = dirty;
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return run_images(c, vol, patch_image);
+	return run_images(c, vol, patch_image, few_dirty(dirty, (size_t)c->image_count * c->mask_bytes));
 }
 
 /* A composition from nothing is a patch of an empty volume where every
@@ -667,7 +575,7 @@ static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k,
 {
 	uint8_t buf[CANVAS_TILE_BYTES], mirrored[CANVAS_TILE_BYTES], lifted[2][CANVAS_TILE_BYTES];
 	memset(buf, 0, sizeof(buf));
-	size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
+	size_t used = rle_or_coded(code, avail, buf, CANVAS_TILE_BYTES);
 	if (!used)
 		return 0;
 	const uint8_t *tile = buf;
@@ -725,7 +633,7 @@ int compose_turned(struct compose *c, struct volume *out, const struct turned_so
 	volume_clear(out);
 	c->turned = src;
 	c->n = n;
-	return run_images(c, out, turn_image);
+	return run_images(c, out, turn_image, false);
 }
 
 unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_t height,
@@ -761,29 +669,6 @@ unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_
 		out_ty[n++] = (uint32_t)(first + i);
 	}
 	return n;
-}
-
-int rle_canvas_each(const struct rle_volume *r, uint32_t k, canvas_tile_fn fn, void *arg)
-{
-	const struct rle_image *img = &r->images[k];
-	if (!img->tile_count)
-		return 0;
-	size_t head = r->mask_bytes + (size_t)img->tile_count * sizeof(uint32_t);
-	size_t avail = img->len - head;
-	const uint8_t *code = img->data + head;
-	uint8_t buf[CANVAS_TILE_BYTES];
-	for (uint32_t t = 0; t < r->tiles_per_image; t++) {
-		if (!bit(img->data, t))
-			continue;
-		memset(buf, 0, sizeof(buf));
-		size_t used = or_coded(code, avail, buf, CANVAS_TILE_BYTES);
-		if (!used)
-			return -EINVAL;
-		fn(arg, t, buf);
-		code += used;
-		avail -= used;
-	}
-	return 0;
 }
 
 int rle_volume_decode(const struct rle_volume *r, struct volume *out)

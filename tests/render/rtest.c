@@ -240,7 +240,8 @@ bool rtest_same(const struct volume *a, const struct volume *b)
 		return false;
 	for (uint32_t k = 0; k < a->image_count; k++) {
 		const struct volume_image *x = &a->images[k], *y = &b->images[k];
-		if (x->tile_count != y->tile_count || memcmp(x->mask, y->mask, a->mask_bytes) != 0)
+		if (x->tile_count != y->tile_count || x->next_tile != y->next_tile ||
+		    memcmp(x->mask, y->mask, a->mask_bytes) != 0)
 			return false;
 		if (x->tile_count && memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES) != 0)
 			return false;

@@ -77,7 +77,7 @@ bool rtest_lit(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, int
 /* Lit pixels of channel c in image k, or in the whole volume. */
 uint64_t rtest_count_image(const struct volume *vol, uint32_t k, int c);
 uint64_t rtest_count(const struct volume *vol, int c);
-/* Whether two volumes hold the same masks and tile bytes. */
+/* Whether two volumes hold the same masks, tile bytes and next_tile. */
 bool rtest_same(const struct volume *a, const struct volume *b);
 
 /* Whether every pixel past W or H in edge tiles is 0 (volume.h's rule). */
