@@ -1,6 +1,7 @@
 #include "volume.h"
 
 #include <errno.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -167,6 +168,68 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
 		memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
 	d->tile_count = s->tile_count;
 	d->next_tile = s->next_tile;
+	dst->origin = 0;
+	return 0;
+}
+
+uint32_t volume_stored_index(const uint8_t *mask, uint32_t t)
+{
+	uint32_t i = 0;
+	for (uint32_t b = 0; b < t / 8; b++)
+		i += volume_mask_bits(mask[b]);
+	return t % 8 ? i + volume_mask_bits(mask[t / 8] & ((1u << (t % 8)) - 1)) : i;
+}
+
+/* The first and last tiles whose presence differs between masks a and b;
+ * false when none does. */
+static bool presence_differs(const uint8_t *a, const uint8_t *b, uint32_t bytes, uint32_t *first, uint32_t *last)
+{
+	bool any = false;
+	for (uint32_t i = 0; i < bytes; i++) {
+		uint32_t d = a[i] ^ b[i];
+		if (!d)
+			continue;
+		if (!any)
+			*first = i * 8 + (uint32_t)__builtin_ctz(d);
+		*last = i * 8 + 31 - (uint32_t)__builtin_clz(d);
+		any = true;
+	}
+	return any;
+}
+
+int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src, const uint8_t *changed)
+{
+	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes || k >= src->image_count)
+		return -EINVAL;
+	const struct volume_image *s = &src->images[k];
+	struct volume_image *d = &dst->images[k];
+	uint32_t first = 0, last = 0;
+	bool moved = presence_differs(s->mask, d->mask, src->mask_bytes, &first, &last);
+	if (moved) {
+		int r = volume_image_reserve(dst, k, s->tile_count);
+		if (r < 0)
+			return r;
+		/* Both hold the same tiles before first and after last. */
+		uint32_t at = volume_stored_index(s->mask, first);
+		uint32_t s_end = volume_stored_index(s->mask, last + 1), d_end = volume_stored_index(d->mask, last + 1);
+		memmove(d->tiles + (size_t)s_end * VOLUME_TILE_BYTES, d->tiles + (size_t)d_end * VOLUME_TILE_BYTES,
+			(size_t)(d->tile_count - d_end) * VOLUME_TILE_BYTES);
+		memcpy(d->tiles + (size_t)at * VOLUME_TILE_BYTES, s->tiles + (size_t)at * VOLUME_TILE_BYTES,
+		       (size_t)(s_end - at) * VOLUME_TILE_BYTES);
+		memcpy(d->mask, s->mask, src->mask_bytes);
+		d->tile_count = s->tile_count;
+		d->next_tile = s->next_tile;
+	}
+	uint32_t base = 0; /* the stored index of the first tile of byte b */
+	for (uint32_t b = 0; b < src->mask_bytes; base += volume_mask_bits(s->mask[b]), b++)
+		for (uint32_t c = changed[b] & s->mask[b]; c; c &= c - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctz(c), t = b * 8 + bitno;
+			if (moved && t >= first && t <= last)
+				continue; /* copied with the run */
+			size_t at = (size_t)(base + volume_mask_bits(s->mask[b] & ((1u << bitno) - 1))) *
+				    VOLUME_TILE_BYTES;
+			memcpy(d->tiles + at, s->tiles + at, VOLUME_TILE_BYTES);
+		}
 	dst->origin = 0;
 	return 0;
 }

@@ -92,6 +92,18 @@ void volume_image_clear(struct volume *vol, uint32_t k);
  * same geometry): tiles, mask and counts, without copying tiles. */
 void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint32_t kb);
 
+/* The stored index of tile t in an image with this mask: how many of its
+ * tiles come before t (t up to tiles per image: all of them). */
+uint32_t volume_stored_index(const uint8_t *mask, uint32_t t);
+
+/* Image k of dst becomes image k of src (same geometry), where the two
+ * differ at most in the tiles whose bit is set in changed (mask_bytes):
+ * tiles up to the first whose presence differs stay, those after the
+ * last move by one memmove, the run between is copied from src, and the
+ * other changed tiles are copied in place, so that a few changed tiles
+ * cost about themselves, not the image. 0 or -ENOMEM/-EINVAL. */
+int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src, const uint8_t *changed);
+
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
 int volume_copy(struct volume *dst, const struct volume *src);
 /* Image k of src copied into image k of dst (same geometry); nothing

@@ -195,26 +195,6 @@ static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8
 	return any != 0;
 }
 
-/* Image k of prev into out, which holds an earlier composition that
- * differs at most in the tiles of changed: where both store the same
- * tiles, only the changed ones are copied, in place. */
-static int copy_changed(struct volume *out, const struct volume *prev, uint32_t k, const uint8_t *changed)
-{
-	const struct volume_image *src = &prev->images[k];
-	struct volume_image *dst = &out->images[k];
-	if (src->tile_count != dst->tile_count || memcmp(src->mask, dst->mask, prev->mask_bytes))
-		return volume_copy_image(out, k, prev);
-	uint32_t base = 0; /* the stored index of the first tile of byte b */
-	for (uint32_t b = 0; b < prev->mask_bytes; base += volume_mask_bits(src->mask[b]), b++)
-		for (uint32_t d = changed[b] & src->mask[b]; d; d &= d - 1) {
-			uint32_t bitno = (uint32_t)__builtin_ctz(d);
-			size_t at = (size_t)(base + volume_mask_bits(src->mask[b] & ((1u << bitno) - 1))) *
-				    VOLUME_TILE_BYTES;
-			memcpy(dst->tiles + at, src->tiles + at, VOLUME_TILE_BYTES);
-		}
-	return 0;
-}
-
 /* The composition copied into out: only the images changed since the one
  * out holds, when out is a volume handed out lately and unchanged since
  * (its origin mark), else whole. out is then marked. */
@@ -231,7 +211,7 @@ static int hand_out(struct cache *c, struct volume *out)
 	} else {
 		for (uint32_t k = 0; k < out->image_count && err == 0; k++)
 			if (changed_since(c, had, k, c->changed_mask))
-				err = copy_changed(out, c->prev, k, c->changed_mask);
+				err = volume_update_image(out, k, c->prev, c->changed_mask);
 		out->seq = c->prev->seq;
 		out->shown_ns = c->prev->shown_ns;
 	}

@@ -14,6 +14,8 @@ void brightness_map_finish(struct brightness_map *m)
 	free(m->n);
 	free(m->phase);
 	free(m->solid);
+	free(m->lanes);
+	m->lanes = NULL;
 	m->rate = NULL;
 	m->line_rate = NULL;
 	m->n = NULL;
@@ -87,6 +89,26 @@ static void set_column(struct brightness_map *m, const struct geometry *g, uint3
 	}
 }
 
+/* brightness_map.lanes[tu] from the columns' rates and multipliers. */
+static void set_lanes(struct brightness_map *m, uint32_t tu)
+{
+	struct brightness_lanes *l = &m->lanes[tu];
+	bool any = false, by_mul = true;
+	for (uint32_t p = 0; p < 32; p++) {
+		uint32_t u = tu * 32 + (p ^ 7);
+		float w = u < m->width ? m->rate[u] : 1.0f; /* brightness_apply(), a crossing weight of 1 */
+		w = w > m->wall ? m->wall : w;
+		l->weight[p] = w < 1.0f ? w : 1.0f;
+		any |= w < 1.0f;
+		uint32_t k = u < m->width ? m->solid[u] : BRIGHTNESS_KEEP;
+		by_mul &= k != BRIGHTNESS_FLOAT;
+		l->mul[p] = k < BRIGHTNESS_KEEP ? (uint16_t)k : 0;
+		l->keep |= (uint32_t)(k == BRIGHTNESS_KEEP) << p;
+	}
+	l->weighed = any;
+	l->by_mul = by_mul;
+}
+
 int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 {
 	*m = (struct brightness_map){ .model = g->brightness, .width = g->width, .band_lo = 1, .band_hi = 0 };
@@ -97,7 +119,8 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	uint32_t radii = g->width / 2 + 1;
 	m->phase = malloc(radii * 16 * sizeof(*m->phase));
 	m->solid = malloc(g->width * sizeof(*m->solid));
-	if (!m->rate || !m->line_rate || !m->n || !m->phase || !m->solid) {
+	m->lanes = calloc((g->width + 31) / 32, sizeof(*m->lanes));
+	if (!m->rate || !m->line_rate || !m->n || !m->phase || !m->solid || !m->lanes) {
 		brightness_map_finish(m);
 		return -ENOMEM;
 	}
@@ -113,6 +136,8 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	/* Outside the band every weight is 1: every byte stays. */
 	for (uint32_t u = 0; u < g->width; u++)
 		m->solid[u] = u >= m->band_lo && u <= m->band_hi ? solid_mul_of(m, u) : BRIGHTNESS_KEEP;
+	for (uint32_t tu = 0; tu < (g->width + 31) / 32; tu++)
+		set_lanes(m, tu);
 	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
 	if (brightness_active(m)) {
 		m->band_s =

@@ -276,16 +276,6 @@ static uint32_t last_tile(const uint8_t *mask, uint32_t bytes)
 	return b * 8 + 31 - (uint32_t)__builtin_clz(mask[b]);
 }
 
-/* The stored index of tile t in an image with this mask: the set bits
- * below t. */
-static uint32_t stored_index(const uint8_t *mask, uint32_t t)
-{
-	uint32_t i = 0;
-	for (uint32_t b = 0; b < t / 8; b++)
-		i += volume_mask_bits(mask[b]);
-	return i + volume_mask_bits(mask[t / 8] & ((1u << (t % 8)) - 1));
-}
-
 /* Writes the gathered (touched) dirty tiles that are still in w's dense
  * image over old's, whose mask holds them, leaving the dense image zero. */
 static void write_touched(const struct compose *c, struct compose_worker *w, struct volume_image *old,
@@ -373,7 +363,7 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
 		int err = volume_image_reserve(c->out, k, (uint32_t)((int32_t)old->tile_count + delta));
 		if (err < 0)
 			return err;
-		uint32_t at = stored_index(old->mask, first), next;
+		uint32_t at = volume_stored_index(old->mask, first), next;
 		uint8_t *place = old->tiles + (size_t)at * VOLUME_TILE_BYTES;
 		bool direct = at == old->tile_count; /* nothing of old to move */
 		uint32_t n = lay_run(w, old, dirty, first, last, at, direct ? place : w->run, &next);

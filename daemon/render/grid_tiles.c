@@ -569,26 +569,15 @@ typedef void tiles_fn(struct section_canvas *c, const struct grid_job *job, cons
 		      const struct tile_span *sp, const struct tile_tf *tf, float *buf);
 
 /* The lanes' weights of tile column tu under map m (NULL: none) into
- * tf: NULL both when every lane keeps its colour, else the multipliers
- * where every lane has one (brightness_map.solid), else the floats. */
-static void tile_weights(const struct brightness_map *m, uint32_t width, uint32_t tu, float *weight, uint16_t *mul,
-			 struct tile_tf *tf)
+ * tf (brightness_map.lanes): NULL both when every lane keeps its colour,
+ * else the multipliers where every lane has one, else the floats. */
+static inline void tile_weights(const struct brightness_map *m, uint32_t tu, struct tile_tf *tf)
 {
-	bool any = false, exact = true;
-	tf->keep = 0;
-	for (uint32_t p = 0; m && p < LANES; p++) {
-		uint32_t out = tu * VOLUME_TILE + (p ^ 7);
-		float w = out < width ? m->rate[out] : 1.0f; /* brightness_apply(), a crossing weight of 1 */
-		w = w > m->wall ? m->wall : w;
-		weight[p] = w < 1.0f ? w : 1.0f;
-		any |= w < 1.0f;
-		uint32_t k = out < width ? m->solid[out] : BRIGHTNESS_KEEP;
-		exact &= k != BRIGHTNESS_FLOAT;
-		mul[p] = k < BRIGHTNESS_KEEP ? (uint16_t)k : 0;
-		tf->keep |= (uint32_t)(k == BRIGHTNESS_KEEP) << p;
-	}
-	tf->weight = any && !exact ? weight : NULL;
-	tf->mul = any && exact ? mul : NULL;
+	const struct brightness_lanes *l = m ? &m->lanes[tu] : NULL;
+	bool weighed = l && l->weighed;
+	tf->keep = weighed ? l->keep : 0;
+	tf->weight = weighed && !l->by_mul ? l->weight : NULL;
+	tf->mul = weighed && l->by_mul ? l->mul : NULL;
 }
 
 #define TILES_VARIANT(name, attr, rowfn)                                                                              \
@@ -597,13 +586,11 @@ static void tile_weights(const struct brightness_map *m, uint32_t width, uint32_
 	{                                                                                                             \
 		for (uint32_t tu = 0; tu < c->tiles_x; tu++) {                                                        \
 			uint32_t lit[4096 / SCENE_GRID_BRICK + 1];                                                    \
-			float weight[LANES];                                                                          \
-			uint16_t mul[LANES];                                                                          \
 			struct tile_tf tw = *draw_tf;                                                                 \
 			const struct tile_tf *tf = &tw;                                                               \
 			if (!tile_lanes(c, job, dir, mirror, tu, sp, draw_tf, buf, lit))                              \
 				continue;                                                                             \
-			tile_weights(sp->bright, c->geom.width, tu, weight, mul, &tw);                                \
+			tile_weights(sp->bright, tu, &tw);                                                            \
 			if (tf->lut && tf->tri)                                                                       \
 				tile_rows(c, tu, sp, tf, buf, lit, rowfn, true, true);                                \
 			else if (tf->lut)                                                                             \

@@ -3,6 +3,7 @@
  * append rules, dense round trips, and edge tiles of images whose size is
  * not a multiple of 32 (or of 8). */
 #include <errno.h>
+#include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -117,6 +118,69 @@ static void check_pixels_and_dense(const struct geometry *g)
 	volume_destroy(v);
 }
 
+/* Image 0 of v: each tile present with probability 1 / 2 (keep: the
+ * tiles of base outside change stay as base has them), its bytes from
+ * seed. */
+static void random_image(struct volume *v, const struct volume *base, const uint8_t *change, uint32_t *seed)
+{
+	uint8_t tile[VOLUME_TILE_BYTES];
+	volume_image_clear(v, 0);
+	for (uint32_t t = 0; t < volume_tiles_per_image(v); t++) {
+		bool keep = base && !((change[t / 8] >> (t % 8)) & 1);
+		if (keep && !volume_tile_present(&base->images[0], t))
+			continue;
+		if (keep) {
+			uint32_t i = volume_stored_index(base->images[0].mask, t);
+			CHECK(volume_image_append(v, 0, t, base->images[0].tiles + (size_t)i * VOLUME_TILE_BYTES) == 0);
+			continue;
+		}
+		if (lcg(seed) % 2)
+			continue;
+		for (size_t i = 0; i < sizeof(tile); i++)
+			tile[i] = (uint8_t)lcg(seed);
+		tile[0] |= 1;
+		CHECK(volume_image_append(v, 0, t, tile) == 0);
+	}
+}
+
+/* volume_update_image(): an image brought to another that differs in some
+ * tiles (present in one only, or both with other bytes), the changed mask
+ * holding those and some others, is that image: mask, count, next tile,
+ * bytes. */
+static void check_update(const struct geometry *g)
+{
+	struct volume *from = volume_create(g), *to = volume_create(g);
+	CHECK(from && to);
+	uint32_t seed = 5, tiles = volume_tiles_per_image(from);
+	uint8_t change[128];
+	CHECK(from->mask_bytes <= sizeof(change));
+	for (int round = 0; round < 400; round++) {
+		memset(change, 0, sizeof(change));
+		uint32_t spread = 1 + lcg(&seed) % tiles, at = lcg(&seed) % tiles;
+		for (uint32_t n = lcg(&seed) % 6; n > 0; n--) { /* a few tiles near one another, or anywhere */
+			uint32_t t = (at + lcg(&seed) % spread) % tiles;
+			change[t / 8] |= (uint8_t)(1u << (t % 8));
+		}
+		if (round % 5 == 0) /* sometimes every tile */
+			memset(change, 0xff, from->mask_bytes);
+		random_image(from, NULL, NULL, &seed);
+		random_image(to, from, change, &seed);
+		for (uint32_t t = 0; t < tiles; t++) /* and some that did not change */
+			if (lcg(&seed) % 8 == 0)
+				change[t / 8] |= (uint8_t)(1u << (t % 8));
+		for (uint32_t b = 0; round % 5 && b < from->mask_bytes; b++)
+			change[b] &= (uint8_t)((1u << (tiles - b * 8 < 8 ? tiles - b * 8 : 8)) - 1);
+		CHECK(volume_update_image(from, 0, to, change) == 0);
+		const struct volume_image *x = &from->images[0], *y = &to->images[0];
+		CHECK(x->tile_count == y->tile_count && x->next_tile == y->next_tile);
+		CHECK(memcmp(x->mask, y->mask, from->mask_bytes) == 0);
+		CHECK(memcmp(x->tiles, y->tiles, (size_t)y->tile_count * VOLUME_TILE_BYTES) == 0);
+	}
+	CHECK(volume_stored_index(to->images[0].mask, tiles) == to->images[0].tile_count);
+	volume_destroy(from);
+	volume_destroy(to);
+}
+
 int main(void)
 {
 	struct geometry small;
@@ -125,5 +189,7 @@ int main(void)
 	check_append();
 	check_pixels_and_dense(&odd);
 	check_pixels_and_dense(&small);
+	check_update(&odd);
+	check_update(&small);
 	return check_done();
 }
