@@ -44,23 +44,25 @@
 #include "halftone.h"
 
 struct brightness_map {
-	uint8_t model;                  /* enum geometry_brightness */
-	uint32_t width;                 /* W */
-	uint32_t images;                /* M: images per volume, the pattern's period */
-	uint32_t band_lo;               /* columns band_lo..band_hi are thinned (rate < 1 or */
-	uint32_t band_hi;               /* wall < 1); band_lo > band_hi: none (EXACT) */
-	double band_s;                  /* |s| of the band's outer column edges (s = p . d_k) */
-	double band_d;                  /* 2 sin(pi / N) band_s (and a hair): the same against
+	uint8_t model;    /* enum geometry_brightness */
+	uint32_t width;   /* W */
+	uint32_t images;  /* M: images per volume, the pattern's period */
+	uint32_t band_lo; /* columns band_lo..band_hi are thinned (rate < 1 or */
+	uint32_t band_hi; /* wall < 1); band_lo > band_hi: none (EXACT) */
+	double band_s;    /* |s| of the band's outer column edges (s = p . d_k) */
+	double band_d;    /* 2 sin(pi / N) band_s (and a hair): the same against
 			   * the sum of a point's distances to a wedge's two
 			   * planes, which is 2 sin(pi / N) s (section.c) */
-	float wall;                     /* the weight of a primitive lying in the plane */
-	float *rate;                    /* per column: n[u] / M (UNIFORM: d r_u D) */
-	float *line_rate;               /* per column: segments' rate (EVEN's) */
-	uint16_t *n;                    /* per column: images of M a crossing primitive lights */
-	uint16_t *phase;                /* per radius index i and row v % 16: the pattern's
+	float wall;       /* the weight of a primitive lying in the plane */
+	float *rate;      /* per column: n[u] / M (UNIFORM: d r_u D) */
+	float *line_rate; /* per column: segments' rate (EVEN's) */
+	uint16_t *n;      /* per column: images of M a crossing primitive lights */
+	uint16_t *phase;  /* per radius index i and row v % 16: the pattern's
 			    * offset, phase[i * 16 + v % 16] in 0..M-1 */
-	uint32_t *solid;                /* per column: brightness_solid_mul() */
-	struct brightness_lanes *lanes; /* per tile column (32 pixel columns) */
+	uint32_t *solid;  /* per column: brightness_solid_mul() */
+
+	/* Per tile column (32 pixel columns): how a solid weighs it. */
+	struct brightness_lanes *lanes;
 };
 
 /* How a solid weighs the 32 pixel columns of a tile column, in canvas
