@@ -36,8 +36,8 @@ struct bin_work {
 	uint64_t prim_items, point_items;
 	struct draw_base *base; /* per draw */
 	size_t base_cap;
-	/* Two staging entries per item (a primitive may need two records);
-	 * unused ones have key KEY_NONE. */
+	/* prim_slots() staging entries per item (unmirrored, a primitive
+	 * may need two records); unused ones have key KEY_NONE. */
 	struct stage_prim *stage_prims;
 	size_t stage_prims_cap;
 	/* bin_point_slots() records and keys per point (bin.h). */
@@ -108,6 +108,13 @@ void bin_finish(struct bin_set *b)
 }
 
 /* ---- per item ---- */
+
+/* Staging entries per segment or triangle: a mirrored geometry folds
+ * both lobes onto one record, an unmirrored one may need two. */
+static inline unsigned prim_slots(const struct bin_set *b)
+{
+	return b->geom.mirrored ? 1 : 2;
+}
 
 static int draw_verts(const struct scene_draw *d)
 {
@@ -180,12 +187,15 @@ static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t fir
 	s->key = cls * b->images + first;
 }
 
-/* Records (one or two) of one segment or triangle. */
+/* Records (one or two: out has prim_slots() entries) of one segment or
+ * triangle. */
 static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const float *xyz, int n,
 			 const uint8_t rgb[3], struct stage_prim *out)
 {
 	double t[3][3];
-	out[0].key = out[1].key = KEY_NONE;
+	out[0].key = KEY_NONE;
+	if (!b->geom.mirrored)
+		out[1].key = KEY_NONE;
 	for (int i = 0; i < n; i++)
 		if (!bin_transform(d->transform, xyz + 3 * i, t[i]))
 			return; /* NaN or infinite: nothing sensible to light */
@@ -216,7 +226,7 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 static void turn_prims(const struct bin_set *b, uint32_t turn, struct stage_prim *s)
 {
 	uint32_t M = b->images;
-	for (int i = 0; i < 2; i++) {
+	for (unsigned i = 0; i < prim_slots(b); i++) {
 		if (s[i].key == KEY_NONE)
 			continue;
 		uint32_t was = s[i].rec.first, first = was;
@@ -279,14 +289,13 @@ static bool point_run(const struct bin_work *w, uint32_t di, struct chunk c, uin
 	return *lo < *hi;
 }
 
-/* Adds the keys of a staged pair to a histogram (mask: KEY_MASK for
- * primitives, whose keys carry their turn). */
-static inline void count_keys(uint32_t *hist, uint32_t k0, uint32_t k1, uint32_t mask)
+/* Adds the keys of an item's staged records (slots of them) to a
+ * histogram; their turn is masked off. */
+static inline void count_keys(uint32_t *hist, const struct stage_prim *s, unsigned slots)
 {
-	if (k0 != KEY_NONE)
-		hist[k0 & mask]++;
-	if (k1 != KEY_NONE)
-		hist[k1 & mask]++;
+	for (unsigned i = 0; i < slots; i++)
+		if (s[i].key != KEY_NONE)
+			hist[s[i].key & KEY_MASK]++;
 }
 
 static void count_job(void *arg, unsigned t)
@@ -296,20 +305,21 @@ static void count_job(void *arg, unsigned t)
 	uint32_t pk = prim_keys(b);
 	uint32_t *hist = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
+	const unsigned slots = prim_slots(b);
 	FOR_ITEMS(b, false, c, d, nv, i, {
-		struct stage_prim *s = &w->stage_prims[2 * i];
+		struct stage_prim *s = &w->stage_prims[slots * i];
 		bin_one_prim(b, d, xyz_, nv, rgb_, s);
 		if (turn_)
 			turn_prims(b, turn_, s);
-		count_keys(hist, s[0].key, s[1].key, KEY_MASK);
+		count_keys(hist, s, slots);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
-	uint32_t slots = bin_point_slots(b);
+	uint32_t point_slots = bin_point_slots(b);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
 		if (point_run(w, di, c, &lo, &hi))
-			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
-					 w->point_keys + slots * lo, hist + pk);
+			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base,
+					 w->point_recs + point_slots * lo, w->point_keys + point_slots * lo, hist + pk);
 	}
 }
 
@@ -324,12 +334,13 @@ static void scatter_job(void *arg, unsigned t)
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	/* Indexed, not pointer-stepped: a scene without lines or triangles
 	 * (or points) has no staging array at all. */
+	const unsigned slots = prim_slots(b);
 	if (!b->turned) {
-		for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++)
+		for (uint64_t i = slots * c.lo; i < slots * c.hi; i++)
 			if (w->stage_prims[i].key != KEY_NONE)
 				b->prims[off[w->stage_prims[i].key]++] = w->stage_prims[i].rec;
 	} else {
-		for (uint64_t i = 2 * c.lo; i < 2 * c.hi; i++) {
+		for (uint64_t i = slots * c.lo; i < slots * c.hi; i++) {
 			uint32_t key = w->stage_prims[i].key;
 			if (key == KEY_NONE)
 				continue;
@@ -339,12 +350,13 @@ static void scatter_job(void *arg, unsigned t)
 		}
 	}
 	c = chunk_of(w->point_items, w->threads, t);
-	uint32_t slots = bin_point_slots(b);
+	uint32_t point_slots = bin_point_slots(b);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
 		if (point_run(w, di, c, &lo, &hi))
-			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
-					   w->point_keys + slots * lo, off + pk);
+			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base,
+					   w->point_recs + point_slots * lo, w->point_keys + point_slots * lo,
+					   off + pk);
 	}
 }
 
@@ -391,7 +403,8 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
 		return -E2BIG;
 	size_t keys = prim_keys(b) + b->images;
-	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, 2 * w->prim_items, sizeof(*w->stage_prims))) < 0 ||
+	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, prim_slots(b) * w->prim_items,
+		      sizeof(*w->stage_prims))) < 0 ||
 	    (r = grow((void **)&w->point_recs, &w->point_recs_cap, bin_point_slots(b) * w->point_items,
 		      sizeof(*w->point_recs))) < 0 ||
 	    (r = grow((void **)&w->point_keys, &w->point_keys_cap, bin_point_slots(b) * w->point_items,
