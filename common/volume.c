@@ -180,6 +180,41 @@ uint32_t volume_stored_index(const uint8_t *mask, uint32_t t)
 	return t % 8 ? i + volume_mask_bits(mask[t / 8] & ((1u << (t % 8)) - 1)) : i;
 }
 
+/* The highest tile of a mask that is not empty. */
+static uint32_t last_tile(const uint8_t *mask, uint32_t bytes)
+{
+	uint32_t b = bytes - 1;
+	while (!mask[b])
+		b--;
+	return b * 8 + 31 - (uint32_t)__builtin_clz(mask[b]);
+}
+
+int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t last, const uint8_t *mask,
+			const uint8_t *run)
+{
+	if (k >= vol->image_count || first > last || last >= volume_tiles_per_image(vol))
+		return -EINVAL;
+	struct volume_image *img = &vol->images[k];
+	uint32_t at = volume_stored_index(img->mask, first), end = volume_stored_index(img->mask, last + 1);
+	uint32_t n = volume_stored_index(mask, last + 1) - volume_stored_index(mask, first);
+	uint32_t count = img->tile_count - (end - at) + n;
+	int r = volume_image_reserve(vol, k, count);
+	if (r < 0)
+		return r;
+	uint8_t *place = img->tiles + (size_t)at * VOLUME_TILE_BYTES;
+	memmove(place + (size_t)n * VOLUME_TILE_BYTES, img->tiles + (size_t)end * VOLUME_TILE_BYTES,
+		(size_t)(img->tile_count - end) * VOLUME_TILE_BYTES);
+	memcpy(place, run, (size_t)n * VOLUME_TILE_BYTES);
+	for (uint32_t t = first; t <= last; t++) {
+		uint8_t bit = (uint8_t)(1u << (t % 8));
+		img->mask[t / 8] = (uint8_t)((img->mask[t / 8] & ~bit) | (mask[t / 8] & bit));
+	}
+	img->tile_count = count;
+	img->next_tile = count ? last_tile(img->mask, vol->mask_bytes) + 1 : 0;
+	vol->origin = 0;
+	return 0;
+}
+
 /* The first and last tiles whose presence differs between masks a and b;
  * false when none does. */
 static bool presence_differs(const uint8_t *a, const uint8_t *b, uint32_t bytes, uint32_t *first, uint32_t *last)
@@ -205,20 +240,11 @@ int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src
 	struct volume_image *d = &dst->images[k];
 	uint32_t first = 0, last = 0;
 	bool moved = presence_differs(s->mask, d->mask, src->mask_bytes, &first, &last);
-	if (moved) {
-		int r = volume_image_reserve(dst, k, s->tile_count);
+	if (moved) { /* both hold the same tiles before first and after last */
+		const uint8_t *run = s->tiles + (size_t)volume_stored_index(s->mask, first) * VOLUME_TILE_BYTES;
+		int r = volume_image_splice(dst, k, first, last, s->mask, run);
 		if (r < 0)
 			return r;
-		/* Both hold the same tiles before first and after last. */
-		uint32_t at = volume_stored_index(s->mask, first);
-		uint32_t s_end = volume_stored_index(s->mask, last + 1), d_end = volume_stored_index(d->mask, last + 1);
-		memmove(d->tiles + (size_t)s_end * VOLUME_TILE_BYTES, d->tiles + (size_t)d_end * VOLUME_TILE_BYTES,
-			(size_t)(d->tile_count - d_end) * VOLUME_TILE_BYTES);
-		memcpy(d->tiles + (size_t)at * VOLUME_TILE_BYTES, s->tiles + (size_t)at * VOLUME_TILE_BYTES,
-		       (size_t)(s_end - at) * VOLUME_TILE_BYTES);
-		memcpy(d->mask, s->mask, src->mask_bytes);
-		d->tile_count = s->tile_count;
-		d->next_tile = s->next_tile;
 	}
 	uint32_t base = 0; /* the stored index of the first tile of byte b */
 	for (uint32_t b = 0; b < src->mask_bytes; base += volume_mask_bits(s->mask[b]), b++)

@@ -96,12 +96,20 @@ void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint
  * tiles come before t (t up to tiles per image: all of them). */
 uint32_t volume_stored_index(const uint8_t *mask, uint32_t t);
 
+/* Tiles first..last of image k become the tiles whose bits are set in
+ * mask's first..last, stored in that order at run (not all zero, and not
+ * in vol's storage): the stored tiles before first stay where they are,
+ * those after last move by one memmove, and the mask, counts and next
+ * tile follow. So a few tiles that come or go cost the tiles between
+ * them and one move, not a copy of the image. 0 or -ENOMEM/-EINVAL. */
+int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t last, const uint8_t *mask,
+			const uint8_t *run);
+
 /* Image k of dst becomes image k of src (same geometry), where the two
  * differ at most in the tiles whose bit is set in changed (mask_bytes):
- * tiles up to the first whose presence differs stay, those after the
- * last move by one memmove, the run between is copied from src, and the
- * other changed tiles are copied in place, so that a few changed tiles
- * cost about themselves, not the image. 0 or -ENOMEM/-EINVAL. */
+ * the tiles from the first whose presence differs to the last are spliced
+ * in from src (volume_image_splice()), and the other changed tiles are
+ * copied in place. 0 or -ENOMEM/-EINVAL. */
 int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src, const uint8_t *changed);
 
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */

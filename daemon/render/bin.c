@@ -36,11 +36,12 @@ struct bin_work {
 	uint64_t prim_items, point_items;
 	struct draw_base *base; /* per draw */
 	size_t base_cap;
-	/* prim_slots() staging entries per item (unmirrored, a primitive
+	/* bin_slots() staging entries per item (unmirrored, a primitive
 	 * may need two records); unused ones have key KEY_NONE. */
 	struct stage_prim *stage_prims;
 	size_t stage_prims_cap;
-	/* bin_point_slots() records and keys per point (bin.h). */
+	/* bin_slots() records and keys per point (bin.h), as for the
+	 * primitives above. */
 	struct bin_point *point_recs;
 	size_t point_recs_cap;
 	uint16_t *point_keys;
@@ -108,13 +109,6 @@ void bin_finish(struct bin_set *b)
 }
 
 /* ---- per item ---- */
-
-/* Staging entries per segment or triangle: a mirrored geometry folds
- * both lobes onto one record, an unmirrored one may need two. */
-static inline unsigned prim_slots(const struct bin_set *b)
-{
-	return b->geom.mirrored ? 1 : 2;
-}
 
 static int draw_verts(const struct scene_draw *d)
 {
@@ -187,7 +181,7 @@ static void prim_key(const struct bin_set *b, struct stage_prim *s, uint32_t fir
 	s->key = cls * b->images + first;
 }
 
-/* Records (one or two: out has prim_slots() entries) of one segment or
+/* Records (one or two: out has bin_slots() entries) of one segment or
  * triangle. */
 static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const float *xyz, int n,
 			 const uint8_t rgb[3], struct stage_prim *out)
@@ -226,7 +220,7 @@ static void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, co
 static void turn_prims(const struct bin_set *b, uint32_t turn, struct stage_prim *s)
 {
 	uint32_t M = b->images;
-	for (unsigned i = 0; i < prim_slots(b); i++) {
+	for (uint32_t i = 0; i < bin_slots(b); i++) {
 		if (s[i].key == KEY_NONE)
 			continue;
 		uint32_t was = s[i].rec.first, first = was;
@@ -291,9 +285,9 @@ static bool point_run(const struct bin_work *w, uint32_t di, struct chunk c, uin
 
 /* Adds the keys of an item's staged records (slots of them) to a
  * histogram; their turn is masked off. */
-static inline void count_keys(uint32_t *hist, const struct stage_prim *s, unsigned slots)
+static inline void count_keys(uint32_t *hist, const struct stage_prim *s, uint32_t slots)
 {
-	for (unsigned i = 0; i < slots; i++)
+	for (uint32_t i = 0; i < slots; i++)
 		if (s[i].key != KEY_NONE)
 			hist[s[i].key & KEY_MASK]++;
 }
@@ -305,7 +299,7 @@ static void count_job(void *arg, unsigned t)
 	uint32_t pk = prim_keys(b);
 	uint32_t *hist = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
-	const unsigned slots = prim_slots(b);
+	const uint32_t slots = bin_slots(b);
 	FOR_ITEMS(b, false, c, d, nv, i, {
 		struct stage_prim *s = &w->stage_prims[slots * i];
 		bin_one_prim(b, d, xyz_, nv, rgb_, s);
@@ -314,12 +308,11 @@ static void count_job(void *arg, unsigned t)
 		count_keys(hist, s, slots);
 	});
 	c = chunk_of(w->point_items, w->threads, t);
-	uint32_t point_slots = bin_point_slots(b);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
 		if (point_run(w, di, c, &lo, &hi))
-			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base,
-					 w->point_recs + point_slots * lo, w->point_keys + point_slots * lo, hist + pk);
+			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
+					 w->point_keys + slots * lo, hist + pk);
 	}
 }
 
@@ -334,7 +327,7 @@ static void scatter_job(void *arg, unsigned t)
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	/* Indexed, not pointer-stepped: a scene without lines or triangles
 	 * (or points) has no staging array at all. */
-	const unsigned slots = prim_slots(b);
+	const uint32_t slots = bin_slots(b);
 	if (!b->turned) {
 		for (uint64_t i = slots * c.lo; i < slots * c.hi; i++)
 			if (w->stage_prims[i].key != KEY_NONE)
@@ -350,13 +343,11 @@ static void scatter_job(void *arg, unsigned t)
 		}
 	}
 	c = chunk_of(w->point_items, w->threads, t);
-	uint32_t point_slots = bin_point_slots(b);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
 		if (point_run(w, di, c, &lo, &hi))
-			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base,
-					   w->point_recs + point_slots * lo, w->point_keys + point_slots * lo,
-					   off + pk);
+			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
+					   w->point_keys + slots * lo, off + pk);
 	}
 }
 
@@ -403,11 +394,11 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	if (w->prim_items > INT32_MAX || w->point_items > INT32_MAX)
 		return -E2BIG;
 	size_t keys = prim_keys(b) + b->images;
-	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, prim_slots(b) * w->prim_items,
+	if ((r = grow((void **)&w->stage_prims, &w->stage_prims_cap, bin_slots(b) * w->prim_items,
 		      sizeof(*w->stage_prims))) < 0 ||
-	    (r = grow((void **)&w->point_recs, &w->point_recs_cap, bin_point_slots(b) * w->point_items,
+	    (r = grow((void **)&w->point_recs, &w->point_recs_cap, bin_slots(b) * w->point_items,
 		      sizeof(*w->point_recs))) < 0 ||
-	    (r = grow((void **)&w->point_keys, &w->point_keys_cap, bin_point_slots(b) * w->point_items,
+	    (r = grow((void **)&w->point_keys, &w->point_keys_cap, bin_slots(b) * w->point_items,
 		      sizeof(*w->point_keys))) < 0 ||
 	    (r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
 		return r;

@@ -177,10 +177,10 @@ static inline uint32_t bin_draw_turn(const struct bin_set *b, const struct scene
 	return d->turn ? d->turn % b->geom.images_per_rev : 0;
 }
 
-/* Staged records per point: 1 on a mirrored device (both lobes fold onto
- * one volume image; the rare second record of a rounding tie is made again
- * by the scatter), else 2. */
-static inline uint32_t bin_point_slots(const struct bin_set *b)
+/* Staged records per item (point, segment or triangle): 1 on a mirrored
+ * device, where both lobes fold onto one volume image (a point's rare
+ * second record of a rounding tie is made again by the scatter), else 2. */
+static inline uint32_t bin_slots(const struct bin_set *b)
 {
 	return b->geom.mirrored ? 1 : 2;
 }
@@ -190,7 +190,7 @@ static inline uint32_t bin_point_slots(const struct bin_set *b)
 bool bin_points_isa_supported(enum bin_points_isa isa);
 
 /* Stages points j0 .. j1 - 1 of draw d: recs and keys point at point j0's
- * bin_point_slots() entries; counts each record's volume image in hist. */
+ * bin_slots() entries; counts each record's volume image in hist. */
 void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
 		      struct bin_point *recs, uint16_t *keys, uint32_t *hist);
 

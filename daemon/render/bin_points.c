@@ -509,7 +509,7 @@ void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint6
 	uint32_t turn = bin_draw_turn(b, d);
 	uint64_t j = j0;
 #ifdef BIN_POINTS_X86
-	const uint32_t slots = bin_point_slots(b);
+	const uint32_t slots = bin_slots(b);
 	enum bin_points_isa isa = b->geom.images_per_rev % 2 == 0 ? isa_of(b->points_isa) : BIN_POINTS_SCALAR;
 	if (isa == BIN_POINTS_AVX512)
 		j = stage_avx512(b, d, j0, j1, recs, keys, hist);

@@ -22,7 +22,8 @@ static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 struct compose_worker {
 	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
 	uint8_t *touched; /* tiles_per_image flags */
-	uint8_t *run;     /* patch_shifted()'s changed run of tiles: tiles_per_image of them */
+	uint8_t *run;     /* lay_run()'s tiles: tiles_per_image of them */
+	uint8_t *mask;    /* and their presence: mask_bytes */
 	int err;
 };
 
@@ -51,6 +52,23 @@ struct compose {
 	unsigned n;
 	atomic_uint next_image;
 };
+
+/* Each worker's dense image and run (compose_destroy() frees them). */
+static int workers_create(struct compose *c)
+{
+	if (!(c->w = calloc(c->workers, sizeof(*c->w))))
+		return -ENOMEM;
+	for (unsigned i = 0; i < c->workers; i++) {
+		struct compose_worker *w = &c->w[i];
+		w->tiles = calloc(c->tiles_per_image, VOLUME_TILE_BYTES);
+		w->touched = calloc(c->tiles_per_image, 1);
+		w->run = malloc((size_t)c->tiles_per_image * VOLUME_TILE_BYTES);
+		w->mask = calloc(c->mask_bytes, 1);
+		if (!w->tiles || !w->touched || !w->run || !w->mask)
+			return -ENOMEM;
+	}
+	return 0;
+}
 
 struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 {
@@ -82,16 +100,8 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	for (uint32_t k = 0; k < c->image_count; k++)
 		for (uint32_t t = 0; t < c->tiles_per_image; t++)
 			c->all_dirty[(size_t)k * c->mask_bytes + t / 8] |= (uint8_t)(1u << (t % 8));
-	c->w = calloc(c->workers, sizeof(*c->w));
-	if (!c->w)
+	if (workers_create(c) < 0)
 		goto fail;
-	for (unsigned i = 0; i < c->workers; i++) {
-		c->w[i].tiles = calloc(c->tiles_per_image, VOLUME_TILE_BYTES);
-		c->w[i].touched = calloc(c->tiles_per_image, 1);
-		c->w[i].run = malloc((size_t)c->tiles_per_image * VOLUME_TILE_BYTES);
-		if (!c->w[i].tiles || !c->w[i].touched || !c->w[i].run)
-			goto fail;
-	}
 	return c;
 fail:
 	compose_destroy(c);
@@ -107,6 +117,7 @@ void compose_destroy(struct compose *c)
 		free(c->w[i].tiles);
 		free(c->w[i].touched);
 		free(c->w[i].run);
+		free(c->w[i].mask);
 	}
 	free(c->w);
 	brightness_tables_finish(&c->thr);
@@ -267,15 +278,6 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 	return 0;
 }
 
-/* The highest tile of a mask that is not empty. */
-static uint32_t last_tile(const uint8_t *mask, uint32_t bytes)
-{
-	uint32_t b = bytes - 1;
-	while (!mask[b])
-		b--;
-	return b * 8 + 31 - (uint32_t)__builtin_clz(mask[b]);
-}
-
 /* Writes the gathered (touched) dirty tiles that are still in w's dense
  * image over old's, whose mask holds them, leaving the dense image zero. */
 static void write_touched(const struct compose *c, struct compose_worker *w, struct volume_image *old,
@@ -285,7 +287,7 @@ static void write_touched(const struct compose *c, struct compose_worker *w, str
 	for (uint32_t b = 0; b < c->mask_bytes; base += volume_mask_bits(old->mask[b]), b++)
 		for (uint32_t d = dirty[b] & old->mask[b]; d; d &= d - 1) {
 			uint32_t bitno = (uint32_t)__builtin_ctz(d), t = b * 8 + bitno;
-			if (!w->touched[t]) /* laid out already (lay_run()) */
+			if (!w->touched[t]) /* spliced in already (lay_run()) */
 				continue;
 			uint32_t i = base + volume_mask_bits(old->mask[b] & ((1u << bitno) - 1));
 			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
@@ -295,39 +297,35 @@ static void write_touched(const struct compose *c, struct compose_worker *w, str
 		}
 }
 
-/* The dirty tiles whose presence changes (old has them and the sources
- * no longer do, or the other way): the first and last, and how many
- * fewer or more tiles the image holds. False when there are none. */
+/* The first and last dirty tiles whose presence changes (old has them
+ * and the sources no longer do, or the other way); false when none does. */
 static bool presence_changes(const struct compose *c, const struct compose_worker *w, const struct volume_image *old,
-			     const uint8_t *dirty, uint32_t *first, uint32_t *last, int32_t *delta)
+			     const uint8_t *dirty, uint32_t *first, uint32_t *last)
 {
 	bool any = false;
-	*delta = 0;
 	for (uint32_t b = 0; b < c->mask_bytes; b++)
 		for (uint32_t d = dirty[b]; d; d &= d - 1) {
 			uint32_t t = b * 8 + (uint32_t)__builtin_ctz(d);
-			bool had = bit(old->mask, t), has = w->touched[t];
-			if (had == has)
+			if (bit(old->mask, t) == (w->touched[t] != 0))
 				continue;
 			*first = any ? *first : t;
 			*last = t;
-			*delta += has ? 1 : -1;
 			any = true;
 		}
 	return any;
 }
 
-/* Lays out tiles first..last of old anew at dst (presence: the gathered
- * tiles where dirty, else old's), from w's dense image and from old's
- * stored tiles from index at on, and sets their mask bits. Returns the
- * tiles laid out; *next: old's stored index after the run. */
-static uint32_t lay_run(struct compose_worker *w, struct volume_image *old, const uint8_t *dirty, uint32_t first,
-			uint32_t last, uint32_t at, uint8_t *dst, uint32_t *next)
+/* Tiles first..last of image old as they are to be, in order in w->run
+ * with their presence in w->mask: the gathered tiles where dirty (taken
+ * from w's dense image, which is left zero there), else old's stored
+ * ones (from index at on). */
+static void lay_run(const struct compose *c, struct compose_worker *w, const struct volume_image *old,
+		    const uint8_t *dirty, uint32_t first, uint32_t last, uint32_t at)
 {
 	uint32_t i = at, n = 0;
 	for (uint32_t t = first; t <= last; t++) {
 		bool had = bit(old->mask, t), has = had;
-		uint8_t *to = dst + (size_t)n * VOLUME_TILE_BYTES;
+		uint8_t *to = w->run + (size_t)n * VOLUME_TILE_BYTES;
 		if (bit(dirty, t)) {
 			has = w->touched[t];
 			if (has) {
@@ -341,41 +339,26 @@ static uint32_t lay_run(struct compose_worker *w, struct volume_image *old, cons
 		}
 		i += had;
 		n += has;
-		old->mask[t / 8] = (uint8_t)((old->mask[t / 8] & ~(1u << (t % 8))) | ((uint32_t)has << (t % 8)));
+		uint8_t m = (uint8_t)(1u << (t % 8));
+		w->mask[t / 8] = (uint8_t)(has ? w->mask[t / 8] | m : w->mask[t / 8] & ~m);
 	}
-	*next = i;
-	return n;
 }
 
-/* Image k of c->out patched in place: the tiles up to the first whose
- * presence changes stay where they are, those after the last move by the
- * change in count (one memmove), and only the run between is laid out
- * anew (in w->run, then copied in; straight in place where old holds
- * nothing from there on); the other gathered tiles are written over
- * their places. A small object moving over a large static one so costs
- * the tiles about it, not the whole image. 0 or -ENOMEM. */
+/* Image k of c->out patched in place: where tiles come or go, the run
+ * from the first such to the last is laid out anew and spliced in
+ * (volume_image_splice(): the tiles before it stay, those after it move
+ * by one memmove); the other gathered tiles are written over their
+ * places. A small object moving over a large static one so costs the
+ * tiles about it, not the whole image. 0 or -ENOMEM. */
 static int patch_shifted(const struct compose *c, struct compose_worker *w, uint32_t k, const uint8_t *dirty)
 {
 	struct volume_image *old = &c->out->images[k];
 	uint32_t first = 0, last = 0;
-	int32_t delta = 0;
-	if (presence_changes(c, w, old, dirty, &first, &last, &delta)) {
-		int err = volume_image_reserve(c->out, k, (uint32_t)((int32_t)old->tile_count + delta));
+	if (presence_changes(c, w, old, dirty, &first, &last)) {
+		lay_run(c, w, old, dirty, first, last, volume_stored_index(old->mask, first));
+		int err = volume_image_splice(c->out, k, first, last, w->mask, w->run);
 		if (err < 0)
 			return err;
-		uint32_t at = volume_stored_index(old->mask, first), next;
-		uint8_t *place = old->tiles + (size_t)at * VOLUME_TILE_BYTES;
-		bool direct = at == old->tile_count; /* nothing of old to move */
-		uint32_t n = lay_run(w, old, dirty, first, last, at, direct ? place : w->run, &next);
-		if (!direct) {
-			memmove(place + (size_t)n * VOLUME_TILE_BYTES, old->tiles + (size_t)next * VOLUME_TILE_BYTES,
-				(size_t)(old->tile_count - next) * VOLUME_TILE_BYTES);
-			memcpy(place, w->run, (size_t)n * VOLUME_TILE_BYTES);
-		}
-		old->tile_count = (uint32_t)((int32_t)old->tile_count + delta);
-		if (last + 1 >= old->next_tile)
-			old->next_tile = old->tile_count ? last_tile(old->mask, c->mask_bytes) + 1 : 0;
-		c->out->origin = 0;
 	}
 	write_touched(c, w, old, dirty);
 	return 0;
