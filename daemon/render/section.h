@@ -75,6 +75,24 @@ static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t 
 	c->rows[t] |= 1u << (v % VOLUME_TILE);
 }
 
+/* A triangle for section_triangles(): three vertices (x, y, z each, in
+ * float as binned) and its colour. */
+struct section_tri {
+	const float *v;
+	const uint8_t *rgb;
+};
+
+#define SECTION_BATCH 8
+
+/* section_prim() of each of n (at most SECTION_BATCH) triangles in w's
+ * image, unmirrored, bit for bit the same canvas: the common cases eight
+ * at a time where the CPU has AVX-512 (section_batch.c), the rest one by
+ * one. */
+void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t,
+		       unsigned n);
+/* Whether section_triangles() has its eight-lane path on this CPU. */
+bool section_batch_supported(void);
+
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k);
 
 /* Lights columns u0..u1 of row v by per-channel MAX with rgb. */

@@ -1,0 +1,348 @@
+/* Triangles of one image sectioned eight at a time (section.h,
+ * section_triangles()): the same operations as section_prim()'s, in the
+ * same order, on eight lanes of doubles, for the cases that make up most
+ * of a dense mesh; every other lane goes to section_prim() itself.
+ *
+ * A lane follows prim_body(), lobe_piece() and raster_rows() (section.c)
+ * step for step:
+ * - d1, d2 and their sum's range; a lane in the brightness band (weighted)
+ *   or reaching both lobes leaves for section_prim();
+ * - the lobe's in-counts; none inside a plane: nothing;
+ * - one Sutherland-Hodgman pass, by plane 1 where some vertex is outside
+ *   it, else by plane 2 (every vertex inside both: the pass keeps them as
+ *   they are). After plane 1 section_prim() clips by plane 2 too, which
+ *   keeps the polygon as it is when each of its vertices is inside; a lane
+ *   where one is not leaves. The pass's output is kept in six slots, each
+ *   vertex followed by the cut point of the edge it starts; a slot the
+ *   pass does not emit repeats the one before it (cyclically), so the
+ *   slots' consecutive pairs are the polygon's edges plus edges of no
+ *   length, which raster_rows() skips (y0 == y1), and their vertices are
+ *   the polygon's;
+ * - rows from the extreme y; a piece in more than two rows leaves;
+ * - per row, the s range of the vertices in the row's slab and of the
+ *   edges' crossings of its inner line, then the columns. Minimum and
+ *   maximum give the same values in any order. */
+#include "section.h"
+
+#include <math.h>
+#include <stdbool.h>
+#include <string.h>
+
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define SECTION_BATCH_X86 1
+#endif
+
+#ifdef SECTION_BATCH_X86
+
+#define SLOTS 6
+
+/* The most rows a piece may span here; taller ones go to section_prim(). */
+#define MAX_ROWS 8
+
+/* What the eight lanes light: from row[l] on, rows of spans u0..u1,
+ * lane l's row r where bit l of lit[r] is set. */
+struct lanes_out {
+	uint32_t rows;
+	uint32_t row[8];
+	uint32_t u0[MAX_ROWS][8], u1[MAX_ROWS][8];
+	__mmask8 lit[MAX_ROWS];
+};
+
+/* An edge of the slot polygon, its lower end first (edges_init()). */
+struct edge {
+	__m512d y0, y1, s0, dsdy;
+	__mmask8 rising; /* y1 > y0: the others cross nothing */
+};
+
+/* geometry_clamp_index_() on eight lanes. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i clamp_index(__m512d f, uint32_t n)
+{
+	__mmask8 ok = _mm512_cmp_pd_mask(f, _mm512_setzero_pd(), _CMP_GE_OQ);
+	__mmask8 over = _mm512_cmp_pd_mask(f, _mm512_set1_pd((double)n), _CMP_GE_OQ);
+	__m256i i = _mm512_maskz_cvttpd_epi32(ok & ~over, f);
+	i = _mm256_mask_mov_epi32(i, over, _mm256_set1_epi32((int)(n - 1)));
+	return _mm512_cvtepu32_epi64(i);
+}
+
+/* canvas_row() (section.c) on eight lanes. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i lane_rows(const struct section_canvas *c,
+										     __m512d y)
+{
+	double h = c->geom.half_height;
+	__m512d d = _mm512_sub_pd(_mm512_set1_pd(h), y), f;
+	if (c->row_scale == 0.0)
+		f = _mm512_mul_pd(_mm512_div_pd(d, _mm512_set1_pd(2.0 * h)), _mm512_set1_pd((double)c->geom.height));
+	else
+		f = _mm512_mul_pd(_mm512_mul_pd(d, _mm512_set1_pd(c->row_scale)),
+				  _mm512_set1_pd((double)c->geom.height));
+	return clamp_index(f, c->geom.height);
+}
+
+/* geometry_column() on eight lanes. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i lane_columns(const struct section_canvas *c,
+											__m512d s)
+{
+	__m512d f = _mm512_mul_pd(_mm512_div_pd(_mm512_add_pd(s, _mm512_set1_pd(1.0)), _mm512_set1_pd(2.0)),
+				  _mm512_set1_pd((double)c->geom.width));
+	return clamp_index(f, c->geom.width);
+}
+
+/* edges_init() of the slot polygon's edges (per lane). */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void edges_of(const __m512d *s, const __m512d *y,
+										 struct edge e[SLOTS])
+{
+	for (int j = 0; j < SLOTS; j++) {
+		int k = j + 1 < SLOTS ? j + 1 : 0;
+		__mmask8 swap = _mm512_cmp_pd_mask(y[j], y[k], _CMP_GT_OQ);
+		e[j].y0 = _mm512_mask_blend_pd(swap, y[j], y[k]);
+		e[j].y1 = _mm512_mask_blend_pd(swap, y[k], y[j]);
+		e[j].s0 = _mm512_mask_blend_pd(swap, s[j], s[k]);
+		__m512d s1 = _mm512_mask_blend_pd(swap, s[k], s[j]);
+		e[j].rising = _mm512_cmp_pd_mask(e[j].y1, e[j].y0, _CMP_GT_OQ);
+		e[j].dsdy =
+			_mm512_maskz_div_pd(e[j].rising, _mm512_sub_pd(s1, e[j].s0), _mm512_sub_pd(e[j].y1, e[j].y0));
+	}
+}
+
+/* edges_cross() at line y (per lane). */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void cross_edges(
+	const struct edge e[SLOTS], __m512d line, __m512d *lo, __m512d *hi)
+{
+	for (int j = 0; j < SLOTS; j++) {
+		__mmask8 on = _mm512_cmp_pd_mask(line, e[j].y0, _CMP_GE_OQ) &
+			      _mm512_cmp_pd_mask(line, e[j].y1, _CMP_LE_OQ) & e[j].rising;
+		__m512d at = _mm512_add_pd(e[j].s0, _mm512_mul_pd(_mm512_sub_pd(line, e[j].y0), e[j].dsdy));
+		*lo = _mm512_mask_min_pd(*lo, on, *lo, at);
+		*hi = _mm512_mask_max_pd(*hi, on, *hi, at);
+	}
+}
+
+/* The s range of the slots whose y lies in [ylo, yhi]. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void slab_vertices(
+	const __m512d *s, const __m512d *y, __m512d ylo, __m512d yhi, __m512d *lo, __m512d *hi)
+{
+	for (int j = 0; j < SLOTS; j++) {
+		__mmask8 in = _mm512_cmp_pd_mask(y[j], ylo, _CMP_GE_OQ) & _mm512_cmp_pd_mask(y[j], yhi, _CMP_LE_OQ);
+		*lo = _mm512_mask_min_pd(*lo, in, *lo, s[j]);
+		*hi = _mm512_mask_max_pd(*hi, in, *hi, s[j]);
+	}
+}
+
+/* One pass keeping n.p >= 0 (clip_plane()) on three vertices, into the
+ * slots; a slot not emitted repeats the emitted one before it. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void clip_slots(
+	const __m512d x[3], const __m512d y[3], const __m512d z[3], __m512d nx, __m512d nz, __m512d sx[SLOTS],
+	__m512d sy[SLOTS], __m512d sz[SLOTS])
+{
+	__m512d dp[3];
+	__mmask8 keep[3], valid[SLOTS];
+	for (int i = 0; i < 3; i++) {
+		dp[i] = _mm512_add_pd(_mm512_mul_pd(nx, x[i]), _mm512_mul_pd(nz, z[i]));
+		keep[i] = _mm512_cmp_pd_mask(dp[i], _mm512_setzero_pd(), _CMP_GE_OQ);
+	}
+	for (int i = 0; i < 3; i++) {
+		int k = i + 1 < 3 ? i + 1 : 0;
+		__m512d t = _mm512_div_pd(dp[i], _mm512_sub_pd(dp[i], dp[k]));
+		sx[2 * i] = x[i];
+		sy[2 * i] = y[i];
+		sz[2 * i] = z[i];
+		sx[2 * i + 1] = _mm512_add_pd(x[i], _mm512_mul_pd(t, _mm512_sub_pd(x[k], x[i])));
+		sy[2 * i + 1] = _mm512_add_pd(y[i], _mm512_mul_pd(t, _mm512_sub_pd(y[k], y[i])));
+		sz[2 * i + 1] = _mm512_add_pd(z[i], _mm512_mul_pd(t, _mm512_sub_pd(z[k], z[i])));
+		valid[2 * i] = keep[i];
+		valid[2 * i + 1] = keep[i] ^ keep[k];
+	}
+	/* The last emitted slot, then each slot or the last before it. */
+	__m512d lx = sx[0], ly = sy[0], lz = sz[0];
+	for (int pass = 0; pass < 2; pass++) {
+		for (int j = 0; j < SLOTS; j++) {
+			lx = _mm512_mask_blend_pd(valid[j], lx, sx[j]);
+			ly = _mm512_mask_blend_pd(valid[j], ly, sy[j]);
+			lz = _mm512_mask_blend_pd(valid[j], lz, sz[j]);
+			if (pass) {
+				sx[j] = lx;
+				sy[j] = ly;
+				sz[j] = lz;
+			}
+		}
+	}
+}
+
+/* Eight triangles (lanes of x, y, z; active lanes set) in image w. */
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch8(
+	const struct section_canvas *c, const struct section_wedge *w, const __m512d x[3], const __m512d y[3],
+	const __m512d z[3], __mmask8 active, struct lanes_out *out, __mmask8 *pending)
+{
+	const __m512d zero = _mm512_setzero_pd(), inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
+	__m512d d1[3], d2[3], lo = inf, hi = ninf, xz = zero;
+	for (int i = 0; i < 3; i++) {
+		d1[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n1x), x[i]),
+				      _mm512_mul_pd(_mm512_set1_pd(w->n1z), z[i]));
+		d2[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n2x), x[i]),
+				      _mm512_mul_pd(_mm512_set1_pd(w->n2z), z[i]));
+		__m512d e = _mm512_add_pd(d1[i], d2[i]);
+		lo = _mm512_min_pd(lo, e);
+		hi = _mm512_max_pd(hi, e);
+		xz = _mm512_max_pd(xz, _mm512_max_pd(_mm512_abs_pd(x[i]), _mm512_abs_pd(z[i])));
+	}
+	__mmask8 leave = 0;
+	if (c->bright && brightness_active(c->bright)) { /* weight_start() */
+		__m512d band = _mm512_set1_pd(c->bright->band_d);
+		leave |= ~(_mm512_cmp_pd_mask(hi, _mm512_sub_pd(zero, band), _CMP_LT_OQ) |
+			   _mm512_cmp_pd_mask(lo, band, _CMP_GT_OQ));
+	}
+	/* lobes_reached(): both lobes leave, none is nothing. */
+	__m512d m = _mm512_mul_pd(_mm512_set1_pd(1e-12), xz);
+	__mmask8 front = ~_mm512_cmp_pd_mask(hi, _mm512_sub_pd(zero, m), _CMP_LT_OQ);
+	__mmask8 back = ~_mm512_cmp_pd_mask(lo, m, _CMP_GT_OQ);
+	leave |= _mm512_cmp_pd_mask(lo, zero, _CMP_LE_OQ) & _mm512_cmp_pd_mask(hi, zero, _CMP_GE_OQ);
+	leave |= front & back;
+	__mmask8 live = active & ~leave & (front | back);
+	__m512d sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
+	/* lobe_piece()'s in-counts. */
+	__mmask8 any1 = 0, any2 = 0, all1 = 0xff, all2 = 0xff;
+	for (int i = 0; i < 3; i++) {
+		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d1[i]), zero, _CMP_GE_OQ);
+		__mmask8 in2 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d2[i]), zero, _CMP_GE_OQ);
+		any1 |= in1;
+		any2 |= in2;
+		all1 &= in1;
+		all2 &= in2;
+	}
+	live &= any1 & any2;
+	/* The clip: plane 1 where some vertex is outside it, else plane 2. */
+	__m512d n1x = _mm512_mul_pd(sign, _mm512_set1_pd(w->n1x)), n1z = _mm512_mul_pd(sign, _mm512_set1_pd(w->n1z));
+	__m512d n2x = _mm512_mul_pd(sign, _mm512_set1_pd(w->n2x)), n2z = _mm512_mul_pd(sign, _mm512_set1_pd(w->n2z));
+	__m512d sx[SLOTS], sy[SLOTS], sz[SLOTS], s[SLOTS];
+	clip_slots(x, y, z, _mm512_mask_blend_pd(all1, n1x, n2x), _mm512_mask_blend_pd(all1, n1z, n2z), sx, sy, sz);
+	__m512d ymin = inf, ymax = ninf;
+	for (int j = 0; j < SLOTS; j++) {
+		/* After plane 1, plane 2 must keep every vertex. */
+		__m512d dp = _mm512_add_pd(_mm512_mul_pd(n2x, sx[j]), _mm512_mul_pd(n2z, sz[j]));
+		leave |= ~all1 & live & _mm512_cmp_pd_mask(dp, zero, _CMP_LT_OQ);
+		s[j] = _mm512_add_pd(_mm512_mul_pd(sx[j], _mm512_set1_pd(w->dx)),
+				     _mm512_mul_pd(sz[j], _mm512_set1_pd(w->dz)));
+		ymin = _mm512_min_pd(ymin, sy[j]);
+		ymax = _mm512_max_pd(ymax, sy[j]);
+	}
+	/* raster_rows(): a row at a time, as many as the tallest piece has. */
+	__m512i v0 = lane_rows(c, ymax), v1 = lane_rows(c, ymin);
+	leave |= live & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(v1, v0), _mm512_set1_epi64(MAX_ROWS - 1));
+	live &= ~leave;
+	struct edge e[SLOTS];
+	edges_of(s, sy, e);
+	double h = c->geom.half_height, row_h = 2.0 * h / c->geom.height, eps = 1e-9 * row_h;
+	const __m512d hv = _mm512_set1_pd(h), rh = _mm512_set1_pd(row_h), ev = _mm512_set1_pd(eps);
+	uint32_t rows = live ? (uint32_t)_mm512_mask_reduce_max_epi64(live, _mm512_sub_epi64(v1, v0)) + 1 : 0;
+	_mm256_storeu_si256((__m256i *)out->row, _mm512_cvtepi64_epi32(v0));
+	out->rows = rows;
+	for (uint32_t r = 0; r < rows; r++) {
+		__m512i v = _mm512_add_epi64(v0, _mm512_set1_epi64(r));
+		__mmask8 on = live & _mm512_cmple_epi64_mask(v, v1);
+		__mmask8 top = _mm512_cmpeq_epi64_mask(v, v0), bottom = _mm512_cmpeq_epi64_mask(v, v1);
+		__m512d vd = _mm512_cvtepu64_pd(v),
+			next = _mm512_cvtepu64_pd(_mm512_add_epi64(v, _mm512_set1_epi64(1)));
+		__m512d yhi =
+			_mm512_mask_blend_pd(top, _mm512_add_pd(_mm512_sub_pd(hv, _mm512_mul_pd(vd, rh)), ev), inf);
+		__m512d ylo = _mm512_mask_blend_pd(bottom,
+						   _mm512_sub_pd(_mm512_sub_pd(hv, _mm512_mul_pd(next, rh)), ev), ninf);
+		__m512d slo = inf, shi = ninf;
+		slab_vertices(s, sy, ylo, yhi, &slo, &shi);
+		cross_edges(e, yhi, &slo, &shi); /* an infinite line crosses nothing */
+		cross_edges(e, ylo, &slo, &shi);
+		out->lit[r] = on & _mm512_cmp_pd_mask(slo, shi, _CMP_LE_OQ);
+		_mm256_storeu_si256((__m256i *)out->u0[r], _mm512_cvtepi64_epi32(lane_columns(c, slo)));
+		_mm256_storeu_si256((__m256i *)out->u1[r], _mm512_cvtepi64_epi32(lane_columns(c, shi)));
+	}
+	*pending = active & leave;
+}
+
+static bool batch_cpu(void)
+{
+	static int have = -1;
+	if (have < 0) {
+		__builtin_cpu_init();
+		have = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+		       __builtin_cpu_supports("avx512vl");
+	}
+	return have;
+}
+
+bool section_batch_supported(void)
+{
+	return batch_cpu();
+}
+
+__attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch(
+	struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+{
+	double lx[3][8], ly[3][8], lz[3][8];
+	for (unsigned l = 0; l < 8; l++) {
+		const float *v = t[l < n ? l : 0].v;
+		for (int i = 0; i < 3; i++) {
+			lx[i][l] = v[3 * i];
+			ly[i][l] = v[3 * i + 1];
+			lz[i][l] = v[3 * i + 2];
+		}
+	}
+	__m512d x[3], y[3], z[3];
+	for (int i = 0; i < 3; i++) {
+		x[i] = _mm512_loadu_pd(lx[i]);
+		y[i] = _mm512_loadu_pd(ly[i]);
+		z[i] = _mm512_loadu_pd(lz[i]);
+	}
+	struct lanes_out out;
+	__mmask8 pending;
+	batch8(c, w, x, y, z, (__mmask8)((1u << n) - 1), &out, &pending);
+	for (unsigned l = 0; l < n; l++) {
+		if (pending >> l & 1) {
+			double v[3][3];
+			for (int i = 0; i < 3; i++) {
+				v[i][0] = lx[i][l];
+				v[i][1] = ly[i][l];
+				v[i][2] = lz[i][l];
+			}
+			section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
+			continue;
+		}
+		for (uint32_t r = 0; r < out.rows; r++)
+			if (out.lit[r] >> l & 1)
+				section_span(c, out.row[l] + r, out.u0[r][l], out.u1[r][l], t[l].rgb);
+	}
+}
+
+void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+{
+	if (!c->general && batch_cpu()) {
+		batch(c, w, t, n);
+		return;
+	}
+	for (unsigned l = 0; l < n; l++) {
+		double v[3][3];
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++)
+				v[i][j] = t[l].v[3 * i + j];
+		section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
+	}
+}
+
+#else
+
+bool section_batch_supported(void)
+{
+	return false;
+}
+
+void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+{
+	for (unsigned l = 0; l < n; l++) {
+		double v[3][3];
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++)
+				v[i][j] = t[l].v[3 * i + j];
+		section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
+	}
+}
+
+#endif
