@@ -9,6 +9,11 @@
 
 #include "pool.h"
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#define BIN_TRIS_X86 1
+#endif
+
 #define KEY_NONE UINT32_MAX
 /* A staged primitive's key holds its sort key (class * M + first) in the
  * low KEY_BITS bits and its turn (mod N) above them: sort keys are below
@@ -130,7 +135,7 @@ static int draw_verts(const struct scene_draw *d)
  * False when the projection may touch the axis: every slot. */
 static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool neg, uint32_t *first, uint32_t *len)
 {
-	uint32_t s[3], N = b->slots.n;
+	uint32_t s[3] = { 0 }, N = b->slots.n;
 	bool near = false;
 	float sign = neg ? -1.0f : 1.0f;
 	for (int i = 0; i < n; i++) {
@@ -243,33 +248,19 @@ static struct chunk chunk_of(uint64_t items, unsigned threads, unsigned w)
 	return (struct chunk){ items * w / threads, items * (w + 1) / threads };
 }
 
-/* Runs body for every item i of one kind (points or not) in [c.lo, c.hi),
- * with d its draw, nv its vertex count, xyz_ its vertices, rgb_ its colour
- * (the draw's, or the item's own from prim_rgb) and turn_ its draw's turn
- * mod N. */
-#define BASE_(db, points) ((points) ? (db).point : (db).prim)
-#define FOR_ITEMS(b, points, c, d, nv, i, body)                                                                    \
-	do {                                                                                                       \
-		const struct bin_work *w_ = (b)->work;                                                             \
-		const struct draw_base *base_ = w_->base;                                                          \
-		for (uint32_t di_ = 0; di_ < w_->scene->draw_count; di_++) {                                       \
-			const struct scene_draw *d = &w_->scene->draws[di_];                                       \
-			int nv = draw_verts(d);                                                                    \
-			if (nv == 0 || !d->xyz || (nv == 1) != (points))                                           \
-				continue;                                                                          \
-			uint64_t n_ = d->count / (uint32_t)nv;                                                     \
-			const uint32_t turn_ = bin_draw_turn(b, d);                                                \
-			uint64_t lo_ = BASE_(base_[di_], points) > (c).lo ? BASE_(base_[di_], points) : (c).lo;    \
-			uint64_t hi_ =                                                                             \
-				BASE_(base_[di_], points) + n_ < (c).hi ? BASE_(base_[di_], points) + n_ : (c).hi; \
-			for (uint64_t i = lo_; i < hi_; i++) {                                                     \
-				uint64_t j_ = i - BASE_(base_[di_], points);                                       \
-				const float *xyz_ = d->xyz + j_ * (uint64_t)nv * 3;                                \
-				const uint8_t *rgb_ = d->prim_rgb ? d->prim_rgb + j_ * 3 : d->rgb;                 \
-				body                                                                               \
-			}                                                                                          \
-		}                                                                                                  \
-	} while (0)
+/* The segments or triangles of draw di in chunk c: [*lo, *hi), false
+ * when none. */
+static bool prim_run(const struct bin_work *w, uint32_t di, struct chunk c, uint64_t *lo, uint64_t *hi)
+{
+	const struct scene_draw *d = &w->scene->draws[di];
+	int nv = draw_verts(d);
+	if (nv < 2 || !d->xyz)
+		return false;
+	uint64_t base = w->base[di].prim, end = base + d->count / (uint32_t)nv;
+	*lo = base > c.lo ? base : c.lo;
+	*hi = end < c.hi ? end : c.hi;
+	return *lo < *hi;
+}
 
 /* The points of draw di in chunk c: [*lo, *hi), false when none. */
 static bool point_run(const struct bin_work *w, uint32_t di, struct chunk c, uint64_t *lo, uint64_t *hi)
@@ -292,6 +283,189 @@ static inline void count_keys(uint32_t *hist, const struct stage_prim *s, uint32
 			hist[s[i].key & KEY_MASK]++;
 }
 
+#ifdef BIN_TRIS_X86
+#define TRIS_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512cd,avx2")))
+
+static bool tris_wide(void)
+{
+	static int have = -1;
+	if (have < 0) {
+		__builtin_cpu_init();
+		have = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+		       __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd");
+	}
+	return have;
+}
+
+/* slot_of() of eight (x, z), with the same operations: the slots; the
+ * lanes it flags near a boundary are added to *near, those on the axis
+ * to *axis. */
+TRIS_TARGET static inline __m256i slots8(const struct slot_table *t, __m256 fx, __m256 fz, __mmask8 *near,
+					 __mmask8 *axis)
+{
+	const __m256 fzero = _mm256_setzero_ps(), fabsmask = _mm256_castsi256_ps(_mm256_set1_epi32(INT32_MAX));
+	__m256 ax = _mm256_and_ps(fx, fabsmask), az = _mm256_and_ps(fz, fabsmask);
+	__m256 xneg = _mm256_cmp_ps(fx, fzero, _CMP_LT_OS), zneg = _mm256_cmp_ps(fz, fzero, _CMP_LT_OS);
+	__m256 odd = _mm256_xor_ps(xneg, zneg); /* quadrants 1 and 3 */
+	__m256 perp = _mm256_blendv_ps(az, ax, odd), radial = _mm256_blendv_ps(ax, az, odd);
+	__m256 gt = _mm256_cmp_ps(perp, radial, _CMP_GT_OS);
+	__m256 mn = _mm256_min_ps(perp, radial), mx = _mm256_max_ps(perp, radial);
+	__mmask8 zero = _mm256_cmp_ps_mask(mx, fzero, _CMP_EQ_OQ);
+	*axis |= zero;
+	/* The slope, zeroed on the axis so that the gathers stay in the table. */
+	__m256 s = _mm256_maskz_div_ps((__mmask8)~zero, mn, mx);
+	__m256i q = _mm256_sub_epi32(
+		_mm256_setzero_si256(),
+		_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
+				 _mm256_castps_si256(odd))); /* 2 zneg + odd */
+	__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
+	__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, _mm256_set1_epi32((int)t->buckets + 1)),
+				       _mm256_cvttps_epi32(_mm256_mul_ps(s, _mm256_set1_ps((float)t->buckets))));
+	__m256i idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
+	const float *table = (const float *)t->b;
+	__m512i eb = _mm512_i32gather_epi64(idx3, table, 4); /* edge | below << 32 | above << 48 */
+	__m256 nearv = _mm256_i32gather_ps(table + 2, idx3, 4);
+	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
+	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
+	__m256 dd = _mm256_sub_ps(s, nearv);
+	*near |= _mm256_cmp_ps_mask(dd, _mm256_set1_ps(1e-5f), _CMP_LT_OS) &
+		 _mm256_cmp_ps_mask(dd, _mm256_set1_ps(-1e-5f), _CMP_GT_OS);
+	return _mm256_mask_blend_epi32(_mm256_cmp_ps_mask(s, edge, _CMP_GE_OS),
+				       _mm256_and_si256(ba, _mm256_set1_epi32(0xFFFF)), _mm256_srli_epi32(ba, 16));
+}
+
+/* prim_arc() and prim_key() of eight triangles on a mirrored geometry,
+ * from their vertices' slots and near flags: each record's first image
+ * and count, and its key. Lanes on the axis are made "every image". */
+TRIS_TARGET static inline void arcs8(const struct bin_set *b, const __m256i sl[3], __mmask8 near, __mmask8 every,
+				     uint32_t first[8], uint32_t count[8], uint32_t key[8])
+{
+	const uint32_t N = b->slots.n, M = b->images;
+	const __m256i vN = _mm256_set1_epi32((int)N), vM = _mm256_set1_epi32((int)M), one = _mm256_set1_epi32(1);
+	__m256i lo = _mm256_min_epu32(_mm256_min_epu32(sl[0], sl[1]), sl[2]);
+	__m256i hi = _mm256_max_epu32(_mm256_max_epu32(sl[0], sl[1]), sl[2]);
+	__m256i mid =
+		_mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(sl[0], sl[1]), sl[2]), _mm256_add_epi32(lo, hi));
+	/* The largest circular gap, the first of equals. */
+	__m256i gap = _mm256_sub_epi32(_mm256_add_epi32(lo, vN), hi), start = lo, end = hi;
+	__m256i g1 = _mm256_sub_epi32(mid, lo), g2 = _mm256_sub_epi32(hi, mid);
+	__mmask8 c1 = _mm256_cmpgt_epi32_mask(g1, gap);
+	gap = _mm256_mask_blend_epi32(c1, gap, g1);
+	start = _mm256_mask_blend_epi32(c1, start, mid);
+	end = _mm256_mask_blend_epi32(c1, end, lo);
+	__mmask8 c2 = _mm256_cmpgt_epi32_mask(g2, gap);
+	gap = _mm256_mask_blend_epi32(c2, gap, g2);
+	start = _mm256_mask_blend_epi32(c2, start, hi);
+	end = _mm256_mask_blend_epi32(c2, end, mid);
+	__m256i slack = _mm256_mask_blend_epi32(near, one, _mm256_set1_epi32(3));
+	every |= _mm256_cmple_epi32_mask(gap, slack) |
+		 _mm256_cmple_epi32_mask(_mm256_slli_epi32(_mm256_sub_epi32(gap, slack), 1), vN);
+	__m256i len = _mm256_sub_epi32(_mm256_add_epi32(end, vN), start);
+	len = _mm256_mask_sub_epi32(len, _mm256_cmpge_epi32_mask(len, vN), len, vN);
+	len = _mm256_add_epi32(len, one);
+	__m256i back = _mm256_sub_epi32(start, one); /* (start + N - 1) % N */
+	back = _mm256_mask_blend_epi32(_mm256_cmpeq_epi32_mask(start, _mm256_setzero_si256()), back,
+				       _mm256_sub_epi32(vN, one));
+	start = _mm256_mask_blend_epi32(near, start, back);
+	len = _mm256_mask_add_epi32(len, near, len, _mm256_set1_epi32(2));
+	every |= _mm256_cmpge_epi32_mask(len, vN);
+	/* Both lobes fold onto M images; a range of M or more is every one. */
+	start = _mm256_mask_sub_epi32(start, _mm256_cmpge_epi32_mask(start, vM), start, vM);
+	every |= _mm256_cmpge_epi32_mask(len, vM);
+	start = _mm256_maskz_mov_epi32((__mmask8)~every, start);
+	len = _mm256_mask_blend_epi32(every, len, vM);
+	/* ceil_log2(count): 32 - clz(count - 1), 0 for 1 */
+	__m256i cls = _mm256_sub_epi32(_mm256_set1_epi32(32), _mm256_lzcnt_epi32(_mm256_sub_epi32(len, one)));
+	cls = _mm256_maskz_mov_epi32(_mm256_cmpgt_epi32_mask(len, one), cls);
+	_mm256_storeu_si256((__m256i *)first, start);
+	_mm256_storeu_si256((__m256i *)count, len);
+	_mm256_storeu_si256((__m256i *)key, _mm256_add_epi32(_mm256_mullo_epi32(cls, vM), start));
+}
+
+/* bin_one_prim() of triangles j0 .. j1 - 1 of d, eight at a time, on a
+ * mirrored geometry: the same operations lane for lane (the transform
+ * grouped as bin_transform() groups it, the slots as slot_of() finds
+ * them); a lane with a coordinate that is not a finite float goes to
+ * bin_one_prim(). Returns the first triangle not staged. */
+TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+					struct stage_prim *out)
+{
+	const float *m = d->transform;
+	const __m512d fltmax = _mm512_set1_pd(FLT_MAX);
+	const __m256i stride = _mm256_setr_epi32(0, 9, 18, 27, 36, 45, 54, 63);
+	uint64_t j = j0;
+	for (; j + 8 <= j1; j += 8) {
+		const float *p = d->xyz + 9 * j;
+		float v[3][3][8]; /* vertex, coordinate, lane */
+		__m256i sl[3];
+		__mmask8 fin = 0xFF, near = 0, axis = 0;
+		for (int i = 0; i < 3; i++) {
+			__m512d x = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i, stride, 4));
+			__m512d y = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i + 1, stride, 4));
+			__m512d z = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i + 2, stride, 4));
+			__m256 f[3];
+			for (int c = 0; c < 3; c++) {
+				__m512d t = _mm512_add_pd(
+					_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[c]), x),
+								    _mm512_mul_pd(_mm512_set1_pd(m[4 + c]), y)),
+						      _mm512_mul_pd(_mm512_set1_pd(m[8 + c]), z)),
+					_mm512_set1_pd(m[12 + c]));
+				fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(t), fltmax, _CMP_LE_OQ);
+				f[c] = _mm512_cvtpd_ps(t);
+				_mm256_storeu_ps(v[i][c], f[c]);
+			}
+			/* Not finite: left to bin_one_prim(), its slope kept in the table */
+			sl[i] = slots8(&b->slots, _mm256_maskz_mov_ps(fin, f[0]), _mm256_maskz_mov_ps(fin, f[2]), &near,
+				       &axis);
+		}
+		uint32_t first[8], count[8], key[8];
+		arcs8(b, sl, near, axis, first, count, key);
+		for (unsigned l = 0; l < 8; l++) {
+			uint64_t k = j + l;
+			const uint8_t *rgb = d->prim_rgb ? d->prim_rgb + 3 * k : d->rgb;
+			struct stage_prim *s = &out[k - j0];
+			if (!(fin >> l & 1)) {
+				bin_one_prim(b, d, d->xyz + 9 * k, 3, rgb, s);
+				continue;
+			}
+			for (int i = 0; i < 3; i++)
+				for (int c = 0; c < 3; c++)
+					s->rec.v[i][c] = v[i][c][l];
+			s->rec.nverts = 3;
+			memcpy(s->rec.rgb, rgb, 3);
+			s->rec.first = (uint16_t)first[l];
+			s->rec.count = (uint16_t)count[l];
+			s->key = key[l];
+		}
+	}
+	return j;
+}
+#endif
+
+/* The staged records of items j0 .. j1 - 1 of draw d (out: item j0's
+ * bin_slots() entries), turned and counted in hist: triangles on a
+ * mirrored geometry eight at a time where the CPU can (unless
+ * b->prims_scalar), the rest one by one. */
+static void stage_prims(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
+			struct stage_prim *out, uint32_t *hist)
+{
+	const int nv = draw_verts(d);
+	const uint32_t slots = bin_slots(b), turn = bin_draw_turn(b, d);
+	uint64_t j = j0;
+#ifdef BIN_TRIS_X86
+	if (nv == 3 && b->geom.mirrored && !b->prims_scalar && tris_wide())
+		j = stage_tris8(b, d, j0, j1, out);
+#endif
+	for (; j < j1; j++)
+		bin_one_prim(b, d, d->xyz + j * (uint64_t)nv * 3, nv, d->prim_rgb ? d->prim_rgb + 3 * j : d->rgb,
+			     &out[slots * (j - j0)]);
+	for (uint64_t i = 0; i < slots * (j1 - j0); i += slots) {
+		if (turn)
+			turn_prims(b, turn, &out[i]);
+		count_keys(hist, &out[i], slots);
+	}
+}
+
 static void count_job(void *arg, unsigned t)
 {
 	struct bin_set *b = arg;
@@ -300,13 +474,11 @@ static void count_job(void *arg, unsigned t)
 	uint32_t *hist = w->hist + (size_t)t * (pk + b->images);
 	struct chunk c = chunk_of(w->prim_items, w->threads, t);
 	const uint32_t slots = bin_slots(b);
-	FOR_ITEMS(b, false, c, d, nv, i, {
-		struct stage_prim *s = &w->stage_prims[slots * i];
-		bin_one_prim(b, d, xyz_, nv, rgb_, s);
-		if (turn_)
-			turn_prims(b, turn_, s);
-		count_keys(hist, s, slots);
-	});
+	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
+		uint64_t lo, hi, base = w->base[di].prim;
+		if (prim_run(w, di, c, &lo, &hi))
+			stage_prims(b, &w->scene->draws[di], lo - base, hi - base, &w->stage_prims[slots * lo], hist);
+	}
 	c = chunk_of(w->point_items, w->threads, t);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;

@@ -108,6 +108,9 @@ struct bin_set {
 	/* Tests: the path that bins points (bin_points.c); every path gives
 	 * the same records. 0 (BIN_POINTS_AUTO): the fastest there is. */
 	enum bin_points_isa points_isa;
+	/* Tests and the scalar renderer variant: triangles staged one at a
+	 * time (bin.c), not eight at a time; the records are the same. */
+	bool prims_scalar;
 
 	/* Work space of a build. */
 	struct bin_work *work;

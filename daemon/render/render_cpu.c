@@ -46,7 +46,7 @@ struct render_cpu {
 	struct brightness_map bright; /* geom.brightness's weights */
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
-	bool batch; /* unturned triangles through section_triangles() */
+	bool batch; /* unturned triangles through section_triangles() (and binned eight at a time) */
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
@@ -660,6 +660,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 		goto err_free;
 	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
 		goto err_free;
+	r->bins.prims_scalar = !batch; /* the scalar variant bins one at a time too */
 	for (uint32_t k = 0; k < images; k++)
 		section_wedge_init(&r->wedges[k], geom, k);
 	for (unsigned i = 0; i < n; i++) {

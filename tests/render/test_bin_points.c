@@ -6,7 +6,11 @@
  * ones, under the identity, a turn about the axis, a tilt and a scale,
  * with turns, even and odd point sizes and per-point colours, on mirrored,
  * plain, odd-N and perspecta geometries, with 1, 2 and 3 workers, and in
- * draws whose lengths are no multiple of four or eight. */
+ * draws whose lengths are no multiple of four or eight. Likewise the
+ * triangles staged eight at a time (bin.c, on mirrored geometries) against
+ * those staged one at a time (bin_set.prims_scalar): the same bins, records
+ * and turns, from triangles of those points, small ones about every slot
+ * boundary, on the axis and across it. */
 #include <float.h>
 #include <math.h>
 #include <stdio.h>
@@ -141,6 +145,86 @@ static void check_geometry(const struct geometry *g)
 	rtest_mesh_free(&m);
 }
 
+/* Triangles: the stress points three at a time, then small ones about
+ * every slot boundary and across the axis. */
+static void make_triangles(const struct geometry *g, struct rtest_mesh *m)
+{
+	make_points(g, m, 6000);
+	m->count -= m->count % 3;
+	double d = 2.0 * M_PI / g->images_per_rev;
+	for (uint32_t j = 0; j < 2 * g->images_per_rev; j++) {
+		double a = (j + 0.5) * d * 0.5, r = 0.05 + 0.9 * rnd(), e = d * (rnd() - 0.5);
+		rtest_mesh_add(m, r * cos(a), 0.01, r * sin(a));
+		rtest_mesh_add(m, r * cos(a + e), 0.012, r * sin(a + e));
+		rtest_mesh_add(m, (r + 1e-3) * cos(a - e), 0.011, (r + 1e-3) * sin(a - e));
+		double b = 2.0 * M_PI * rnd(); /* across the axis */
+		rtest_mesh_add(m, 1e-3 * cos(b), 0.2, 1e-3 * sin(b));
+		rtest_mesh_add(m, -1e-3 * cos(b + 0.1), 0.2, -1e-3 * sin(b + 0.1));
+		rtest_mesh_add(m, j % 2 ? 0.0 : 1e-4, 0.21, 0.0);
+	}
+	/* Spanning about half a turn, and thirds of one, with vertices on
+	 * slot centres and boundaries (k half slots): the arcs' limits. */
+	uint32_t halves = 2 * g->images_per_rev;
+	for (uint32_t j = 0; j < 4 * halves; j++) {
+		uint32_t k0 = (uint32_t)(rnd() * halves), k1 = k0 + halves / 2 + (uint32_t)(rnd() * 17) - 8;
+		uint32_t k2 = j % 2 ? k0 + (uint32_t)(rnd() * 5) : k0 + halves / 3 + (uint32_t)(rnd() * 3) - 1;
+		if (j % 4 == 3)
+			k1 = k0 + 2 * halves / 3 + (uint32_t)(rnd() * 3) - 1;
+		const uint32_t ks[3] = { k0, k1, k2 };
+		for (int v = 0; v < 3; v++) {
+			double a = 0.5 * ks[v] * d, r = 0.1 + rnd();
+			rtest_mesh_add(m, r * cos(a), 0.3, r * sin(a));
+		}
+	}
+}
+
+static void check_triangles(const struct geometry *g)
+{
+	struct rtest_mesh m = { 0 };
+	make_triangles(g, &m);
+	uint32_t n = m.count / 3, first = 0;
+	uint8_t *rgbs = malloc(3 * (size_t)n);
+	CHECK(rgbs != NULL);
+	for (uint32_t i = 0; i < n; i++)
+		rtest_colour(i, rgbs + 3 * i);
+	struct scene_draw draws[6];
+	for (int i = 0; i < 6; i++) {
+		uint32_t len = i == 5 ? n - first : n / 7 + (uint32_t)i;
+		draws[i] = rtest_draw(SCENE_TRIANGLES, &m, 255, (uint8_t)(40 * i), 7);
+		draws[i].xyz = m.xyz + 9 * (size_t)first;
+		draws[i].count = 3 * len;
+		draws[i].turn = (uint16_t)(i % 3 == 0 ? 0 : i * 37 + 1);
+		draws[i].prim_rgb = i % 2 ? rgbs + 3 * (size_t)first : NULL;
+		set_transforms(&draws[i], i % 4);
+		first += len;
+	}
+	struct scene scene = { .draw_count = 6, .draws = draws };
+	for (unsigned threads = 1; threads <= 2; threads++) {
+		struct pool *pool = pool_create(threads);
+		CHECK(pool != NULL);
+		struct bin_set ref, wide;
+		CHECK(bin_init(&ref, g) == 0 && bin_init(&wide, g) == 0);
+		ref.prims_scalar = true;
+		CHECK(bin_build(&ref, &scene, pool) == 0);
+		CHECK(bin_build(&wide, &scene, pool) == 0);
+		CHECK(ref.prim_count > n / 2);
+		CHECK_MSG(ref.prim_count == wide.prim_count, "N %u: %u triangles against %u", g->images_per_rev,
+			  wide.prim_count, ref.prim_count);
+		CHECK(memcmp(ref.prim_start, wide.prim_start, (ref.classes * ref.images + 1) * sizeof(uint32_t)) == 0);
+		uint32_t differ = 0;
+		for (uint32_t i = 0; i < ref.prim_count && i < wide.prim_count; i++)
+			differ += memcmp(&ref.prims[i], &wide.prims[i], sizeof(struct bin_prim)) != 0 ||
+				  ref.prim_turn[i] != wide.prim_turn[i];
+		CHECK_MSG(differ == 0, "N %u, %u threads: %u of %u triangles differ", g->images_per_rev, threads,
+			  differ, ref.prim_count);
+		bin_finish(&ref);
+		bin_finish(&wide);
+		pool_destroy(pool);
+	}
+	free(rgbs);
+	rtest_mesh_free(&m);
+}
+
 int main(void)
 {
 	struct geometry small = rtest_small(), odd = rtest_odd(), perspecta;
@@ -152,5 +236,9 @@ int main(void)
 	check_geometry(&even_plain);
 	check_geometry(&odd_n);
 	check_geometry(&perspecta);
+	check_triangles(&small);
+	check_triangles(&odd);
+	check_triangles(&even_plain);
+	check_triangles(&perspecta);
 	return check_done();
 }
