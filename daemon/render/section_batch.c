@@ -35,10 +35,20 @@
 
 #ifdef SECTION_BATCH_X86
 
-#define SLOTS 6
+#define TARGET __attribute__((target("avx512f,avx512dq,avx512vl")))
+
+/* Slots of a piece: 6 after one clip of a triangle, 12 after two. */
+#define MAX_SLOTS 12
 
 /* The most rows a piece may span here; taller ones go to section_prim(). */
 #define MAX_ROWS 8
+
+/* A piece in slots (lanes of x, y, z), each the polygon's vertex or a
+ * repeat of the one before it. */
+struct slots {
+	int n;
+	__m512d x[MAX_SLOTS], y[MAX_SLOTS], z[MAX_SLOTS];
+};
 
 /* What the eight lanes light: from row[l] on, rows of spans u0..u1,
  * lane l's row r where bit l of lit[r] is set. */
@@ -56,7 +66,7 @@ struct edge {
 };
 
 /* geometry_clamp_index_() on eight lanes. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i clamp_index(__m512d f, uint32_t n)
+TARGET static inline __m512i clamp_index(__m512d f, uint32_t n)
 {
 	__mmask8 ok = _mm512_cmp_pd_mask(f, _mm512_setzero_pd(), _CMP_GE_OQ);
 	__mmask8 over = _mm512_cmp_pd_mask(f, _mm512_set1_pd((double)n), _CMP_GE_OQ);
@@ -66,8 +76,7 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i clamp
 }
 
 /* canvas_row() (section.c) on eight lanes. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i lane_rows(const struct section_canvas *c,
-										     __m512d y)
+TARGET static inline __m512i lane_rows(const struct section_canvas *c, __m512d y)
 {
 	double h = c->geom.half_height;
 	__m512d d = _mm512_sub_pd(_mm512_set1_pd(h), y), f;
@@ -80,20 +89,19 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i lane_
 }
 
 /* geometry_column() on eight lanes. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline __m512i lane_columns(const struct section_canvas *c,
-											__m512d s)
+TARGET static inline __m512i lane_columns(const struct section_canvas *c, __m512d s)
 {
-	__m512d f = _mm512_mul_pd(_mm512_div_pd(_mm512_add_pd(s, _mm512_set1_pd(1.0)), _mm512_set1_pd(2.0)),
+	/* (s + 1) / 2 == (s + 1) * 0.5 exactly: both round the same real */
+	__m512d f = _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(s, _mm512_set1_pd(1.0)), _mm512_set1_pd(0.5)),
 				  _mm512_set1_pd((double)c->geom.width));
 	return clamp_index(f, c->geom.width);
 }
 
 /* edges_init() of the slot polygon's edges (per lane). */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void edges_of(const __m512d *s, const __m512d *y,
-										 struct edge e[SLOTS])
+TARGET static inline void edges_of(int n, const __m512d *s, const __m512d *y, struct edge *e)
 {
-	for (int j = 0; j < SLOTS; j++) {
-		int k = j + 1 < SLOTS ? j + 1 : 0;
+	for (int j = 0; j < n; j++) {
+		int k = j + 1 < n ? j + 1 : 0;
 		__mmask8 swap = _mm512_cmp_pd_mask(y[j], y[k], _CMP_GT_OQ);
 		e[j].y0 = _mm512_mask_blend_pd(swap, y[j], y[k]);
 		e[j].y1 = _mm512_mask_blend_pd(swap, y[k], y[j]);
@@ -106,10 +114,9 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void edges_of
 }
 
 /* edges_cross() at line y (per lane). */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void cross_edges(
-	const struct edge e[SLOTS], __m512d line, __m512d *lo, __m512d *hi)
+TARGET static inline void cross_edges(int n, const struct edge *e, __m512d line, __m512d *lo, __m512d *hi)
 {
-	for (int j = 0; j < SLOTS; j++) {
+	for (int j = 0; j < n; j++) {
 		__mmask8 on = _mm512_cmp_pd_mask(line, e[j].y0, _CMP_GE_OQ) &
 			      _mm512_cmp_pd_mask(line, e[j].y1, _CMP_LE_OQ) & e[j].rising;
 		__m512d at = _mm512_add_pd(e[j].s0, _mm512_mul_pd(_mm512_sub_pd(line, e[j].y0), e[j].dsdy));
@@ -119,62 +126,117 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void cross_ed
 }
 
 /* The s range of the slots whose y lies in [ylo, yhi]. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void slab_vertices(
-	const __m512d *s, const __m512d *y, __m512d ylo, __m512d yhi, __m512d *lo, __m512d *hi)
+TARGET static inline void slab_vertices(int n, const __m512d *s, const __m512d *y, __m512d ylo, __m512d yhi,
+					__m512d *lo, __m512d *hi)
 {
-	for (int j = 0; j < SLOTS; j++) {
+	for (int j = 0; j < n; j++) {
 		__mmask8 in = _mm512_cmp_pd_mask(y[j], ylo, _CMP_GE_OQ) & _mm512_cmp_pd_mask(y[j], yhi, _CMP_LE_OQ);
 		*lo = _mm512_mask_min_pd(*lo, in, *lo, s[j]);
 		*hi = _mm512_mask_max_pd(*hi, in, *hi, s[j]);
 	}
 }
 
-/* One pass keeping n.p >= 0 (clip_plane()) on three vertices, into the
- * slots; a slot not emitted repeats the emitted one before it. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static inline void clip_slots(
-	const __m512d x[3], const __m512d y[3], const __m512d z[3], __m512d nx, __m512d nz, __m512d sx[SLOTS],
-	__m512d sy[SLOTS], __m512d sz[SLOTS])
+/* One pass keeping n.p >= 0 (clip_plane()) of the polygon in, into out
+ * (twice the slots: each vertex, then the cut point of the edge it starts;
+ * a slot not emitted repeats the emitted one before it). Lanes in keep
+ * keep every vertex (no pass). Returns the lanes with a piece left. */
+TARGET static inline __mmask8 clip_slots(const struct slots *in, __m512d nx, __m512d nz, __mmask8 keep_all,
+					 struct slots *out)
 {
-	__m512d dp[3];
-	__mmask8 keep[3], valid[SLOTS];
-	for (int i = 0; i < 3; i++) {
-		dp[i] = _mm512_add_pd(_mm512_mul_pd(nx, x[i]), _mm512_mul_pd(nz, z[i]));
-		keep[i] = _mm512_cmp_pd_mask(dp[i], _mm512_setzero_pd(), _CMP_GE_OQ);
+	const int n = in->n;
+	__m512d dp[MAX_SLOTS / 2];
+	__mmask8 keep[MAX_SLOTS / 2], valid[MAX_SLOTS], any = 0;
+	for (int i = 0; i < n; i++) {
+		dp[i] = _mm512_add_pd(_mm512_mul_pd(nx, in->x[i]), _mm512_mul_pd(nz, in->z[i]));
+		keep[i] = _mm512_cmp_pd_mask(dp[i], _mm512_setzero_pd(), _CMP_GE_OQ) | keep_all;
+		any |= keep[i];
 	}
-	for (int i = 0; i < 3; i++) {
-		int k = i + 1 < 3 ? i + 1 : 0;
+	out->n = 2 * n;
+	for (int i = 0; i < n; i++) {
+		int k = i + 1 < n ? i + 1 : 0;
 		__m512d t = _mm512_div_pd(dp[i], _mm512_sub_pd(dp[i], dp[k]));
-		sx[2 * i] = x[i];
-		sy[2 * i] = y[i];
-		sz[2 * i] = z[i];
-		sx[2 * i + 1] = _mm512_add_pd(x[i], _mm512_mul_pd(t, _mm512_sub_pd(x[k], x[i])));
-		sy[2 * i + 1] = _mm512_add_pd(y[i], _mm512_mul_pd(t, _mm512_sub_pd(y[k], y[i])));
-		sz[2 * i + 1] = _mm512_add_pd(z[i], _mm512_mul_pd(t, _mm512_sub_pd(z[k], z[i])));
+		out->x[2 * i] = in->x[i];
+		out->y[2 * i] = in->y[i];
+		out->z[2 * i] = in->z[i];
+		out->x[2 * i + 1] = _mm512_add_pd(in->x[i], _mm512_mul_pd(t, _mm512_sub_pd(in->x[k], in->x[i])));
+		out->y[2 * i + 1] = _mm512_add_pd(in->y[i], _mm512_mul_pd(t, _mm512_sub_pd(in->y[k], in->y[i])));
+		out->z[2 * i + 1] = _mm512_add_pd(in->z[i], _mm512_mul_pd(t, _mm512_sub_pd(in->z[k], in->z[i])));
 		valid[2 * i] = keep[i];
 		valid[2 * i + 1] = keep[i] ^ keep[k];
 	}
 	/* The last emitted slot, then each slot or the last before it. */
-	__m512d lx = sx[0], ly = sy[0], lz = sz[0];
+	__m512d lx = out->x[0], ly = out->y[0], lz = out->z[0];
 	for (int pass = 0; pass < 2; pass++) {
-		for (int j = 0; j < SLOTS; j++) {
-			lx = _mm512_mask_blend_pd(valid[j], lx, sx[j]);
-			ly = _mm512_mask_blend_pd(valid[j], ly, sy[j]);
-			lz = _mm512_mask_blend_pd(valid[j], lz, sz[j]);
+		for (int j = 0; j < out->n; j++) {
+			lx = _mm512_mask_blend_pd(valid[j], lx, out->x[j]);
+			ly = _mm512_mask_blend_pd(valid[j], ly, out->y[j]);
+			lz = _mm512_mask_blend_pd(valid[j], lz, out->z[j]);
 			if (pass) {
-				sx[j] = lx;
-				sy[j] = ly;
-				sz[j] = lz;
+				out->x[j] = lx;
+				out->y[j] = ly;
+				out->z[j] = lz;
 			}
 		}
+	}
+	return any;
+}
+
+/* project_body() and raster_rows() of the pieces in p (live lanes): the
+ * rows and spans into out; lanes taller than MAX_ROWS are added to *leave
+ * and dropped from *live. */
+TARGET static inline void raster_slots(const struct section_canvas *c, const struct section_wedge *w,
+				       const struct slots *p, __mmask8 *live, __mmask8 *leave, struct lanes_out *out)
+{
+	const __m512d inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
+	const int n = p->n;
+	__m512d s[MAX_SLOTS], ymin = inf, ymax = ninf;
+	for (int j = 0; j < n; j++) {
+		s[j] = _mm512_add_pd(_mm512_mul_pd(p->x[j], _mm512_set1_pd(w->dx)),
+				     _mm512_mul_pd(p->z[j], _mm512_set1_pd(w->dz)));
+		ymin = _mm512_min_pd(ymin, p->y[j]);
+		ymax = _mm512_max_pd(ymax, p->y[j]);
+	}
+	/* A row at a time, as many as the tallest piece has. */
+	__m512i v0 = lane_rows(c, ymax), v1 = lane_rows(c, ymin);
+	__mmask8 tall = *live & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(v1, v0), _mm512_set1_epi64(MAX_ROWS - 1));
+	*leave |= tall;
+	*live &= ~tall;
+	double h = c->geom.half_height, row_h = 2.0 * h / c->geom.height, eps = 1e-9 * row_h;
+	const __m512d hv = _mm512_set1_pd(h), rh = _mm512_set1_pd(row_h), ev = _mm512_set1_pd(eps);
+	uint32_t rows = *live ? (uint32_t)_mm512_mask_reduce_max_epi64(*live, _mm512_sub_epi64(v1, v0)) + 1 : 0;
+	struct edge e[MAX_SLOTS];
+	if (rows > 1) /* a piece in one row needs no edges */
+		edges_of(n, s, p->y, e);
+	_mm256_storeu_si256((__m256i *)out->row, _mm512_cvtepi64_epi32(v0));
+	out->rows = rows;
+	for (uint32_t r = 0; r < rows; r++) {
+		__m512i v = _mm512_add_epi64(v0, _mm512_set1_epi64(r));
+		__mmask8 on = *live & _mm512_cmple_epi64_mask(v, v1);
+		__mmask8 top = _mm512_cmpeq_epi64_mask(v, v0), bottom = _mm512_cmpeq_epi64_mask(v, v1);
+		__m512d vd = _mm512_cvtepu64_pd(v),
+			next = _mm512_cvtepu64_pd(_mm512_add_epi64(v, _mm512_set1_epi64(1)));
+		__m512d yhi =
+			_mm512_mask_blend_pd(top, _mm512_add_pd(_mm512_sub_pd(hv, _mm512_mul_pd(vd, rh)), ev), inf);
+		__m512d ylo = _mm512_mask_blend_pd(bottom,
+						   _mm512_sub_pd(_mm512_sub_pd(hv, _mm512_mul_pd(next, rh)), ev), ninf);
+		__m512d slo = inf, shi = ninf;
+		slab_vertices(n, s, p->y, ylo, yhi, &slo, &shi);
+		if (rows > 1) { /* an infinite line crosses nothing */
+			cross_edges(n, e, yhi, &slo, &shi);
+			cross_edges(n, e, ylo, &slo, &shi);
+		}
+		out->lit[r] = on & _mm512_cmp_pd_mask(slo, shi, _CMP_LE_OQ);
+		_mm256_storeu_si256((__m256i *)out->u0[r], _mm512_cvtepi64_epi32(lane_columns(c, slo)));
+		_mm256_storeu_si256((__m256i *)out->u1[r], _mm512_cvtepi64_epi32(lane_columns(c, shi)));
 	}
 }
 
 /* Eight triangles (lanes of x, y, z; active lanes set) in image w. */
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch8(
-	const struct section_canvas *c, const struct section_wedge *w, const __m512d x[3], const __m512d y[3],
-	const __m512d z[3], __mmask8 active, struct lanes_out *out, __mmask8 *pending)
+TARGET static void batch8(const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri,
+			  __mmask8 active, struct lanes_out *out, __mmask8 *pending)
 {
 	const __m512d zero = _mm512_setzero_pd(), inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
+	const __m512d *x = tri->x, *z = tri->z;
 	__m512d d1[3], d2[3], lo = inf, hi = ninf, xz = zero;
 	for (int i = 0; i < 3; i++) {
 		d1[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n1x), x[i]),
@@ -201,59 +263,32 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch8(
 	__mmask8 live = active & ~leave & (front | back);
 	__m512d sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
 	/* lobe_piece()'s in-counts. */
-	__mmask8 any1 = 0, any2 = 0, all1 = 0xff, all2 = 0xff;
+	__mmask8 any1 = 0, any2 = 0, all1 = 0xff;
 	for (int i = 0; i < 3; i++) {
 		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d1[i]), zero, _CMP_GE_OQ);
-		__mmask8 in2 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d2[i]), zero, _CMP_GE_OQ);
 		any1 |= in1;
-		any2 |= in2;
+		any2 |= _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d2[i]), zero, _CMP_GE_OQ);
 		all1 &= in1;
-		all2 &= in2;
 	}
 	live &= any1 & any2;
-	/* The clip: plane 1 where some vertex is outside it, else plane 2. */
+	/* The clip: plane 1 where some vertex is outside it (then plane 2 on
+	 * what is left), else plane 2 alone (every vertex inside both: the
+	 * pass keeps them as they are). */
 	__m512d n1x = _mm512_mul_pd(sign, _mm512_set1_pd(w->n1x)), n1z = _mm512_mul_pd(sign, _mm512_set1_pd(w->n1z));
 	__m512d n2x = _mm512_mul_pd(sign, _mm512_set1_pd(w->n2x)), n2z = _mm512_mul_pd(sign, _mm512_set1_pd(w->n2z));
-	__m512d sx[SLOTS], sy[SLOTS], sz[SLOTS], s[SLOTS];
-	clip_slots(x, y, z, _mm512_mask_blend_pd(all1, n1x, n2x), _mm512_mask_blend_pd(all1, n1z, n2z), sx, sy, sz);
-	__m512d ymin = inf, ymax = ninf;
-	for (int j = 0; j < SLOTS; j++) {
-		/* After plane 1, plane 2 must keep every vertex. */
-		__m512d dp = _mm512_add_pd(_mm512_mul_pd(n2x, sx[j]), _mm512_mul_pd(n2z, sz[j]));
-		leave |= ~all1 & live & _mm512_cmp_pd_mask(dp, zero, _CMP_LT_OQ);
-		s[j] = _mm512_add_pd(_mm512_mul_pd(sx[j], _mm512_set1_pd(w->dx)),
-				     _mm512_mul_pd(sz[j], _mm512_set1_pd(w->dz)));
-		ymin = _mm512_min_pd(ymin, sy[j]);
-		ymax = _mm512_max_pd(ymax, sy[j]);
+	struct slots one, two;
+	clip_slots(tri, _mm512_mask_blend_pd(all1, n1x, n2x), _mm512_mask_blend_pd(all1, n1z, n2z), 0, &one);
+	__mmask8 cut2 = 0; /* after plane 1, plane 2 cuts something */
+	for (int j = 0; j < one.n; j++) {
+		__m512d dp = _mm512_add_pd(_mm512_mul_pd(n2x, one.x[j]), _mm512_mul_pd(n2z, one.z[j]));
+		cut2 |= _mm512_cmp_pd_mask(dp, zero, _CMP_LT_OQ);
 	}
-	/* raster_rows(): a row at a time, as many as the tallest piece has. */
-	__m512i v0 = lane_rows(c, ymax), v1 = lane_rows(c, ymin);
-	leave |= live & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(v1, v0), _mm512_set1_epi64(MAX_ROWS - 1));
-	live &= ~leave;
-	struct edge e[SLOTS];
-	edges_of(s, sy, e);
-	double h = c->geom.half_height, row_h = 2.0 * h / c->geom.height, eps = 1e-9 * row_h;
-	const __m512d hv = _mm512_set1_pd(h), rh = _mm512_set1_pd(row_h), ev = _mm512_set1_pd(eps);
-	uint32_t rows = live ? (uint32_t)_mm512_mask_reduce_max_epi64(live, _mm512_sub_epi64(v1, v0)) + 1 : 0;
-	_mm256_storeu_si256((__m256i *)out->row, _mm512_cvtepi64_epi32(v0));
-	out->rows = rows;
-	for (uint32_t r = 0; r < rows; r++) {
-		__m512i v = _mm512_add_epi64(v0, _mm512_set1_epi64(r));
-		__mmask8 on = live & _mm512_cmple_epi64_mask(v, v1);
-		__mmask8 top = _mm512_cmpeq_epi64_mask(v, v0), bottom = _mm512_cmpeq_epi64_mask(v, v1);
-		__m512d vd = _mm512_cvtepu64_pd(v),
-			next = _mm512_cvtepu64_pd(_mm512_add_epi64(v, _mm512_set1_epi64(1)));
-		__m512d yhi =
-			_mm512_mask_blend_pd(top, _mm512_add_pd(_mm512_sub_pd(hv, _mm512_mul_pd(vd, rh)), ev), inf);
-		__m512d ylo = _mm512_mask_blend_pd(bottom,
-						   _mm512_sub_pd(_mm512_sub_pd(hv, _mm512_mul_pd(next, rh)), ev), ninf);
-		__m512d slo = inf, shi = ninf;
-		slab_vertices(s, sy, ylo, yhi, &slo, &shi);
-		cross_edges(e, yhi, &slo, &shi); /* an infinite line crosses nothing */
-		cross_edges(e, ylo, &slo, &shi);
-		out->lit[r] = on & _mm512_cmp_pd_mask(slo, shi, _CMP_LE_OQ);
-		_mm256_storeu_si256((__m256i *)out->u0[r], _mm512_cvtepi64_epi32(lane_columns(c, slo)));
-		_mm256_storeu_si256((__m256i *)out->u1[r], _mm512_cvtepi64_epi32(lane_columns(c, shi)));
+	cut2 &= live & ~all1;
+	if (cut2) {
+		live &= clip_slots(&one, n2x, n2z, (__mmask8)~cut2, &two) | ~cut2;
+		raster_slots(c, w, &two, &live, &leave, out);
+	} else {
+		raster_slots(c, w, &one, &live, &leave, out);
 	}
 	*pending = active & leave;
 }
@@ -274,8 +309,8 @@ bool section_batch_supported(void)
 	return batch_cpu();
 }
 
-__attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch(
-	struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+TARGET static void batch(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t,
+			 unsigned n)
 {
 	double lx[3][8], ly[3][8], lz[3][8];
 	for (unsigned l = 0; l < 8; l++) {
@@ -286,15 +321,15 @@ __attribute__((target("avx512f,avx512dq,avx512vl"))) static void batch(
 			lz[i][l] = v[3 * i + 2];
 		}
 	}
-	__m512d x[3], y[3], z[3];
+	struct slots tri = { .n = 3 };
 	for (int i = 0; i < 3; i++) {
-		x[i] = _mm512_loadu_pd(lx[i]);
-		y[i] = _mm512_loadu_pd(ly[i]);
-		z[i] = _mm512_loadu_pd(lz[i]);
+		tri.x[i] = _mm512_loadu_pd(lx[i]);
+		tri.y[i] = _mm512_loadu_pd(ly[i]);
+		tri.z[i] = _mm512_loadu_pd(lz[i]);
 	}
 	struct lanes_out out;
 	__mmask8 pending;
-	batch8(c, w, x, y, z, (__mmask8)((1u << n) - 1), &out, &pending);
+	batch8(c, w, &tri, (__mmask8)((1u << n) - 1), &out, &pending);
 	for (unsigned l = 0; l < n; l++) {
 		if (pending >> l & 1) {
 			double v[3][3];
