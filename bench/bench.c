@@ -18,6 +18,7 @@
 #include "options.h"
 #include "render.h"
 #include "scenes.h"
+#include "section.h"
 #include "svol.h"
 
 /* What the measured volumes of one scene and variant gave. */
@@ -370,10 +371,15 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 			snprintf(th, sizeof(th), "%u thread%s", vars[i].threads, vars[i].threads > 1 ? "s" : "");
 		else
 			snprintf(th, sizeof(th), "one thread per core");
+		/* render_cpu.c: the eight-lane triangles go with auto and avx512 */
+		bool lanes = (strcmp(vars[i].simd, "auto") == 0 || strcmp(vars[i].simd, "avx512") == 0) &&
+			     section_batch_supported();
+		const char *tris = lanes ? "triangles sectioned and staged eight at a time" : "triangles one at a time";
 		if (strcmp(vars[i].simd, "auto") == 0)
-			printf("- %s: %s, halftone auto (%s here)\n", vars[i].name, th, halftone_variants()[0].name);
+			printf("- %s: %s, halftone auto (%s here), %s\n", vars[i].name, th, halftone_variants()[0].name,
+			       tris);
 		else
-			printf("- %s: %s, halftone %s\n", vars[i].name, th, vars[i].simd);
+			printf("- %s: %s, halftone %s, %s\n", vars[i].name, th, vars[i].simd, tris);
 	}
 	printf("\nEach scene and variant: %u warm-up volume%s, then up to %u measured volumes or "
 	       "%.3g s, whichever comes first (volumes). Times are wall ms per volume, animation "
