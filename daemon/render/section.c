@@ -305,6 +305,33 @@ static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool
 	}
 }
 
+void section_weighted_runs(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			   const uint8_t rgb[3], double lo, double hi, const struct section_run *runs, unsigned count)
+{
+	/* raster_convex()'s test, on the piece's s range [lo, hi] */
+	const struct brightness_map *m = c->bright;
+	if (hi >= -m->band_s && lo <= m->band_s) {
+		uint32_t u0 = geometry_column(&c->geom, lo), u1 = geometry_column(&c->geom, hi);
+		if (lo <= hi && u1 >= m->band_lo && u0 <= m->band_hi) {
+			uint32_t a = u0 > m->band_lo ? u0 : m->band_lo, b = u1 < m->band_hi ? u1 : m->band_hi;
+			struct section_weight wt = { .m = m, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
+			enum weighed lit = weigh_columns(c, &wt, a, b, rgb);
+			if (lit != WEIGH_SAME) {
+				for (unsigned i = 0; i < count; i++) {
+					const struct section_run *r = &runs[i];
+					if (r->u1 >= a && r->u0 <= b)
+						weighted_span(c, a, b, lit == WEIGH_LIT, r->v, r->u0, r->u1, rgb);
+					else
+						section_span(c, r->v, r->u0, r->u1, rgb);
+				}
+				return;
+			}
+		}
+	}
+	for (unsigned i = 0; i < count; i++)
+		section_span(c, runs[i].v, runs[i].u0, runs[i].u1, rgb);
+}
+
 /* Minimum and maximum of finite values (fmin/fmax are library calls). */
 static inline double dmin(double a, double b)
 {

@@ -98,6 +98,19 @@ void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint3
 /* Lights columns u0..u1 of row v by per-channel MAX with rgb. */
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3]);
 
+/* A span for section_weighted_runs(): columns u0..u1 of row v. */
+struct section_run {
+	uint32_t v, u0, u1;
+};
+
+/* The spans of one unmirrored piece of triangle or segment v (n vertices)
+ * in w's image, whose s range is [lo, hi], lit as section_prim() lights
+ * them where c's brightness model is active and v reaches its band
+ * (brightness.h): the columns in the band weighted by v's weights, the
+ * others plain (section_triangles()' lanes, section_batch.c). */
+void section_weighted_runs(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
+			   const uint8_t rgb[3], double lo, double hi, const struct section_run *runs, unsigned count);
+
 /* Sections a segment (n = 2) or triangle (n = 3), vertices in volume space
  * and finite, by both lobes of the wedge's image and lights what it touches,
  * clamped to the image. Degenerate primitives light their section too.

@@ -5,20 +5,20 @@
  *
  * A lane follows prim_body(), lobe_piece() and raster_rows() (section.c)
  * step for step:
- * - d1, d2 and their sum's range; a lane in the brightness band (weighted)
- *   or reaching both lobes leaves for section_prim();
+ * - d1, d2 and their sum's range; a lane reaching both lobes leaves for
+ *   section_prim(); one in the brightness band keeps its piece's s range,
+ *   and its spans are lit by section_weighted_runs() as raster_convex()
+ *   lights them;
  * - the lobe's in-counts; none inside a plane: nothing;
- * - one Sutherland-Hodgman pass, by plane 1 where some vertex is outside
- *   it, else by plane 2 (every vertex inside both: the pass keeps them as
- *   they are). After plane 1 section_prim() clips by plane 2 too, which
- *   keeps the polygon as it is when each of its vertices is inside; a lane
- *   where one is not leaves. The pass's output is kept in six slots, each
- *   vertex followed by the cut point of the edge it starts; a slot the
- *   pass does not emit repeats the one before it (cyclically), so the
- *   slots' consecutive pairs are the polygon's edges plus edges of no
- *   length, which raster_rows() skips (y0 == y1), and their vertices are
- *   the polygon's;
- * - rows from the extreme y; a piece in more than two rows leaves;
+ * - Sutherland-Hodgman passes: by plane 1 where some vertex is outside it,
+ *   then by plane 2 where that cuts what is left; else by plane 2 alone
+ *   (every vertex inside both: the pass keeps them as they are). A pass's
+ *   output is kept in slots, each vertex followed by the cut point of the
+ *   edge it starts; a slot the pass does not emit repeats the one before it
+ *   (cyclically), so the slots' consecutive pairs are the polygon's edges
+ *   plus edges of no length, which raster_rows() skips (y0 == y1), and
+ *   their vertices are the polygon's;
+ * - rows from the extreme y; a piece in more than MAX_ROWS rows leaves;
  * - per row, the s range of the vertices in the row's slab and of the
  *   edges' crossings of its inner line, then the columns. Minimum and
  *   maximum give the same values in any order. */
@@ -53,6 +53,8 @@ struct slots {
 /* What the eight lanes light: from row[l] on, rows of spans u0..u1,
  * lane l's row r where bit l of lit[r] is set. */
 struct lanes_out {
+	__mmask8 weighted;   /* lanes whose spans section_weighted_runs() lights */
+	double lo[8], hi[8]; /* each piece's s range */
 	uint32_t rows;
 	uint32_t row[8];
 	uint32_t u0[MAX_ROWS][8], u1[MAX_ROWS][8];
@@ -196,6 +198,15 @@ TARGET static inline void raster_slots(const struct section_canvas *c, const str
 		ymin = _mm512_min_pd(ymin, p->y[j]);
 		ymax = _mm512_max_pd(ymax, p->y[j]);
 	}
+	if (out->weighted) { /* raster_convex()'s s range of the piece */
+		__m512d lo = inf, hi = ninf;
+		for (int j = 0; j < n; j++) {
+			lo = _mm512_min_pd(lo, s[j]);
+			hi = _mm512_max_pd(hi, s[j]);
+		}
+		_mm512_storeu_pd(out->lo, lo);
+		_mm512_storeu_pd(out->hi, hi);
+	}
 	/* A row at a time, as many as the tallest piece has. */
 	__m512i v0 = lane_rows(c, ymax), v1 = lane_rows(c, ymin);
 	__mmask8 tall = *live & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(v1, v0), _mm512_set1_epi64(MAX_ROWS - 1));
@@ -249,10 +260,11 @@ TARGET static void batch8(const struct section_canvas *c, const struct section_w
 		xz = _mm512_max_pd(xz, _mm512_max_pd(_mm512_abs_pd(x[i]), _mm512_abs_pd(z[i])));
 	}
 	__mmask8 leave = 0;
+	out->weighted = 0;
 	if (c->bright && brightness_active(c->bright)) { /* weight_start() */
 		__m512d band = _mm512_set1_pd(c->bright->band_d);
-		leave |= ~(_mm512_cmp_pd_mask(hi, _mm512_sub_pd(zero, band), _CMP_LT_OQ) |
-			   _mm512_cmp_pd_mask(lo, band, _CMP_GT_OQ));
+		out->weighted = active & ~(_mm512_cmp_pd_mask(hi, _mm512_sub_pd(zero, band), _CMP_LT_OQ) |
+					   _mm512_cmp_pd_mask(lo, band, _CMP_GT_OQ));
 	}
 	/* lobes_reached(): both lobes leave, none is nothing. */
 	__m512d m = _mm512_mul_pd(_mm512_set1_pd(1e-12), xz);
@@ -331,19 +343,30 @@ TARGET static void batch(struct section_canvas *c, const struct section_wedge *w
 	__mmask8 pending;
 	batch8(c, w, &tri, (__mmask8)((1u << n) - 1), &out, &pending);
 	for (unsigned l = 0; l < n; l++) {
+		double v[3][3];
+		for (int i = 0; i < 3; i++) {
+			v[i][0] = lx[i][l];
+			v[i][1] = ly[i][l];
+			v[i][2] = lz[i][l];
+		}
 		if (pending >> l & 1) {
-			double v[3][3];
-			for (int i = 0; i < 3; i++) {
-				v[i][0] = lx[i][l];
-				v[i][1] = ly[i][l];
-				v[i][2] = lz[i][l];
-			}
 			section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
 			continue;
 		}
+		if (!(out.weighted >> l & 1)) {
+			for (uint32_t r = 0; r < out.rows; r++)
+				if (out.lit[r] >> l & 1)
+					section_span(c, out.row[l] + r, out.u0[r][l], out.u1[r][l], t[l].rgb);
+			continue;
+		}
+		struct section_run runs[MAX_ROWS];
+		unsigned count = 0;
 		for (uint32_t r = 0; r < out.rows; r++)
 			if (out.lit[r] >> l & 1)
-				section_span(c, out.row[l] + r, out.u0[r][l], out.u1[r][l], t[l].rgb);
+				runs[count++] = (struct section_run){ out.row[l] + r, out.u0[r][l], out.u1[r][l] };
+		if (count)
+			section_weighted_runs(c, w, (const double(*)[3])v, 3, t[l].rgb, out.lo[l], out.hi[l], runs,
+					      count);
 	}
 }
 
