@@ -46,7 +46,7 @@ struct render_cpu {
 	struct brightness_map bright; /* geom.brightness's weights */
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
-	bool batch; /* unturned triangles through section_triangles() (and binned eight at a time) */
+	bool batch; /* unturned segments and triangles through section_lanes() (triangles binned eight at a time) */
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
@@ -170,19 +170,23 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k], sectioned = 0;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i]);
-	struct section_tri tri[SECTION_BATCH];
-	unsigned tris = 0;
+	/* Unturned segments and triangles eight at a time (section_lanes()),
+	 * kept apart by vertex count: lanes[0] the segments, lanes[1] the
+	 * triangles. */
+	struct section_lane lanes[2][SECTION_BATCH];
+	unsigned queued[2] = { 0, 0 };
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
 			const struct bin_prim *p = &b->prims[i];
 			if (!bin_prim_in_image(b, p, k))
 				continue;
 			sectioned++;
-			if (r->batch && p->nverts == 3 && (!b->turned || !b->prim_turn[i])) {
-				tri[tris++] = (struct section_tri){ &p->v[0][0], p->rgb };
-				if (tris == SECTION_BATCH) {
-					section_triangles(c, &r->wedges[k], tri, tris);
-					tris = 0;
+			if (r->batch && (!b->turned || !b->prim_turn[i])) {
+				unsigned q = p->nverts == 3;
+				lanes[q][queued[q]++] = (struct section_lane){ &p->v[0][0], p->rgb };
+				if (queued[q] == SECTION_BATCH) {
+					section_lanes(c, &r->wedges[k], lanes[q], queued[q], p->nverts);
+					queued[q] = 0;
 				}
 				continue;
 			}
@@ -200,8 +204,9 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 			}
 		}
 	}
-	if (tris)
-		section_triangles(c, &r->wedges[k], tri, tris);
+	for (unsigned q = 0; q < 2; q++)
+		if (queued[q])
+			section_lanes(c, &r->wedges[k], lanes[q], queued[q], q ? 3 : 2);
 	w->prim_images += sectioned;
 	drawn += sectioned;
 	for (uint32_t i = 0; i < r->grid_count; i++) {

@@ -75,22 +75,22 @@ static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t 
 	c->rows[t] |= 1u << (v % VOLUME_TILE);
 }
 
-/* A triangle for section_triangles(): three vertices (x, y, z each, in
- * float as binned) and its colour. */
-struct section_tri {
+/* A segment or triangle for section_lanes(): its vertices (x, y, z each,
+ * in float as binned) and its colour. */
+struct section_lane {
 	const float *v;
 	const uint8_t *rgb;
 };
 
 #define SECTION_BATCH 8
 
-/* section_prim() of each of n (at most SECTION_BATCH) triangles in w's
- * image, unmirrored, bit for bit the same canvas: the common cases eight
- * at a time where the CPU has AVX-512 (section_batch.c), the rest one by
- * one. */
-void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t,
-		       unsigned n);
-/* Whether section_triangles() has its eight-lane path on this CPU. */
+/* section_prim() of each of n (at most SECTION_BATCH) primitives of verts
+ * vertices (2 or 3) in w's image, unmirrored, bit for bit the same canvas:
+ * the common cases eight at a time where the CPU has AVX-512
+ * (section_batch.c), the rest one by one. */
+void section_lanes(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t, unsigned n,
+		   int verts);
+/* Whether section_lanes() has its eight-lane path on this CPU. */
 bool section_batch_supported(void);
 
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k);
@@ -107,7 +107,7 @@ struct section_run {
  * in w's image, whose s range is [lo, hi], lit as section_prim() lights
  * them where c's brightness model is active and v reaches its band
  * (brightness.h): the columns in the band weighted by v's weights, the
- * others plain (section_triangles()' lanes, section_batch.c). */
+ * others plain (section_lanes()' lanes, section_batch.c). */
 void section_weighted_runs(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 			   const uint8_t rgb[3], double lo, double hi, const struct section_run *runs, unsigned count);
 

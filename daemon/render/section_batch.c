@@ -1,5 +1,5 @@
-/* Triangles of one image sectioned eight at a time (section.h,
- * section_triangles()): the same operations as section_prim()'s, in the
+/* Segments or triangles of one image sectioned eight at a time (section.h,
+ * section_lanes()): the same operations as section_prim()'s, in the
  * same order, on eight lanes of doubles, for the cases that make up most
  * of a dense mesh; every other lane goes to section_prim() itself.
  *
@@ -242,14 +242,17 @@ TARGET static inline void raster_slots(const struct section_canvas *c, const str
 	}
 }
 
-/* Eight triangles (lanes of x, y, z; active lanes set) in image w. */
-TARGET static void batch8(const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri,
-			  __mmask8 active, struct lanes_out *out, __mmask8 *pending)
+/* Eight segments or triangles (tri->n vertices, lanes of x, y, z; active
+ * lanes set) in image w. */
+TARGET static inline __attribute__((always_inline)) void batch8(
+	const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri, __mmask8 active,
+	struct lanes_out *out, __mmask8 *pending)
 {
 	const __m512d zero = _mm512_setzero_pd(), inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
 	const __m512d *x = tri->x, *z = tri->z;
+	const int nv = tri->n;
 	__m512d d1[3], d2[3], lo = inf, hi = ninf, xz = zero;
-	for (int i = 0; i < 3; i++) {
+	for (int i = 0; i < nv; i++) {
 		d1[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n1x), x[i]),
 				      _mm512_mul_pd(_mm512_set1_pd(w->n1z), z[i]));
 		d2[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n2x), x[i]),
@@ -276,7 +279,7 @@ TARGET static void batch8(const struct section_canvas *c, const struct section_w
 	__m512d sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
 	/* lobe_piece()'s in-counts. */
 	__mmask8 any1 = 0, any2 = 0, all1 = 0xff;
-	for (int i = 0; i < 3; i++) {
+	for (int i = 0; i < nv; i++) {
 		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d1[i]), zero, _CMP_GE_OQ);
 		any1 |= in1;
 		any2 |= _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d2[i]), zero, _CMP_GE_OQ);
@@ -321,67 +324,93 @@ bool section_batch_supported(void)
 	return batch_cpu();
 }
 
-TARGET static void batch(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t,
-			 unsigned n)
+/* Primitive l's vertices as doubles (as raster_image() converts them). */
+static void lane_vertices(const struct section_lane *t, int verts, double v[3][3])
+{
+	for (int i = 0; i < verts; i++)
+		for (int j = 0; j < 3; j++)
+			v[i][j] = t->v[3 * i + j];
+}
+
+/* What the lanes found for lane l, lit: its spans, weighted where its
+ * piece is in the brightness band. */
+static void light_lane(struct section_canvas *c, const struct section_wedge *w, const struct lanes_out *out, unsigned l,
+		       const double (*v)[3], int verts, const uint8_t rgb[3])
+{
+	if (!(out->weighted >> l & 1)) {
+		for (uint32_t r = 0; r < out->rows; r++)
+			if (out->lit[r] >> l & 1)
+				section_span(c, out->row[l] + r, out->u0[r][l], out->u1[r][l], rgb);
+		return;
+	}
+	struct section_run runs[MAX_ROWS];
+	unsigned count = 0;
+	for (uint32_t r = 0; r < out->rows; r++)
+		if (out->lit[r] >> l & 1)
+			runs[count++] = (struct section_run){ out->row[l] + r, out->u0[r][l], out->u1[r][l] };
+	if (count)
+		section_weighted_runs(c, w, v, verts, rgb, out->lo[l], out->hi[l], runs, count);
+}
+
+/* The eight lanes for verts 2 or 3, a constant in each caller (so the
+ * vertex loops unroll). */
+TARGET static inline __attribute__((always_inline)) void batch(struct section_canvas *c, const struct section_wedge *w,
+							       const struct section_lane *t, unsigned n, int verts)
 {
 	double lx[3][8], ly[3][8], lz[3][8];
 	for (unsigned l = 0; l < 8; l++) {
 		const float *v = t[l < n ? l : 0].v;
-		for (int i = 0; i < 3; i++) {
+		for (int i = 0; i < verts; i++) {
 			lx[i][l] = v[3 * i];
 			ly[i][l] = v[3 * i + 1];
 			lz[i][l] = v[3 * i + 2];
 		}
 	}
-	struct slots tri = { .n = 3 };
-	for (int i = 0; i < 3; i++) {
-		tri.x[i] = _mm512_loadu_pd(lx[i]);
-		tri.y[i] = _mm512_loadu_pd(ly[i]);
-		tri.z[i] = _mm512_loadu_pd(lz[i]);
+	struct slots prims = { .n = verts };
+	for (int i = 0; i < verts; i++) {
+		prims.x[i] = _mm512_loadu_pd(lx[i]);
+		prims.y[i] = _mm512_loadu_pd(ly[i]);
+		prims.z[i] = _mm512_loadu_pd(lz[i]);
 	}
 	struct lanes_out out;
 	__mmask8 pending;
-	batch8(c, w, &tri, (__mmask8)((1u << n) - 1), &out, &pending);
+	batch8(c, w, &prims, (__mmask8)((1u << n) - 1), &out, &pending);
 	for (unsigned l = 0; l < n; l++) {
 		double v[3][3];
-		for (int i = 0; i < 3; i++) {
-			v[i][0] = lx[i][l];
-			v[i][1] = ly[i][l];
-			v[i][2] = lz[i][l];
-		}
-		if (pending >> l & 1) {
-			section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
-			continue;
-		}
-		if (!(out.weighted >> l & 1)) {
-			for (uint32_t r = 0; r < out.rows; r++)
-				if (out.lit[r] >> l & 1)
-					section_span(c, out.row[l] + r, out.u0[r][l], out.u1[r][l], t[l].rgb);
-			continue;
-		}
-		struct section_run runs[MAX_ROWS];
-		unsigned count = 0;
-		for (uint32_t r = 0; r < out.rows; r++)
-			if (out.lit[r] >> l & 1)
-				runs[count++] = (struct section_run){ out.row[l] + r, out.u0[r][l], out.u1[r][l] };
-		if (count)
-			section_weighted_runs(c, w, (const double(*)[3])v, 3, t[l].rgb, out.lo[l], out.hi[l], runs,
-					      count);
+		lane_vertices(&t[l], verts, v);
+		if (pending >> l & 1)
+			section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
+		else
+			light_lane(c, w, &out, l, (const double(*)[3])v, verts, t[l].rgb);
 	}
 }
 
-void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+TARGET static void batch_segments(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t,
+				  unsigned n)
+{
+	batch(c, w, t, n, 2);
+}
+
+TARGET static void batch_triangles(struct section_canvas *c, const struct section_wedge *w,
+				   const struct section_lane *t, unsigned n)
+{
+	batch(c, w, t, n, 3);
+}
+
+void section_lanes(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t, unsigned n,
+		   int verts)
 {
 	if (!c->general && batch_cpu()) {
-		batch(c, w, t, n);
+		if (verts == 3)
+			batch_triangles(c, w, t, n);
+		else
+			batch_segments(c, w, t, n);
 		return;
 	}
 	for (unsigned l = 0; l < n; l++) {
 		double v[3][3];
-		for (int i = 0; i < 3; i++)
-			for (int j = 0; j < 3; j++)
-				v[i][j] = t[l].v[3 * i + j];
-		section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
+		lane_vertices(&t[l], verts, v);
+		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
 	}
 }
 
@@ -392,14 +421,15 @@ bool section_batch_supported(void)
 	return false;
 }
 
-void section_triangles(struct section_canvas *c, const struct section_wedge *w, const struct section_tri *t, unsigned n)
+void section_lanes(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t, unsigned n,
+		   int verts)
 {
 	for (unsigned l = 0; l < n; l++) {
-		double v[3][3];
-		for (int i = 0; i < 3; i++)
+		double v[3][3] = { { 0 } };
+		for (int i = 0; i < verts; i++)
 			for (int j = 0; j < 3; j++)
 				v[i][j] = t[l].v[3 * i + j];
-		section_prim(c, w, (const double(*)[3])v, 3, t[l].rgb);
+		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
 	}
 }
 

@@ -1,6 +1,6 @@
 /* section.c's shortcuts (lobes the clip cannot reach, planes every vertex
- * is inside, rows by a product, spans by half rows), and section_triangles()'s
- * eight lanes (section_batch.c) on the unmirrored triangles, eight cases
+ * is inside, rows by a product, spans by half rows), and section_lanes()'s
+ * eight lanes (section_batch.c) on the unmirrored segments and triangles, eight cases
  * at a time, against the general
  * path (section_canvas.general: both lobes, both planes, geometry_row(),
  * spans byte by byte), pixel for pixel: many random small triangles and
@@ -81,13 +81,15 @@ static void vertex(const struct geometry *g, const struct section_wedge *w, doub
 		out[j] = F(out[j]);
 }
 
-/* Eight triangles at a time through section_triangles() (lanes of all
- * kinds side by side) against the general path. */
+/* Eight segments or triangles (verts vertices) at a time through
+ * section_lanes() (lanes of all kinds side by side) against the general
+ * path. */
 struct batch {
+	int verts;
 	struct section_canvas lanes, general;
 	float v[SECTION_BATCH][9];
 	uint8_t rgb[SECTION_BATCH][3];
-	struct section_tri t[SECTION_BATCH];
+	struct section_lane t[SECTION_BATCH];
 	unsigned n;
 	struct section_wedge w;
 };
@@ -96,43 +98,50 @@ static void batch_flush(struct batch *b)
 {
 	if (!b->n)
 		return;
-	section_triangles(&b->lanes, &b->w, b->t, b->n);
+	section_lanes(&b->lanes, &b->w, b->t, b->n, b->verts);
 	CHECK_MSG(same_and_clear(&b->lanes, &b->general), "%ux%u N %u: a batch of %u in image %u", b->lanes.geom.width,
 		  b->lanes.geom.height, b->lanes.geom.images_per_rev, b->n, b->w.image);
 	b->n = 0;
 }
 
-/* Adds triangle v of image w (the batch's image, or a new batch). */
+/* Adds segment or triangle v of image w (the batch's image, or a new
+ * batch). */
 static void batch_add(struct batch *b, const struct section_wedge *w, const double (*v)[3], const uint8_t rgb[3])
 {
 	if (b->n && b->w.image != w->image)
 		batch_flush(b);
 	b->w = *w;
 	double f[3][3]; /* binned vertices are floats */
-	for (int a = 0; a < 9; a++) {
+	for (int a = 0; a < 3 * b->verts; a++) {
 		b->v[b->n][a] = (float)v[a / 3][a % 3];
 		f[a / 3][a % 3] = b->v[b->n][a];
 	}
 	memcpy(b->rgb[b->n], rgb, 3);
-	b->t[b->n] = (struct section_tri){ b->v[b->n], b->rgb[b->n] };
-	section_prim(&b->general, w, (const double(*)[3])f, 3, rgb);
+	b->t[b->n] = (struct section_lane){ b->v[b->n], b->rgb[b->n] };
+	section_prim(&b->general, w, (const double(*)[3])f, b->verts, rgb);
 	if (++b->n == SECTION_BATCH)
 		batch_flush(b);
 }
 
 static void check_geometry(const struct geometry *g, uint32_t cases)
 {
-	struct batch bt = { .n = 0 };
-	CHECK(section_canvas_init(&bt.lanes, g) == 0);
-	CHECK(section_canvas_init(&bt.general, g) == 0);
+	struct batch bt = { .verts = 3 }, bs = { .verts = 2 }; /* triangles, segments */
+	struct batch *both[2] = { &bs, &bt };
+	for (int q = 0; q < 2; q++) {
+		CHECK(section_canvas_init(&both[q]->lanes, g) == 0);
+		CHECK(section_canvas_init(&both[q]->general, g) == 0);
+	}
 	struct section_canvas fast, slow;
 	struct brightness_map bright;
 	CHECK(section_canvas_init(&fast, g) == 0);
 	CHECK(section_canvas_init(&slow, g) == 0);
 	CHECK(brightness_map_init(&bright, g) == 0);
 	fast.bright = slow.bright = &bright; /* weighted near the axis unless EXACT */
-	bt.lanes.bright = bt.general.bright = &bright;
-	slow.general = bt.general.general = true;
+	for (int q = 0; q < 2; q++) {
+		both[q]->lanes.bright = both[q]->general.bright = &bright;
+		both[q]->general.general = true;
+	}
+	slow.general = true;
 	uint32_t images = geometry_images_per_volume(g);
 	double col_w = 2.0 / g->width;
 	for (uint32_t i = 0; i < cases; i++) {
@@ -165,17 +174,19 @@ static void check_geometry(const struct geometry *g, uint32_t cases)
 		bool mirror = unit() < 0.3;
 		section_prim_mirror(&fast, &w, (const double(*)[3])v, n, rgb, mirror);
 		section_prim_mirror(&slow, &w, (const double(*)[3])v, n, rgb, mirror);
-		if (n == 3 && !mirror)
-			batch_add(&bt, &w, (const double(*)[3])v, rgb);
+		if (!mirror)
+			batch_add(both[n == 3], &w, (const double(*)[3])v, rgb);
 		CHECK_MSG(same_and_clear(&fast, &slow),
 			  "%ux%u N %u: case %u, image %u, %d vertices (%.17g %.17g %.17g) (%.17g %.17g %.17g) "
 			  "(%.17g %.17g %.17g), mirror %d",
 			  g->width, g->height, g->images_per_rev, i, k, n, v[0][0], v[0][1], v[0][2], v[1][0], v[1][1],
 			  v[1][2], v[2][0], v[2][1], v[2][2], mirror);
 	}
-	batch_flush(&bt);
-	section_canvas_finish(&bt.lanes);
-	section_canvas_finish(&bt.general);
+	for (int q = 0; q < 2; q++) {
+		batch_flush(both[q]);
+		section_canvas_finish(&both[q]->lanes);
+		section_canvas_finish(&both[q]->general);
+	}
 	section_canvas_finish(&fast);
 	section_canvas_finish(&slow);
 	brightness_map_finish(&bright);
