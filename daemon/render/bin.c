@@ -382,6 +382,20 @@ TRIS_TARGET static inline void arcs8(const struct bin_set *b, const __m256i sl[3
 	_mm256_storeu_si256((__m256i *)key, _mm256_add_epi32(_mm256_mullo_epi32(cls, vM), start));
 }
 
+/* Float k (0 .. 8) of each of eight triangles (9 floats each) held in r:
+ * element 9 l + k of the 72, for lane l. */
+TRIS_TARGET static inline __m256 column9(const __m512 r[5], int k)
+{
+	__m512i e = _mm512_add_epi32(_mm512_setr_epi32(0, 9, 18, 27, 36, 45, 54, 63, 0, 0, 0, 0, 0, 0, 0, 0),
+				     _mm512_set1_epi32(k));
+	__m512 lo = _mm512_permutex2var_ps(r[0], e, r[1]); /* elements 0 .. 31 */
+	__m512 mid = _mm512_permutex2var_ps(r[2], _mm512_sub_epi32(e, _mm512_set1_epi32(32)), r[3]);
+	__m512 hi = _mm512_permutexvar_ps(_mm512_sub_epi32(e, _mm512_set1_epi32(64)), r[4]);
+	lo = _mm512_mask_blend_ps(_mm512_cmpge_epi32_mask(e, _mm512_set1_epi32(32)), lo, mid);
+	lo = _mm512_mask_blend_ps(_mm512_cmpge_epi32_mask(e, _mm512_set1_epi32(64)), lo, hi);
+	return _mm512_castps512_ps256(lo);
+}
+
 /* bin_one_prim() of triangles j0 .. j1 - 1 of d, eight at a time, on a
  * mirrored geometry: the same operations lane for lane (the transform
  * grouped as bin_transform() groups it, the slots as slot_of() finds
@@ -392,17 +406,19 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 {
 	const float *m = d->transform;
 	const __m512d fltmax = _mm512_set1_pd(FLT_MAX);
-	const __m256i stride = _mm256_setr_epi32(0, 9, 18, 27, 36, 45, 54, 63);
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
 		const float *p = d->xyz + 9 * j;
+		/* the 72 floats of eight triangles, loaded whole */
+		const __m512 r[5] = { _mm512_loadu_ps(p), _mm512_loadu_ps(p + 16), _mm512_loadu_ps(p + 32),
+				      _mm512_loadu_ps(p + 48), _mm512_castps256_ps512(_mm256_loadu_ps(p + 64)) };
 		float v[3][3][8]; /* vertex, coordinate, lane */
 		__m256i sl[3];
 		__mmask8 fin = 0xFF, near = 0, axis = 0;
 		for (int i = 0; i < 3; i++) {
-			__m512d x = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i, stride, 4));
-			__m512d y = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i + 1, stride, 4));
-			__m512d z = _mm512_cvtps_pd(_mm256_i32gather_ps(p + 3 * i + 2, stride, 4));
+			__m512d x = _mm512_cvtps_pd(column9(r, 3 * i));
+			__m512d y = _mm512_cvtps_pd(column9(r, 3 * i + 1));
+			__m512d z = _mm512_cvtps_pd(column9(r, 3 * i + 2));
 			__m256 f[3];
 			for (int c = 0; c < 3; c++) {
 				__m512d t = _mm512_add_pd(
