@@ -3,6 +3,7 @@
 #include <errno.h>
 #include <float.h>
 #include <math.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -286,15 +287,18 @@ static inline void count_keys(uint32_t *hist, const struct stage_prim *s, uint32
 #ifdef BIN_TRIS_X86
 #define TRIS_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512cd,avx2")))
 
+/* Asked from every worker: the answer is kept atomically. */
 static bool tris_wide(void)
 {
-	static int have = -1;
-	if (have < 0) {
+	static atomic_int have = -1;
+	int h = atomic_load_explicit(&have, memory_order_relaxed);
+	if (h < 0) {
 		__builtin_cpu_init();
-		have = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-		       __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd");
+		h = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+		    __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd");
+		atomic_store_explicit(&have, h, memory_order_relaxed);
 	}
-	return have;
+	return h;
 }
 
 /* slot_of() of eight (x, z), with the same operations: the slots; the
@@ -334,6 +338,28 @@ TRIS_TARGET static inline __m256i slots8(const struct slot_table *t, __m256 fx, 
 				       _mm256_and_si256(ba, _mm256_set1_epi32(0xFFFF)), _mm256_srli_epi32(ba, 16));
 }
 
+/* prim_arc()'s largest circular gap between the sorted slots of three
+ * vertices (the first of equals), and the slots after and before it. */
+TRIS_TARGET static inline __m256i largest_gap(const __m256i sl[3], __m256i vN, __m256i *start, __m256i *end)
+{
+	__m256i lo = _mm256_min_epu32(_mm256_min_epu32(sl[0], sl[1]), sl[2]);
+	__m256i hi = _mm256_max_epu32(_mm256_max_epu32(sl[0], sl[1]), sl[2]);
+	__m256i mid =
+		_mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(sl[0], sl[1]), sl[2]), _mm256_add_epi32(lo, hi));
+	__m256i gap = _mm256_sub_epi32(_mm256_add_epi32(lo, vN), hi);
+	__m256i g1 = _mm256_sub_epi32(mid, lo), g2 = _mm256_sub_epi32(hi, mid);
+	*start = lo;
+	*end = hi;
+	__mmask8 c1 = _mm256_cmpgt_epi32_mask(g1, gap);
+	gap = _mm256_mask_blend_epi32(c1, gap, g1);
+	*start = _mm256_mask_blend_epi32(c1, *start, mid);
+	*end = _mm256_mask_blend_epi32(c1, *end, lo);
+	__mmask8 c2 = _mm256_cmpgt_epi32_mask(g2, gap);
+	*start = _mm256_mask_blend_epi32(c2, *start, hi);
+	*end = _mm256_mask_blend_epi32(c2, *end, mid);
+	return _mm256_mask_blend_epi32(c2, gap, g2);
+}
+
 /* prim_arc() and prim_key() of eight triangles on a mirrored geometry,
  * from their vertices' slots and near flags: each record's first image
  * and count, and its key. Lanes on the axis are made "every image". */
@@ -342,21 +368,7 @@ TRIS_TARGET static inline void arcs8(const struct bin_set *b, const __m256i sl[3
 {
 	const uint32_t N = b->slots.n, M = b->images;
 	const __m256i vN = _mm256_set1_epi32((int)N), vM = _mm256_set1_epi32((int)M), one = _mm256_set1_epi32(1);
-	__m256i lo = _mm256_min_epu32(_mm256_min_epu32(sl[0], sl[1]), sl[2]);
-	__m256i hi = _mm256_max_epu32(_mm256_max_epu32(sl[0], sl[1]), sl[2]);
-	__m256i mid =
-		_mm256_sub_epi32(_mm256_add_epi32(_mm256_add_epi32(sl[0], sl[1]), sl[2]), _mm256_add_epi32(lo, hi));
-	/* The largest circular gap, the first of equals. */
-	__m256i gap = _mm256_sub_epi32(_mm256_add_epi32(lo, vN), hi), start = lo, end = hi;
-	__m256i g1 = _mm256_sub_epi32(mid, lo), g2 = _mm256_sub_epi32(hi, mid);
-	__mmask8 c1 = _mm256_cmpgt_epi32_mask(g1, gap);
-	gap = _mm256_mask_blend_epi32(c1, gap, g1);
-	start = _mm256_mask_blend_epi32(c1, start, mid);
-	end = _mm256_mask_blend_epi32(c1, end, lo);
-	__mmask8 c2 = _mm256_cmpgt_epi32_mask(g2, gap);
-	gap = _mm256_mask_blend_epi32(c2, gap, g2);
-	start = _mm256_mask_blend_epi32(c2, start, hi);
-	end = _mm256_mask_blend_epi32(c2, end, mid);
+	__m256i start, end, gap = largest_gap(sl, vN, &start, &end);
 	__m256i slack = _mm256_mask_blend_epi32(near, one, _mm256_set1_epi32(3));
 	every |= _mm256_cmple_epi32_mask(gap, slack) |
 		 _mm256_cmple_epi32_mask(_mm256_slli_epi32(_mm256_sub_epi32(gap, slack), 1), vN);
@@ -396,6 +408,27 @@ TRIS_TARGET static inline __m256 column9(const __m512 r[5], int k)
 	return _mm512_castps512_ps256(lo);
 }
 
+/* Vertex i of eight triangles (r, column9()) through the transform m as
+ * bin_transform() groups it, in float (f, and v by coordinate and lane);
+ * returns the lanes whose coordinates are all finite floats. */
+TRIS_TARGET static inline __mmask8 vertex8(const float m[16], const __m512 r[5], int i, __m256 f[3], float v[3][8])
+{
+	__m512d x = _mm512_cvtps_pd(column9(r, 3 * i));
+	__m512d y = _mm512_cvtps_pd(column9(r, 3 * i + 1));
+	__m512d z = _mm512_cvtps_pd(column9(r, 3 * i + 2));
+	__mmask8 fin = 0xFF;
+	for (int c = 0; c < 3; c++) {
+		__m512d t = _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[c]), x),
+								      _mm512_mul_pd(_mm512_set1_pd(m[4 + c]), y)),
+							_mm512_mul_pd(_mm512_set1_pd(m[8 + c]), z)),
+					  _mm512_set1_pd(m[12 + c]));
+		fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(t), _mm512_set1_pd(FLT_MAX), _CMP_LE_OQ);
+		f[c] = _mm512_cvtpd_ps(t);
+		_mm256_storeu_ps(v[c], f[c]);
+	}
+	return fin;
+}
+
 /* bin_one_prim() of triangles j0 .. j1 - 1 of d, eight at a time, on a
  * mirrored geometry: the same operations lane for lane (the transform
  * grouped as bin_transform() groups it, the slots as slot_of() finds
@@ -405,7 +438,6 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 					struct stage_prim *out)
 {
 	const float *m = d->transform;
-	const __m512d fltmax = _mm512_set1_pd(FLT_MAX);
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
 		const float *p = d->xyz + 9 * j;
@@ -416,20 +448,8 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 		__m256i sl[3];
 		__mmask8 fin = 0xFF, near = 0, axis = 0;
 		for (int i = 0; i < 3; i++) {
-			__m512d x = _mm512_cvtps_pd(column9(r, 3 * i));
-			__m512d y = _mm512_cvtps_pd(column9(r, 3 * i + 1));
-			__m512d z = _mm512_cvtps_pd(column9(r, 3 * i + 2));
 			__m256 f[3];
-			for (int c = 0; c < 3; c++) {
-				__m512d t = _mm512_add_pd(
-					_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[c]), x),
-								    _mm512_mul_pd(_mm512_set1_pd(m[4 + c]), y)),
-						      _mm512_mul_pd(_mm512_set1_pd(m[8 + c]), z)),
-					_mm512_set1_pd(m[12 + c]));
-				fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(t), fltmax, _CMP_LE_OQ);
-				f[c] = _mm512_cvtpd_ps(t);
-				_mm256_storeu_ps(v[i][c], f[c]);
-			}
+			fin &= vertex8(m, r, i, f, v[i]);
 			/* Not finite: left to bin_one_prim(), its slope kept in the table */
 			sl[i] = slots8(&b->slots, _mm256_maskz_mov_ps(fin, f[0]), _mm256_maskz_mov_ps(fin, f[2]), &near,
 				       &axis);

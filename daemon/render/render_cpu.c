@@ -160,20 +160,15 @@ static void free_grid_jobs(struct render_cpu *r)
 	r->grid_count = 0;
 }
 
-/* Draws image k's points, primitives (its n runs, image_runs()) and grids
- * on the canvas; returns how many (0: the canvas is untouched). */
-static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k, const struct bin_run *runs,
-			     unsigned n)
+/* Sections image k's segments and triangles (its n runs, image_runs())
+ * into the canvas; returns how many. Unturned ones go eight at a time
+ * (section_lanes()), segments and triangles apart. */
+static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, uint32_t k, const struct bin_run *runs,
+			      unsigned n)
 {
 	const struct bin_set *b = &r->bins;
-	struct section_canvas *c = &w->canvas;
-	uint64_t drawn = b->point_start[k + 1] - b->point_start[k], sectioned = 0;
-	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
-		light_point(c, &b->points[i]);
-	/* Unturned segments and triangles eight at a time (section_lanes()),
-	 * kept apart by vertex count: lanes[0] the segments, lanes[1] the
-	 * triangles. */
-	struct section_lane lanes[2][SECTION_BATCH];
+	uint64_t sectioned = 0;
+	struct section_lane lanes[2][SECTION_BATCH]; /* segments, triangles */
 	unsigned queued[2] = { 0, 0 };
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
@@ -207,6 +202,20 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	for (unsigned q = 0; q < 2; q++)
 		if (queued[q])
 			section_lanes(c, &r->wedges[k], lanes[q], queued[q], q ? 3 : 2);
+	return sectioned;
+}
+
+/* Draws image k's points, primitives (its n runs, image_runs()) and grids
+ * on the canvas; returns how many (0: the canvas is untouched). */
+static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k, const struct bin_run *runs,
+			     unsigned n)
+{
+	const struct bin_set *b = &r->bins;
+	struct section_canvas *c = &w->canvas;
+	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
+	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
+		light_point(c, &b->points[i]);
+	uint64_t sectioned = section_image(r, c, k, runs, n);
 	w->prim_images += sectioned;
 	drawn += sectioned;
 	for (uint32_t i = 0; i < r->grid_count; i++) {

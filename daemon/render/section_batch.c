@@ -25,6 +25,7 @@
 #include "section.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <string.h>
 
@@ -183,15 +184,42 @@ TARGET static inline __mmask8 clip_slots(const struct slots *in, __m512d nx, __m
 	return any;
 }
 
+/* Row r of the pieces (rows v0 .. v1 of each lane, live ones): its span,
+ * as raster_rows() finds it from the slab's vertices and the edges'
+ * crossings of the slab's inner lines (edges e when there is more than
+ * one row). */
+TARGET static inline void row_span(const struct section_canvas *c, int n, const __m512d *s, const __m512d *y,
+				   const struct edge *e, bool edges, __m512i v0, __m512i v1, uint32_t r, __mmask8 live,
+				   struct lanes_out *out)
+{
+	const __m512d inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
+	double h = c->geom.half_height, row_h = 2.0 * h / c->geom.height, eps = 1e-9 * row_h;
+	const __m512d hv = _mm512_set1_pd(h), rh = _mm512_set1_pd(row_h), ev = _mm512_set1_pd(eps);
+	__m512i v = _mm512_add_epi64(v0, _mm512_set1_epi64(r));
+	__mmask8 on = live & _mm512_cmple_epi64_mask(v, v1);
+	__mmask8 top = _mm512_cmpeq_epi64_mask(v, v0), bottom = _mm512_cmpeq_epi64_mask(v, v1);
+	__m512d vd = _mm512_cvtepu64_pd(v), next = _mm512_cvtepu64_pd(_mm512_add_epi64(v, _mm512_set1_epi64(1)));
+	__m512d yhi = _mm512_mask_blend_pd(top, _mm512_add_pd(_mm512_sub_pd(hv, _mm512_mul_pd(vd, rh)), ev), inf);
+	__m512d ylo = _mm512_mask_blend_pd(bottom, _mm512_sub_pd(_mm512_sub_pd(hv, _mm512_mul_pd(next, rh)), ev), ninf);
+	__m512d slo = inf, shi = ninf;
+	slab_vertices(n, s, y, ylo, yhi, &slo, &shi);
+	if (edges) { /* an infinite line crosses nothing */
+		cross_edges(n, e, yhi, &slo, &shi);
+		cross_edges(n, e, ylo, &slo, &shi);
+	}
+	out->lit[r] = on & _mm512_cmp_pd_mask(slo, shi, _CMP_LE_OQ);
+	_mm256_storeu_si256((__m256i *)out->u0[r], _mm512_cvtepi64_epi32(lane_columns(c, slo)));
+	_mm256_storeu_si256((__m256i *)out->u1[r], _mm512_cvtepi64_epi32(lane_columns(c, shi)));
+}
+
 /* project_body() and raster_rows() of the pieces in p (live lanes): the
  * rows and spans into out; lanes taller than MAX_ROWS are added to *leave
  * and dropped from *live. */
 TARGET static inline void raster_slots(const struct section_canvas *c, const struct section_wedge *w,
 				       const struct slots *p, __mmask8 *live, __mmask8 *leave, struct lanes_out *out)
 {
-	const __m512d inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
 	const int n = p->n;
-	__m512d s[MAX_SLOTS], ymin = inf, ymax = ninf;
+	__m512d s[MAX_SLOTS], ymin = _mm512_set1_pd(INFINITY), ymax = _mm512_set1_pd(-INFINITY);
 	for (int j = 0; j < n; j++) {
 		s[j] = _mm512_add_pd(_mm512_mul_pd(p->x[j], _mm512_set1_pd(w->dx)),
 				     _mm512_mul_pd(p->z[j], _mm512_set1_pd(w->dz)));
@@ -199,7 +227,7 @@ TARGET static inline void raster_slots(const struct section_canvas *c, const str
 		ymax = _mm512_max_pd(ymax, p->y[j]);
 	}
 	if (out->weighted) { /* raster_convex()'s s range of the piece */
-		__m512d lo = inf, hi = ninf;
+		__m512d lo = _mm512_set1_pd(INFINITY), hi = _mm512_set1_pd(-INFINITY);
 		for (int j = 0; j < n; j++) {
 			lo = _mm512_min_pd(lo, s[j]);
 			hi = _mm512_max_pd(hi, s[j]);
@@ -212,46 +240,28 @@ TARGET static inline void raster_slots(const struct section_canvas *c, const str
 	__mmask8 tall = *live & _mm512_cmpgt_epi64_mask(_mm512_sub_epi64(v1, v0), _mm512_set1_epi64(MAX_ROWS - 1));
 	*leave |= tall;
 	*live &= ~tall;
-	double h = c->geom.half_height, row_h = 2.0 * h / c->geom.height, eps = 1e-9 * row_h;
-	const __m512d hv = _mm512_set1_pd(h), rh = _mm512_set1_pd(row_h), ev = _mm512_set1_pd(eps);
 	uint32_t rows = *live ? (uint32_t)_mm512_mask_reduce_max_epi64(*live, _mm512_sub_epi64(v1, v0)) + 1 : 0;
 	struct edge e[MAX_SLOTS];
 	if (rows > 1) /* a piece in one row needs no edges */
 		edges_of(n, s, p->y, e);
 	_mm256_storeu_si256((__m256i *)out->row, _mm512_cvtepi64_epi32(v0));
 	out->rows = rows;
-	for (uint32_t r = 0; r < rows; r++) {
-		__m512i v = _mm512_add_epi64(v0, _mm512_set1_epi64(r));
-		__mmask8 on = *live & _mm512_cmple_epi64_mask(v, v1);
-		__mmask8 top = _mm512_cmpeq_epi64_mask(v, v0), bottom = _mm512_cmpeq_epi64_mask(v, v1);
-		__m512d vd = _mm512_cvtepu64_pd(v),
-			next = _mm512_cvtepu64_pd(_mm512_add_epi64(v, _mm512_set1_epi64(1)));
-		__m512d yhi =
-			_mm512_mask_blend_pd(top, _mm512_add_pd(_mm512_sub_pd(hv, _mm512_mul_pd(vd, rh)), ev), inf);
-		__m512d ylo = _mm512_mask_blend_pd(bottom,
-						   _mm512_sub_pd(_mm512_sub_pd(hv, _mm512_mul_pd(next, rh)), ev), ninf);
-		__m512d slo = inf, shi = ninf;
-		slab_vertices(n, s, p->y, ylo, yhi, &slo, &shi);
-		if (rows > 1) { /* an infinite line crosses nothing */
-			cross_edges(n, e, yhi, &slo, &shi);
-			cross_edges(n, e, ylo, &slo, &shi);
-		}
-		out->lit[r] = on & _mm512_cmp_pd_mask(slo, shi, _CMP_LE_OQ);
-		_mm256_storeu_si256((__m256i *)out->u0[r], _mm512_cvtepi64_epi32(lane_columns(c, slo)));
-		_mm256_storeu_si256((__m256i *)out->u1[r], _mm512_cvtepi64_epi32(lane_columns(c, shi)));
-	}
+	for (uint32_t r = 0; r < rows; r++)
+		row_span(c, n, s, p->y, e, rows > 1, v0, v1, r, *live, out);
 }
 
-/* Eight segments or triangles (tri->n vertices, lanes of x, y, z; active
- * lanes set) in image w. */
-TARGET static inline __attribute__((always_inline)) void batch8(
+/* prim_body()'s and lobe_piece()'s tests of eight primitives (vertices in
+ * tri): the lanes in the brightness band (out->weighted), those that
+ * leave for section_prim() (both lobes), the live ones (some piece), the
+ * lobe's sign and the lanes with every vertex inside plane 1. */
+TARGET static inline __attribute__((always_inline)) __mmask8 lobe_lanes(
 	const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri, __mmask8 active,
-	struct lanes_out *out, __mmask8 *pending)
+	__mmask8 *leave, __m512d *sign, __mmask8 *all1, struct lanes_out *out)
 {
-	const __m512d zero = _mm512_setzero_pd(), inf = _mm512_set1_pd(INFINITY), ninf = _mm512_set1_pd(-INFINITY);
+	const __m512d zero = _mm512_setzero_pd();
 	const __m512d *x = tri->x, *z = tri->z;
 	const int nv = tri->n;
-	__m512d d1[3], d2[3], lo = inf, hi = ninf, xz = zero;
+	__m512d d1[3], d2[3], lo = _mm512_set1_pd(INFINITY), hi = _mm512_set1_pd(-INFINITY), xz = zero;
 	for (int i = 0; i < nv; i++) {
 		d1[i] = _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(w->n1x), x[i]),
 				      _mm512_mul_pd(_mm512_set1_pd(w->n1z), z[i]));
@@ -262,7 +272,6 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 		hi = _mm512_max_pd(hi, e);
 		xz = _mm512_max_pd(xz, _mm512_max_pd(_mm512_abs_pd(x[i]), _mm512_abs_pd(z[i])));
 	}
-	__mmask8 leave = 0;
 	out->weighted = 0;
 	if (c->bright && brightness_active(c->bright)) { /* weight_start() */
 		__m512d band = _mm512_set1_pd(c->bright->band_d);
@@ -273,19 +282,29 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 	__m512d m = _mm512_mul_pd(_mm512_set1_pd(1e-12), xz);
 	__mmask8 front = ~_mm512_cmp_pd_mask(hi, _mm512_sub_pd(zero, m), _CMP_LT_OQ);
 	__mmask8 back = ~_mm512_cmp_pd_mask(lo, m, _CMP_GT_OQ);
-	leave |= _mm512_cmp_pd_mask(lo, zero, _CMP_LE_OQ) & _mm512_cmp_pd_mask(hi, zero, _CMP_GE_OQ);
-	leave |= front & back;
-	__mmask8 live = active & ~leave & (front | back);
-	__m512d sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
+	*leave = (_mm512_cmp_pd_mask(lo, zero, _CMP_LE_OQ) & _mm512_cmp_pd_mask(hi, zero, _CMP_GE_OQ)) | (front & back);
+	*sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
 	/* lobe_piece()'s in-counts. */
-	__mmask8 any1 = 0, any2 = 0, all1 = 0xff;
+	__mmask8 any1 = 0, any2 = 0;
+	*all1 = 0xff;
 	for (int i = 0; i < nv; i++) {
-		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d1[i]), zero, _CMP_GE_OQ);
+		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(*sign, d1[i]), zero, _CMP_GE_OQ);
 		any1 |= in1;
-		any2 |= _mm512_cmp_pd_mask(_mm512_mul_pd(sign, d2[i]), zero, _CMP_GE_OQ);
-		all1 &= in1;
+		any2 |= _mm512_cmp_pd_mask(_mm512_mul_pd(*sign, d2[i]), zero, _CMP_GE_OQ);
+		*all1 &= in1;
 	}
-	live &= any1 & any2;
+	return active & ~*leave & (front | back) & any1 & any2;
+}
+
+/* Eight segments or triangles (tri->n vertices, lanes of x, y, z; active
+ * lanes set) in image w. */
+TARGET static inline __attribute__((always_inline)) void batch8(
+	const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri, __mmask8 active,
+	struct lanes_out *out, __mmask8 *pending)
+{
+	__mmask8 leave, all1;
+	__m512d sign;
+	__mmask8 live = lobe_lanes(c, w, tri, active, &leave, &sign, &all1, out);
 	/* The clip: plane 1 where some vertex is outside it (then plane 2 on
 	 * what is left), else plane 2 alone (every vertex inside both: the
 	 * pass keeps them as they are). */
@@ -296,7 +315,7 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 	__mmask8 cut2 = 0; /* after plane 1, plane 2 cuts something */
 	for (int j = 0; j < one.n; j++) {
 		__m512d dp = _mm512_add_pd(_mm512_mul_pd(n2x, one.x[j]), _mm512_mul_pd(n2z, one.z[j]));
-		cut2 |= _mm512_cmp_pd_mask(dp, zero, _CMP_LT_OQ);
+		cut2 |= _mm512_cmp_pd_mask(dp, _mm512_setzero_pd(), _CMP_LT_OQ);
 	}
 	cut2 &= live & ~all1;
 	if (cut2) {
@@ -308,15 +327,18 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 	*pending = active & leave;
 }
 
+/* Asked from every worker: the answer is kept atomically. */
 static bool batch_cpu(void)
 {
-	static int have = -1;
-	if (have < 0) {
+	static atomic_int have = -1;
+	int h = atomic_load_explicit(&have, memory_order_relaxed);
+	if (h < 0) {
 		__builtin_cpu_init();
-		have = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-		       __builtin_cpu_supports("avx512vl");
+		h = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+		    __builtin_cpu_supports("avx512vl");
+		atomic_store_explicit(&have, h, memory_order_relaxed);
 	}
-	return have;
+	return h;
 }
 
 bool section_batch_supported(void)
