@@ -3,7 +3,6 @@
 #include <errno.h>
 #include <float.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -284,22 +283,18 @@ static inline void count_keys(uint32_t *hist, const struct stage_prim *s, uint32
 			hist[s[i].key & KEY_MASK]++;
 }
 
-#ifdef BIN_TRIS_X86
-#define TRIS_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512cd,avx2")))
-
-/* Asked from every worker: the answer is kept atomically. */
-static bool tris_wide(void)
+/* A staged item's records turned by its draw's turn, and counted. */
+static inline void finish_item(const struct bin_set *b, uint32_t turn, struct stage_prim *s, uint32_t *hist)
 {
-	static atomic_int have = -1;
-	int h = atomic_load_explicit(&have, memory_order_relaxed);
-	if (h < 0) {
-		__builtin_cpu_init();
-		h = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-		    __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512cd");
-		atomic_store_explicit(&have, h, memory_order_relaxed);
-	}
-	return h;
+	if (turn)
+		turn_prims(b, turn, s);
+	count_keys(hist, s, bin_slots(b));
 }
+
+#ifdef BIN_TRIS_X86
+/* The instruction sets of bin_points.c's AVX-512 path, which
+ * bin_points_isa_supported(BIN_POINTS_AVX512) checks. */
+#define TRIS_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2")))
 
 /* slot_of() of eight (x, z), with the same operations: the slots; the
  * lanes it flags near a boundary are added to *near, those on the axis
@@ -386,8 +381,10 @@ TRIS_TARGET static inline void arcs8(const struct bin_set *b, const __m256i sl[3
 	every |= _mm256_cmpge_epi32_mask(len, vM);
 	start = _mm256_maskz_mov_epi32((__mmask8)~every, start);
 	len = _mm256_mask_blend_epi32(every, len, vM);
-	/* ceil_log2(count): 32 - clz(count - 1), 0 for 1 */
-	__m256i cls = _mm256_sub_epi32(_mm256_set1_epi32(32), _mm256_lzcnt_epi32(_mm256_sub_epi32(len, one)));
+	/* ceil_log2(count), 0 for 1: floor(log2(count - 1)) + 1, the exponent
+	 * of count - 1 in float (exact below 2^24) */
+	__m256i e = _mm256_srli_epi32(_mm256_castps_si256(_mm256_cvtepi32_ps(_mm256_sub_epi32(len, one))), 23);
+	__m256i cls = _mm256_sub_epi32(e, _mm256_set1_epi32(126));
 	cls = _mm256_maskz_mov_epi32(_mm256_cmpgt_epi32_mask(len, one), cls);
 	_mm256_storeu_si256((__m256i *)first, start);
 	_mm256_storeu_si256((__m256i *)count, len);
@@ -435,8 +432,9 @@ TRIS_TARGET static inline __mmask8 vertex8(const float m[16], const __m512 r[5],
  * them); a lane with a coordinate that is not a finite float goes to
  * bin_one_prim(). Returns the first triangle not staged. */
 TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
-					struct stage_prim *out)
+					struct stage_prim *out, uint32_t *hist)
 {
+	const uint32_t turn = bin_draw_turn(b, d);
 	const float *m = d->transform;
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
@@ -462,16 +460,17 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 			struct stage_prim *s = &out[k - j0];
 			if (!(fin >> l & 1)) {
 				bin_one_prim(b, d, d->xyz + 9 * k, 3, rgb, s);
-				continue;
+			} else {
+				for (int i = 0; i < 3; i++)
+					for (int c = 0; c < 3; c++)
+						s->rec.v[i][c] = v[i][c][l];
+				s->rec.nverts = 3;
+				memcpy(s->rec.rgb, rgb, 3);
+				s->rec.first = (uint16_t)first[l];
+				s->rec.count = (uint16_t)count[l];
+				s->key = key[l];
 			}
-			for (int i = 0; i < 3; i++)
-				for (int c = 0; c < 3; c++)
-					s->rec.v[i][c] = v[i][c][l];
-			s->rec.nverts = 3;
-			memcpy(s->rec.rgb, rgb, 3);
-			s->rec.first = (uint16_t)first[l];
-			s->rec.count = (uint16_t)count[l];
-			s->key = key[l];
+			finish_item(b, turn, s, hist);
 		}
 	}
 	return j;
@@ -489,16 +488,13 @@ static void stage_prims(const struct bin_set *b, const struct scene_draw *d, uin
 	const uint32_t slots = bin_slots(b), turn = bin_draw_turn(b, d);
 	uint64_t j = j0;
 #ifdef BIN_TRIS_X86
-	if (nv == 3 && b->geom.mirrored && !b->prims_scalar && tris_wide())
-		j = stage_tris8(b, d, j0, j1, out);
+	if (nv == 3 && b->geom.mirrored && !b->prims_scalar && bin_points_isa_supported(BIN_POINTS_AVX512))
+		j = stage_tris8(b, d, j0, j1, out, hist);
 #endif
-	for (; j < j1; j++)
-		bin_one_prim(b, d, d->xyz + j * (uint64_t)nv * 3, nv, d->prim_rgb ? d->prim_rgb + 3 * j : d->rgb,
-			     &out[slots * (j - j0)]);
-	for (uint64_t i = 0; i < slots * (j1 - j0); i += slots) {
-		if (turn)
-			turn_prims(b, turn, &out[i]);
-		count_keys(hist, &out[i], slots);
+	for (; j < j1; j++) {
+		struct stage_prim *s = &out[slots * (j - j0)];
+		bin_one_prim(b, d, d->xyz + j * (uint64_t)nv * 3, nv, d->prim_rgb ? d->prim_rgb + 3 * j : d->rgb, s);
+		finish_item(b, turn, s, hist);
 	}
 }
 

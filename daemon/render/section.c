@@ -305,31 +305,44 @@ static void weighted_span(struct section_canvas *c, uint32_t a, uint32_t b, bool
 	}
 }
 
+/* How a piece whose s range is [lo, hi] is weighted: where its columns
+ * (mirrored when mirror) reach the thinned band, [*a, *b] are those in
+ * the band and the result weigh_columns()'s; WEIGH_SAME where they do
+ * not, or where the weights leave the colours as they are, so that the
+ * plain spans' bytes and rows do without the weighted ones' work. */
+static enum weighed band_weighing(struct section_canvas *c, struct section_weight *wt, double lo, double hi,
+				  bool mirror, const uint8_t rgb[3], uint32_t *a, uint32_t *b)
+{
+	const struct brightness_map *m = wt->m;
+	/* The band's s range is symmetric about the axis (mirroring keeps it). */
+	if (!(hi >= -m->band_s && lo <= m->band_s))
+		return WEIGH_SAME;
+	uint32_t u0 = geometry_column(&c->geom, lo), u1 = geometry_column(&c->geom, hi);
+	if (mirror) {
+		uint32_t t = c->geom.width - 1 - u0;
+		u0 = c->geom.width - 1 - u1;
+		u1 = t;
+	}
+	if (!(lo <= hi && u1 >= m->band_lo && u0 <= m->band_hi))
+		return WEIGH_SAME;
+	*a = u0 > m->band_lo ? u0 : m->band_lo;
+	*b = u1 < m->band_hi ? u1 : m->band_hi;
+	return weigh_columns(c, wt, *a, *b, rgb);
+}
+
 void section_weighted_runs(struct section_canvas *c, const struct section_wedge *w, const double (*v)[3], int n,
 			   const uint8_t rgb[3], double lo, double hi, const struct section_run *runs, unsigned count)
 {
-	/* raster_convex()'s test, on the piece's s range [lo, hi] */
-	const struct brightness_map *m = c->bright;
-	if (hi >= -m->band_s && lo <= m->band_s) {
-		uint32_t u0 = geometry_column(&c->geom, lo), u1 = geometry_column(&c->geom, hi);
-		if (lo <= hi && u1 >= m->band_lo && u0 <= m->band_hi) {
-			uint32_t a = u0 > m->band_lo ? u0 : m->band_lo, b = u1 < m->band_hi ? u1 : m->band_hi;
-			struct section_weight wt = { .m = m, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
-			enum weighed lit = weigh_columns(c, &wt, a, b, rgb);
-			if (lit != WEIGH_SAME) {
-				for (unsigned i = 0; i < count; i++) {
-					const struct section_run *r = &runs[i];
-					if (r->u1 >= a && r->u0 <= b)
-						weighted_span(c, a, b, lit == WEIGH_LIT, r->v, r->u0, r->u1, rgb);
-					else
-						section_span(c, r->v, r->u0, r->u1, rgb);
-				}
-				return;
-			}
-		}
+	struct section_weight wt = { .m = c->bright, .v = v, .n = n, .dx = w->dx, .dz = w->dz };
+	uint32_t a = 0, b = 0;
+	enum weighed lit = band_weighing(c, &wt, lo, hi, false, rgb, &a, &b);
+	for (unsigned i = 0; i < count; i++) {
+		const struct section_run *r = &runs[i];
+		if (lit != WEIGH_SAME && r->u1 >= a && r->u0 <= b) /* raster_rows()'s choice */
+			weighted_span(c, a, b, lit == WEIGH_LIT, r->v, r->u0, r->u1, rgb);
+		else
+			section_span(c, r->v, r->u0, r->u1, rgb);
 	}
-	for (unsigned i = 0; i < count; i++)
-		section_span(c, runs[i].v, runs[i].u0, runs[i].u1, rgb);
 }
 
 /* Minimum and maximum of finite values (fmin/fmax are library calls). */
@@ -477,27 +490,14 @@ static inline __attribute__((always_inline)) void raster_convex(struct section_c
 								const uint8_t rgb[3], struct section_weight *wt,
 								bool mirror)
 {
-	double lo = INFINITY, hi = -INFINITY;
-	if (wt)
+	if (wt) {
+		double lo = INFINITY, hi = -INFINITY;
+		uint32_t a = 0, b = 0;
 		vertices_in_slab(q, n, -INFINITY, INFINITY, 0, &lo, &hi);
-	/* The band's s range is symmetric about the axis (mirroring keeps it). */
-	if (wt && hi >= -wt->m->band_s && lo <= wt->m->band_s) {
-		uint32_t u0 = geometry_column(&c->geom, lo), u1 = geometry_column(&c->geom, hi);
-		if (mirror) {
-			uint32_t t = c->geom.width - 1 - u0;
-			u0 = c->geom.width - 1 - u1;
-			u1 = t;
-		}
-		if (lo <= hi && u1 >= wt->m->band_lo && u0 <= wt->m->band_hi) {
-			uint32_t a = u0 > wt->m->band_lo ? u0 : wt->m->band_lo;
-			uint32_t b = u1 < wt->m->band_hi ? u1 : wt->m->band_hi;
-			enum weighed lit = weigh_columns(c, wt, a, b, rgb);
-			/* Unchanged colours (and some lit): the plain spans'
-			 * bytes and rows, without the weighted ones' work. */
-			if (lit != WEIGH_SAME) {
-				raster_rows(c, q, n, rgb, a, b, lit == WEIGH_LIT, mirror, true);
-				return;
-			}
+		enum weighed lit = band_weighing(c, wt, lo, hi, mirror, rgb, &a, &b);
+		if (lit != WEIGH_SAME) {
+			raster_rows(c, q, n, rgb, a, b, lit == WEIGH_LIT, mirror, true);
+			return;
 		}
 	}
 	raster_rows(c, q, n, rgb, 0, 0, false, mirror, false);

@@ -25,7 +25,6 @@
 #include "section.h"
 
 #include <math.h>
-#include <stdatomic.h>
 #include <stdbool.h>
 #include <string.h>
 
@@ -327,23 +326,10 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 	*pending = active & leave;
 }
 
-/* Asked from every worker: the answer is kept atomically. */
-static bool batch_cpu(void)
-{
-	static atomic_int have = -1;
-	int h = atomic_load_explicit(&have, memory_order_relaxed);
-	if (h < 0) {
-		__builtin_cpu_init();
-		h = __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
-		    __builtin_cpu_supports("avx512vl");
-		atomic_store_explicit(&have, h, memory_order_relaxed);
-	}
-	return h;
-}
-
 bool section_batch_supported(void)
 {
-	return batch_cpu();
+	return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512dq") &&
+	       __builtin_cpu_supports("avx512vl");
 }
 
 /* Primitive l's vertices as doubles (as raster_image() converts them). */
@@ -357,8 +343,9 @@ static void lane_vertices(const struct section_lane *t, int verts, double v[3][3
 /* What the lanes found for lane l, lit: its spans, weighted where its
  * piece is in the brightness band. */
 static void light_lane(struct section_canvas *c, const struct section_wedge *w, const struct lanes_out *out, unsigned l,
-		       const double (*v)[3], int verts, const uint8_t rgb[3])
+		       const struct section_lane *t, int verts)
 {
+	const uint8_t *rgb = t->rgb;
 	if (!(out->weighted >> l & 1)) {
 		for (uint32_t r = 0; r < out->rows; r++)
 			if (out->lit[r] >> l & 1)
@@ -370,8 +357,11 @@ static void light_lane(struct section_canvas *c, const struct section_wedge *w, 
 	for (uint32_t r = 0; r < out->rows; r++)
 		if (out->lit[r] >> l & 1)
 			runs[count++] = (struct section_run){ out->row[l] + r, out->u0[r][l], out->u1[r][l] };
-	if (count)
-		section_weighted_runs(c, w, v, verts, rgb, out->lo[l], out->hi[l], runs, count);
+	if (count) { /* the weights come from the primitive's own vertices */
+		double v[3][3];
+		lane_vertices(t, verts, v);
+		section_weighted_runs(c, w, (const double(*)[3])v, verts, rgb, out->lo[l], out->hi[l], runs, count);
+	}
 }
 
 /* The eight lanes for verts 2 or 3, a constant in each caller (so the
@@ -398,12 +388,13 @@ TARGET static inline __attribute__((always_inline)) void batch(struct section_ca
 	__mmask8 pending;
 	batch8(c, w, &prims, (__mmask8)((1u << n) - 1), &out, &pending);
 	for (unsigned l = 0; l < n; l++) {
+		if (!(pending >> l & 1)) {
+			light_lane(c, w, &out, l, &t[l], verts);
+			continue;
+		}
 		double v[3][3];
 		lane_vertices(&t[l], verts, v);
-		if (pending >> l & 1)
-			section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
-		else
-			light_lane(c, w, &out, l, (const double(*)[3])v, verts, t[l].rgb);
+		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
 	}
 }
 
@@ -422,7 +413,7 @@ TARGET static void batch_triangles(struct section_canvas *c, const struct sectio
 void section_lanes(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t, unsigned n,
 		   int verts)
 {
-	if (!c->general && batch_cpu()) {
+	if (!c->general && section_batch_supported()) {
 		if (verts == 3)
 			batch_triangles(c, w, t, n);
 		else
