@@ -426,6 +426,21 @@ TRIS_TARGET static inline __mmask8 vertex8(const float m[16], const __m512 r[5],
 	return fin;
 }
 
+/* Lane l's staged record: its vertices from v (vertex, coordinate,
+ * lane), colour, images and key. */
+static inline void lane_record(float v[3][3][8], unsigned l, const uint8_t rgb[3], uint32_t first, uint32_t count,
+			       uint32_t key, struct stage_prim *s)
+{
+	for (int i = 0; i < 3; i++)
+		for (int c = 0; c < 3; c++)
+			s->rec.v[i][c] = v[i][c][l];
+	s->rec.nverts = 3;
+	memcpy(s->rec.rgb, rgb, 3);
+	s->rec.first = (uint16_t)first;
+	s->rec.count = (uint16_t)count;
+	s->key = key;
+}
+
 /* bin_one_prim() of triangles j0 .. j1 - 1 of d, eight at a time, on a
  * mirrored geometry: the same operations lane for lane (the transform
  * grouped as bin_transform() groups it, the slots as slot_of() finds
@@ -458,18 +473,10 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 			uint64_t k = j + l;
 			const uint8_t *rgb = d->prim_rgb ? d->prim_rgb + 3 * k : d->rgb;
 			struct stage_prim *s = &out[k - j0];
-			if (!(fin >> l & 1)) {
+			if (!(fin >> l & 1))
 				bin_one_prim(b, d, d->xyz + 9 * k, 3, rgb, s);
-			} else {
-				for (int i = 0; i < 3; i++)
-					for (int c = 0; c < 3; c++)
-						s->rec.v[i][c] = v[i][c][l];
-				s->rec.nverts = 3;
-				memcpy(s->rec.rgb, rgb, 3);
-				s->rec.first = (uint16_t)first[l];
-				s->rec.count = (uint16_t)count[l];
-				s->key = key[l];
-			}
+			else
+				lane_record(v, l, rgb, first[l], count[l], key[l], s);
 			finish_item(b, turn, s, hist);
 		}
 	}
