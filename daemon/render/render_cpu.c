@@ -99,6 +99,7 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 	memset(st->mask, 0, r->canvas_out->mask_bytes);
 	for (uint32_t t = next_touched(c->rows, 0, tiles); t < tiles; t = next_touched(c->rows, t + 1, tiles)) {
 		uint8_t *dst = st->tiles + (size_t)n++ * CANVAS_TILE_BYTES;
+		section_canvas_fold_tile(c, t);
 		memcpy(dst, &c->rows[t], sizeof(uint32_t));
 		memcpy(dst + sizeof(uint32_t), c->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES);
 		st->mask[t / 8] |= (uint8_t)(1u << (t % 8));
@@ -122,6 +123,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		if (!dst && err == 0)
 			err = -ENOMEM;
 		const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
+		section_canvas_fold_tile(c, t);
 		if (dst && r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst)) {
 			err = volume_image_push(r->out, k, t);
 			w->tiles++;
@@ -391,6 +393,21 @@ static int collect(struct render_cpu *r)
 	return err;
 }
 
+/* The colour the canvases keep as bits (section_canvas_plain()): that of
+ * the draw of segments or triangles with the most vertices, where it has
+ * one colour; NULL where there is none. */
+static const uint8_t *plain_colour(const struct scene *scene)
+{
+	const struct scene_draw *best = NULL;
+	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
+		const struct scene_draw *d = &scene->draws[i];
+		if ((d->prim == SCENE_LINES || d->prim == SCENE_TRIANGLES) && !d->prim_rgb &&
+		    (!best || d->count > best->count))
+			best = d;
+	}
+	return best ? best->rgb : NULL;
+}
+
 /* One pass: scene (no lifts) binned and drawn, image by image, into out or
  * canvas, with r->lifted merged; the stats add up over passes. */
 static int render_pass(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
@@ -405,8 +422,10 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	if (err < 0)
 		return err;
 	base->stats.prims += r->bins.prim_count + r->bins.point_count;
+	const uint8_t *plain = r->batch ? plain_colour(scene) : NULL;
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
+		section_canvas_plain(&c, plain);
 		r->workers[i] = (struct cpu_worker){ .canvas = c };
 	}
 	r->out = out;

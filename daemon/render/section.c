@@ -23,7 +23,9 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	c->weighted_plane = c->tiles_x * VOLUME_TILE;
 	/* Zeroed: the vector spans read whole half rows of it (masked). */
 	c->weighted = calloc((size_t)c->weighted_plane, 3);
-	if (!c->rgb || !c->rows || !c->weighted) {
+	c->plain_bits = calloc(tiles * VOLUME_TILE, sizeof(*c->plain_bits));
+	c->plain_rows = calloc(tiles, sizeof(*c->plain_rows));
+	if (!c->rgb || !c->rows || !c->weighted || !c->plain_bits || !c->plain_rows) {
 		section_canvas_finish(c);
 		return -ENOMEM;
 	}
@@ -35,12 +37,16 @@ void section_canvas_finish(struct section_canvas *c)
 	free(c->rgb);
 	free(c->rows);
 	free(c->weighted);
+	free(c->plain_bits);
+	free(c->plain_rows);
 	free(c->scratch);
 	c->scratch = NULL;
 	c->scratch_floats = 0;
 	c->rgb = NULL;
 	c->rows = NULL;
 	c->weighted = NULL;
+	c->plain_bits = NULL;
+	c->plain_rows = NULL;
 }
 
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
@@ -57,6 +63,16 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
 		}
 	}
 	c->rows[t] = 0;
+	for (uint32_t p = c->plain_rows[t]; p; p &= p - 1)
+		c->plain_bits[(size_t)t * VOLUME_TILE + (uint32_t)__builtin_ctz(p)] = 0;
+	c->plain_rows[t] = 0;
+}
+
+void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb)
+{
+	c->plain = rgb != NULL && !c->general;
+	if (c->plain)
+		memcpy(c->plain_rgb, rgb, 3);
 }
 
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k)
@@ -126,6 +142,36 @@ static inline void max_pixels(uint8_t *r, uint32_t a, uint32_t b, uint8_t value)
 	}
 }
 
+/* The bit of the plain bits' byte (pixels 8 i .. 8 i + 7 of a row) that
+ * each byte of a canvas row half holds (halftone_pos()). */
+static const span_half plain_bit = { 0x80, 0x40, 0x20, 0x10, 8, 4, 2, 1, 0x80, 0x40, 0x20, 0x10, 8, 4, 2, 1 };
+
+void section_canvas_fold(struct section_canvas *c, uint32_t t)
+{
+	uint8_t *tile = c->rgb + (size_t)t * HALFTONE_TILE_BYTES;
+	uint32_t *bits = c->plain_bits + (size_t)t * VOLUME_TILE;
+	for (uint32_t rows = c->plain_rows[t]; rows; rows &= rows - 1) {
+		uint32_t y = (uint32_t)__builtin_ctz(rows), m = bits[y];
+		bits[y] = 0;
+		for (int h = 0; h < 2; h++) {
+			span_half sel = { 0 };
+			for (int j = 0; j < 8; j++) {
+				sel[j] = (uint8_t)(m >> (16 * h));
+				sel[8 + j] = (uint8_t)(m >> (16 * h + 8));
+			}
+			span_half lit = (span_half)((sel & plain_bit) != 0);
+			for (int i = 0; i < 3; i++) {
+				uint8_t *r = tile + i * HALFTONE_PLANE_BYTES + y * HALFTONE_ROW_BYTES + 16 * h;
+				span_half row, val = lit & c->plain_rgb[i];
+				memcpy(&row, r, sizeof(row));
+				row = row ^ ((row ^ val) & (span_half)(row < val)); /* MAX */
+				memcpy(r, &row, sizeof(row));
+			}
+		}
+	}
+	c->plain_rows[t] = 0;
+}
+
 /* section_span()'s byte loops: what the tests compare max_pixels() with
  * (section_canvas.general). */
 static void span_bytes(uint8_t *base, uint32_t a, uint32_t b, const uint8_t rgb[3])
@@ -151,6 +197,17 @@ static void span_bytes(uint8_t *base, uint32_t a, uint32_t b, const uint8_t rgb[
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3])
 {
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
+	if (c->plain && rgb[0] == c->plain_rgb[0] && rgb[1] == c->plain_rgb[1] && rgb[2] == c->plain_rgb[2]) {
+		for (uint32_t u = u0; u <= u1;) {
+			uint32_t t = row + u / VOLUME_TILE;
+			uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
+			c->plain_bits[(size_t)t * VOLUME_TILE + y] |= (uint32_t)((2ull << b) - (1ull << a));
+			c->plain_rows[t] |= 1u << y;
+			c->rows[t] |= 1u << y;
+			u += b - a + 1;
+		}
+		return;
+	}
 	for (uint32_t u = u0; u <= u1;) {
 		uint32_t t = row + u / VOLUME_TILE;
 		uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;

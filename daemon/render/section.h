@@ -36,6 +36,17 @@ struct section_canvas {
 	float *scratch;          /* NULL, or scratch_floats floats: grid.c's, */
 	size_t scratch_floats;   /* grown as needed, freed with the canvas */
 	double row_scale;        /* 1 / (2h) where 2h is a power of two, else 0 */
+	/* The plain colour (section_canvas_plain()): spans of exactly that
+	 * colour are kept as bits, plain_bits[32 t + y] bit x for pixel x of
+	 * tile t's row y (plain_rows[t] flags the rows with any), and MAXed
+	 * into the bytes by section_canvas_fold_tile(), which gives the bytes
+	 * section_span() would have written, as MAX does not mind the order.
+	 * A dense mesh of one colour lights millions of spans of a pixel or
+	 * two: a bit OR each, where three planes of bytes cost three. */
+	bool plain;
+	uint8_t plain_rgb[3];
+	uint32_t *plain_bits; /* tiles_x * tiles_y * VOLUME_TILE */
+	uint32_t *plain_rows; /* tiles_x * tiles_y */
 	/* Tests: none of section.c's shortcuts, which light the same voxels
 	 * (lobes the clip cannot reach, planes every vertex is inside, rows
 	 * by a product, spans by half rows): both lobes, both planes,
@@ -62,6 +73,21 @@ void section_canvas_max_tile(struct section_canvas *c, uint32_t t, const uint8_t
 
 /* Zeroes the rows of tile t that rows[t] flags, and the flags. */
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
+
+/* From now on spans of colour rgb are kept as bits (rgb NULL: none are).
+ * The canvas must hold no plain bits (every tile folded). Not with
+ * c->general, whose byte loops the tests compare. */
+void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
+
+/* Tile t's plain bits MAXed into its bytes, and cleared: its bytes are then
+ * what section_span() would have written. Before tile t's bytes are read
+ * (section_canvas_fold_tile() where it has any). */
+void section_canvas_fold(struct section_canvas *c, uint32_t t);
+static inline void section_canvas_fold_tile(struct section_canvas *c, uint32_t t)
+{
+	if (c->plain_rows[t])
+		section_canvas_fold(c, t);
+}
 
 /* Lights pixel (u, v) by per-channel MAX with rgb. */
 static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t v, const uint8_t rgb[3])

@@ -6,8 +6,9 @@
  * spans byte by byte), pixel for pixel: many random small triangles and
  * segments about each image's wedge planes, near and across the axis, with
  * vertices on column and row boundaries and on the wedge planes, degenerate
- * ones, drawn plain and mirrored, on three geometries (2h a power of two
- * and not), in the exact, even and uniform brightness models. */
+ * ones, drawn as they are and mirrored, on three geometries (2h a power of two
+ * and not), in the exact, even and uniform brightness models; a third in
+ * the colour the fast canvases keep as bits (section_canvas_plain()). */
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -43,6 +44,8 @@ static bool same_and_clear(struct section_canvas *a, struct section_canvas *b)
 	for (uint32_t t = 0; t < tiles; t++) {
 		if (!a->rows[t] && !b->rows[t])
 			continue;
+		section_canvas_fold_tile(a, t);
+		section_canvas_fold_tile(b, t);
 		if (a->rows[t] != b->rows[t] || memcmp(a->rgb + (size_t)t * HALFTONE_TILE_BYTES,
 						       b->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES))
 			same = false;
@@ -142,6 +145,15 @@ static void check_geometry(const struct geometry *g, uint32_t cases)
 		both[q]->general.general = true;
 	}
 	slow.general = true;
+	/* A third of the cases in the plain colour (section_canvas_plain()),
+	 * kept as bits where the canvas is not general. */
+	static const uint8_t plain[3] = { 90, 0, 255 };
+	section_canvas_plain(&fast, plain);
+	section_canvas_plain(&slow, plain);
+	for (int q = 0; q < 2; q++) {
+		section_canvas_plain(&both[q]->lanes, plain);
+		section_canvas_plain(&both[q]->general, plain);
+	}
 	uint32_t images = geometry_images_per_volume(g);
 	double col_w = 2.0 / g->width;
 	for (uint32_t i = 0; i < cases; i++) {
@@ -171,6 +183,8 @@ static void check_geometry(const struct geometry *g, uint32_t cases)
 				v[2][j] = F(v[0][j] + 0.5 * (v[1][j] - v[0][j]));
 		}
 		uint8_t rgb[3] = { (uint8_t)(1 + i % 255), (uint8_t)(i * 7 % 256), 255 };
+		if (i % 3 == 0)
+			memcpy(rgb, plain, 3);
 		bool mirror = unit() < 0.3;
 		section_prim_mirror(&fast, &w, (const double(*)[3])v, n, rgb, mirror);
 		section_prim_mirror(&slow, &w, (const double(*)[3])v, n, rgb, mirror);
