@@ -142,9 +142,9 @@ static inline void max_pixels(uint8_t *r, uint32_t a, uint32_t b, uint8_t value)
 	}
 }
 
-/* The bit of the plain bits' byte (pixels 8 i .. 8 i + 7 of a row) that
- * each byte of a canvas row half holds (halftone_pos()). */
-static const span_half plain_bit = { 0x80, 0x40, 0x20, 0x10, 8, 4, 2, 1, 0x80, 0x40, 0x20, 0x10, 8, 4, 2, 1 };
+/* The bit of a plain bits' byte that each byte of a canvas row half holds:
+ * both are in pixel order x ^ 7. */
+static const span_half plain_bit = { 1, 2, 4, 8, 0x10, 0x20, 0x40, 0x80, 1, 2, 4, 8, 0x10, 0x20, 0x40, 0x80 };
 
 void section_canvas_fold(struct section_canvas *c, uint32_t t)
 {
@@ -169,6 +169,7 @@ void section_canvas_fold(struct section_canvas *c, uint32_t t)
 			}
 		}
 	}
+	c->rows[t] |= c->plain_rows[t];
 	c->plain_rows[t] = 0;
 }
 
@@ -201,9 +202,11 @@ void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1
 		for (uint32_t u = u0; u <= u1;) {
 			uint32_t t = row + u / VOLUME_TILE;
 			uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
-			c->plain_bits[(size_t)t * VOLUME_TILE + y] |= (uint32_t)((2ull << b) - (1ull << a));
+			/* Pixels a..b at bits 31 - b .. 31 - a, bytes swapped:
+			 * at bits x ^ 7. */
+			uint32_t bits = (uint32_t)((2ull << (31 - a)) - (1ull << (31 - b)));
+			c->plain_bits[(size_t)t * VOLUME_TILE + y] |= __builtin_bswap32(bits);
 			c->plain_rows[t] |= 1u << y;
-			c->rows[t] |= 1u << y;
 			u += b - a + 1;
 		}
 		return;

@@ -37,12 +37,16 @@ struct section_canvas {
 	size_t scratch_floats;   /* grown as needed, freed with the canvas */
 	double row_scale;        /* 1 / (2h) where 2h is a power of two, else 0 */
 	/* The plain colour (section_canvas_plain()): spans of exactly that
-	 * colour are kept as bits, plain_bits[32 t + y] bit x for pixel x of
-	 * tile t's row y (plain_rows[t] flags the rows with any), and MAXed
-	 * into the bytes by section_canvas_fold_tile(), which gives the bytes
-	 * section_span() would have written, as MAX does not mind the order.
-	 * A dense mesh of one colour lights millions of spans of a pixel or
-	 * two: a bit OR each, where three planes of bytes cost three. */
+	 * colour are kept as bits, not bytes: plain_bits[32 t + y] holds tile
+	 * t's row y in the packed order of volume.h (bit x ^ 7 for pixel x),
+	 * plain_rows[t] flags the rows with any (rows[t] does not: it stays
+	 * the rows with bytes; a tile is touched where either is set). The
+	 * canvas means the MAX of its bytes and its plain bits, which
+	 * section_canvas_fold() makes bytes again; the halftone of that MAX
+	 * is that of the bytes ORed with that of the bits, so a pack may take
+	 * the bits straight. A dense mesh of one colour lights millions of
+	 * spans of a pixel or two: a bit OR each, where bytes cost three
+	 * planes. All zero outside the flagged rows. */
 	bool plain;
 	uint8_t plain_rgb[3];
 	uint32_t *plain_bits; /* tiles_x * tiles_y * VOLUME_TILE */
@@ -71,7 +75,8 @@ void section_canvas_finish(struct section_canvas *c);
  * mask, then the planes) into tile t of c. */
 void section_canvas_max_tile(struct section_canvas *c, uint32_t t, const uint8_t *src);
 
-/* Zeroes the rows of tile t that rows[t] flags, and the flags. */
+/* Zeroes the rows of tile t that rows[t] flags, its plain bits, and the
+ * flags. */
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
 
 /* From now on spans of colour rgb are kept as bits (rgb NULL: none are).
@@ -79,9 +84,10 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
  * c->general, whose byte loops the tests compare. */
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
 
-/* Tile t's plain bits MAXed into its bytes, and cleared: its bytes are then
- * what section_span() would have written. Before tile t's bytes are read
- * (section_canvas_fold_tile() where it has any). */
+/* Tile t's plain bits MAXed into its bytes (rows[t] gains their rows), and
+ * cleared: its bytes are then what section_span() would have written.
+ * Before tile t's bytes are read (section_canvas_fold_tile() where it has
+ * any). */
 void section_canvas_fold(struct section_canvas *c, uint32_t t);
 static inline void section_canvas_fold_tile(struct section_canvas *c, uint32_t t)
 {

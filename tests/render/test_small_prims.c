@@ -42,10 +42,10 @@ static bool same_and_clear(struct section_canvas *a, struct section_canvas *b)
 	bool same = true;
 	uint32_t tiles = a->tiles_x * a->tiles_y;
 	for (uint32_t t = 0; t < tiles; t++) {
-		if (!a->rows[t] && !b->rows[t])
-			continue;
 		section_canvas_fold_tile(a, t);
 		section_canvas_fold_tile(b, t);
+		if (!a->rows[t] && !b->rows[t])
+			continue;
 		if (a->rows[t] != b->rows[t] || memcmp(a->rgb + (size_t)t * HALFTONE_TILE_BYTES,
 						       b->rgb + (size_t)t * HALFTONE_TILE_BYTES, HALFTONE_TILE_BYTES))
 			same = false;
