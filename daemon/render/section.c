@@ -198,17 +198,8 @@ static void span_bytes(uint8_t *base, uint32_t a, uint32_t b, const uint8_t rgb[
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3])
 {
 	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
-	if (c->plain && rgb[0] == c->plain_rgb[0] && rgb[1] == c->plain_rgb[1] && rgb[2] == c->plain_rgb[2]) {
-		for (uint32_t u = u0; u <= u1;) {
-			uint32_t t = row + u / VOLUME_TILE;
-			uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
-			/* Pixels a..b at bits 31 - b .. 31 - a, bytes swapped:
-			 * at bits x ^ 7. */
-			uint32_t bits = (uint32_t)((2ull << (31 - a)) - (1ull << (31 - b)));
-			c->plain_bits[(size_t)t * VOLUME_TILE + y] |= __builtin_bswap32(bits);
-			c->plain_rows[t] |= 1u << y;
-			u += b - a + 1;
-		}
+	if (section_is_plain(c, rgb)) {
+		section_plain_span(c, v, u0, u1);
 		return;
 	}
 	for (uint32_t u = u0; u <= u1;) {

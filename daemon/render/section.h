@@ -130,6 +130,28 @@ void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint3
 /* Lights columns u0..u1 of row v by per-channel MAX with rgb. */
 void section_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1, const uint8_t rgb[3]);
 
+/* Whether section_span() keeps spans of colour rgb as plain bits. */
+static inline bool section_is_plain(const struct section_canvas *c, const uint8_t rgb[3])
+{
+	return c->plain && rgb[0] == c->plain_rgb[0] && rgb[1] == c->plain_rgb[1] && rgb[2] == c->plain_rgb[2];
+}
+
+/* section_span() of the plain colour: columns u0..u1 of row v as bits. */
+static inline void section_plain_span(struct section_canvas *c, uint32_t v, uint32_t u0, uint32_t u1)
+{
+	uint32_t row = (v / VOLUME_TILE) * c->tiles_x, y = v % VOLUME_TILE;
+	for (uint32_t u = u0; u <= u1;) {
+		uint32_t t = row + u / VOLUME_TILE;
+		uint32_t a = u % VOLUME_TILE, b = (u | 31) < u1 ? 31 : u1 % VOLUME_TILE;
+		/* Pixels a..b at bits 31 - b .. 31 - a, bytes swapped: at
+		 * bits x ^ 7. */
+		uint32_t bits = (uint32_t)((2ull << (31 - a)) - (1ull << (31 - b)));
+		c->plain_bits[(size_t)t * VOLUME_TILE + y] |= __builtin_bswap32(bits);
+		c->plain_rows[t] |= 1u << y;
+		u += b - a + 1;
+	}
+}
+
 /* A span for section_weighted_runs(): columns u0..u1 of row v. */
 struct section_run {
 	uint32_t v, u0, u1;

@@ -347,6 +347,12 @@ static void light_lane(struct section_canvas *c, const struct section_wedge *w, 
 {
 	const uint8_t *rgb = t->rgb;
 	if (!(out->weighted >> l & 1)) {
+		if (section_is_plain(c, rgb)) {
+			for (uint32_t r = 0; r < out->rows; r++)
+				if (out->lit[r] >> l & 1)
+					section_plain_span(c, out->row[l] + r, out->u0[r][l], out->u1[r][l]);
+			return;
+		}
 		for (uint32_t r = 0; r < out->rows; r++)
 			if (out->lit[r] >> l & 1)
 				section_span(c, out->row[l] + r, out->u0[r][l], out->u1[r][l], rgb);
