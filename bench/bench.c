@@ -63,7 +63,7 @@ static int variant_open(struct variant *v, const struct geometry *geom)
 {
 	struct geometry model = *geom, *g = &model;
 	model.brightness = v->brightness;
-	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd };
+	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd, .keep = v->keep };
 	struct render_gl_options gl = { .backend = v->gl, .naive = v->naive, .no_fallback = true };
 	v->r = v->gl[0] ? render_gl_create(g, &gl) : render_cpu_create_opts(g, &o);
 	if (!v->r && v->gl[0]) {
@@ -375,11 +375,12 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 		bool lanes = (strcmp(vars[i].simd, "auto") == 0 || strcmp(vars[i].simd, "avx512") == 0) &&
 			     section_batch_supported();
 		const char *tris = lanes ? "triangles sectioned and staged eight at a time" : "triangles one at a time";
+		const char *keep = vars[i].keep ? "; binning kept while the scene's draws stay the same" : "";
 		if (strcmp(vars[i].simd, "auto") == 0)
-			printf("- %s: %s, halftone auto (%s here), %s\n", vars[i].name, th, halftone_variants()[0].name,
-			       tris);
+			printf("- %s: %s, halftone auto (%s here), %s%s\n", vars[i].name, th,
+			       halftone_variants()[0].name, tris, keep);
 		else
-			printf("- %s: %s, halftone %s, %s\n", vars[i].name, th, vars[i].simd, tris);
+			printf("- %s: %s, halftone %s, %s%s\n", vars[i].name, th, vars[i].simd, tris, keep);
 	}
 	printf("\nEach scene and variant: %u warm-up volume%s, then up to %u measured volumes or "
 	       "%.3g s, whichever comes first (volumes). Times are wall ms per volume, animation "

@@ -21,7 +21,9 @@ static void usage(FILE *f)
 		"  --variants LIST      renderer variants, comma separated (default cpu,%s):\n"
 		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512], egl[-naive],\n"
 		"                       osmesa[-naive]; +even or +uniform after any of them\n"
-		"                       renders in that brightness model (default exact)\n"
+		"                       renders in that brightness model (default exact); +keep\n"
+		"                       after a cpu one keeps its binning while a scene's draws\n"
+		"                       stay the same (render_cpu_options.keep, as the daemon does)\n"
 		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
 		"  --interleave         measure a scene's variants a volume each in turn, the same\n"
@@ -45,15 +47,23 @@ bool variant_parse(const char *spec, struct variant *v)
 	if (strlen(spec) >= sizeof(v->name))
 		return false;
 	snprintf(v->name, sizeof(v->name), "%s", spec);
-	/* A brightness model other than exact: "+even", "+uniform". */
+	/* Modifiers: a brightness model other than exact ("+even",
+	 * "+uniform"), and "+keep" (CPU: bins kept while the scene stays). */
 	char base[32];
 	snprintf(base, sizeof(base), "%s", spec);
 	char *plus = strchr(base, '+');
 	if (plus) {
 		*plus = '\0';
-		if (geometry_brightness_parse(plus + 1, &v->brightness) < 0)
-			return false;
 		spec = base;
+		for (char *m = plus + 1, *next; m; m = next) {
+			next = strchr(m, '+');
+			if (next)
+				*next++ = '\0';
+			if (!strcmp(m, "keep"))
+				v->keep = true;
+			else if (geometry_brightness_parse(m, &v->brightness) < 0)
+				return false;
+		}
 	}
 	static const char *const gl[] = { "egl", "osmesa" };
 	for (size_t i = 0; i < sizeof(gl) / sizeof(gl[0]); i++) {
@@ -61,7 +71,7 @@ bool variant_parse(const char *spec, struct variant *v)
 		if (strncmp(spec, gl[i], n) == 0 && (!spec[n] || !strcmp(spec + n, "-naive"))) {
 			snprintf(v->gl, sizeof(v->gl), "%s", gl[i]);
 			v->naive = spec[n] != '\0';
-			return true;
+			return !v->keep; /* the CPU renderer's */
 		}
 	}
 	if (strncmp(spec, "cpu", 3) != 0)

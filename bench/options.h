@@ -23,6 +23,7 @@ struct variant {
 	char gl[8];         /* GL backend ("egl", "osmesa"), "" for the CPU */
 	bool naive;         /* the GL baseline pipeline */
 	uint8_t brightness; /* enum geometry_brightness: a "+even" or "+uniform" suffix */
+	bool keep;          /* "+keep": render_cpu_options.keep */
 	struct renderer *r;
 	struct volume *out;
 };

@@ -433,6 +433,13 @@ int bench_scene_build(const char *name, const struct geometry *g, const struct b
 		return -ENOMEM;
 	int r = info->impl->build(out, out->data, g, files, info->param, err, err_size);
 	if (r == 0) {
+		/* Numbered as the daemon numbers its vertex data (never twice):
+		 * a renderer that keeps bins may keep them while a scene's
+		 * draws stay the same (render_cpu_options.keep). */
+		static uint64_t data_ids;
+		for (uint32_t i = 0; i < out->scene.draw_count; i++)
+			if (out->draws[i].prim != SCENE_GRID)
+				out->draws[i].data_id = ++data_ids;
 		count_prims(out);
 		if (!counts_match(out)) {
 			snprintf(err, err_size,

@@ -35,6 +35,7 @@ void vgrid_unref(struct vgrid *g);
  * its transfer function, whose lookup table (if any) it owns. */
 struct vdata {
 	unsigned refs;
+	uint64_t id; /* scene_draw.data_id: 0 until first drawn (snapshot.c) */
 	enum scene_prim prim;
 	uint32_t count;    /* vertices in xyz */
 	uint32_t prims;    /* primitives they make */

@@ -96,6 +96,13 @@ struct scene_draw {
 	 * its data's and its size, which the caller must not give another
 	 * grid while the renderer may still hold the first (render_gl.h). */
 	uint64_t grid_id;
+	/* Lines, triangles and points: a number naming the contents of xyz
+	 * and prim_rgb for the daemon's life, never given to other contents
+	 * (snapshot.c numbers each vertex data when first drawn; draws
+	 * sharing one data share its number), by which the CPU renderer keeps
+	 * its binning of a scene whose draws are all the same from one render
+	 * to the next (render_cpu.c). 0: none, and nothing is kept. */
+	uint64_t data_id;
 };
 
 /* A draw with lift L lights, in row v of each image, what it would light

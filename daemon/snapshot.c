@@ -47,6 +47,11 @@ static int add_object(struct snapshot *snap, const struct stage_layer *y)
  * of a grid cannot take a new grid at a freed one's address for it. */
 static uint64_t grid_ids;
 
+/* The last scene_draw.data_id given (main thread only), likewise for
+ * vertex data: a renderer keeps its binning of draws whose data and
+ * everything else are the same. */
+static uint64_t data_ids;
+
 /* Rows of margin a lifted draw keeps from the image's top and bottom: a
  * point's square reaches 8 rows from its centre, and the conservative
  * raster a row beyond a primitive's edge. */
@@ -136,6 +141,9 @@ static int add_layer(struct snapshot *snap, const struct stage_layer *y, const s
 			.point_size = d->point_size,
 			.prim_rgb = d->data->prim_rgb,
 		};
+		if (!d->data->id)
+			d->data->id = ++data_ids;
+		sd->data_id = d->data->id;
 		/* A grid whose volume is gone draws nothing (grid NULL). */
 		if (d->data->grid && !d->data->grid->gone) {
 			struct vgrid *g = d->data->grid;

@@ -33,6 +33,8 @@ struct render_stats {
 	uint64_t pack_ns;          /* halftone + pack + canvas clear */
 	uint64_t prims;            /* primitives after transform (finite) */
 	uint64_t prim_images;      /* (primitive, image) pairs sectioned */
+	uint64_t bins_kept;        /* passes that found their binning kept
+				    * from the last (render_cpu_options.keep) */
 	uint64_t canvas_tiles;     /* tiles halftoned (something touched them) */
 	uint64_t tiles;            /* non-empty tiles packed */
 	unsigned threads;          /* threads that rendered images */
@@ -44,6 +46,9 @@ struct render_cpu_options {
 	unsigned threads; /* worker threads; 0 = one per core */
 	const char *simd; /* halftone+pack variant: NULL or "auto" (best this
 			      * CPU runs), "scalar", "sse2", "avx2", "avx512" */
+	bool keep;        /* keep the binning of a scene whose draws are the
+			      * same as the last render's, data ids included
+			      * (scene_draw.data_id): render_cpu_create() does */
 };
 
 /* GL renderer options (render_gl.c). */

@@ -97,6 +97,17 @@ int main(void)
 	/* Well inside: lifted, the base's transform, the turn kept. */
 	one_init(&o, inside, 0.1 * h, 7, 3, &g);
 	const struct scene_draw *d = build(&o, &g, NULL);
+	/* Vertex data is numbered when first drawn, and keeps its number
+	 * (scene_draw.data_id); other data gets another. */
+	uint64_t id = d->data_id;
+	CHECK(id != 0);
+	CHECK_EQ(build(&o, &g, NULL)->data_id, id);
+	struct vdata *other = triangle((float)(-0.5 * h), (float)(0.5 * h), true);
+	o.item.data = other;
+	CHECK(build(&o, &g, NULL)->data_id > id);
+	o.item.data = inside;
+	d = build(&o, &g, NULL);
+	CHECK_EQ(d->data_id, id);
 	CHECK_EQ(d->lift, 7);
 	CHECK_EQ(d->turn, 3);
 	CHECK(d->transform[13] == o.layer.base[13]);
@@ -161,6 +172,7 @@ int main(void)
 	one_finish(&o);
 
 	free(inside);
+	free(other);
 	free(unbounded);
 	free(gv);
 	return check_done();
