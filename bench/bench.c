@@ -64,7 +64,7 @@ static int variant_open(struct variant *v, const struct geometry *geom)
 	struct geometry model = *geom, *g = &model;
 	model.brightness = v->brightness;
 	struct render_cpu_options o = { .threads = v->threads, .simd = v->simd, .keep = v->keep };
-	struct render_gl_options gl = { .backend = v->gl, .naive = v->naive, .no_fallback = true };
+	struct render_gl_options gl = { .backend = v->gl, .naive = v->naive, .no_fallback = true, .keep = v->keep };
 	v->r = v->gl[0] ? render_gl_create(g, &gl) : render_cpu_create_opts(g, &o);
 	if (!v->r && v->gl[0]) {
 		fprintf(stderr, "spindle-bench: variant %s: %s\n", v->name, strerror(errno));
@@ -363,8 +363,9 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 	for (int i = 0; i < nvars; i++) {
 		char th[32];
 		if (vars[i].gl[0]) {
-			printf("- %s: GL renderer%s on %s; binning on one thread per core\n", vars[i].name,
-			       vars[i].naive ? " (the naive pipeline)" : "", render_gl_describe(vars[i].r));
+			printf("- %s: GL renderer%s on %s; binning on one thread per core%s\n", vars[i].name,
+			       vars[i].naive ? " (the naive pipeline)" : "", render_gl_describe(vars[i].r),
+			       vars[i].keep ? ", kept while the scene's draws stay the same" : "");
 			continue;
 		}
 		if (vars[i].threads)

@@ -22,8 +22,8 @@ static void usage(FILE *f)
 		"                       cpu[-<N>t][-auto|scalar|sse2|avx2|avx512], egl[-naive],\n"
 		"                       osmesa[-naive]; +even or +uniform after any of them\n"
 		"                       renders in that brightness model (default exact); +keep\n"
-		"                       after a cpu one keeps its binning while a scene's draws\n"
-		"                       stay the same (render_cpu_options.keep, as the daemon does)\n"
+		"                       keeps the binning while a scene's draws stay the same\n"
+		"                       (render_cpu_options.keep, as the daemon's renderers do)\n"
 		"  --volumes N          measure at most N volumes per scene and variant (default 100)\n"
 		"  --seconds S          ... and stop measuring after S seconds (default 2)\n"
 		"  --interleave         measure a scene's variants a volume each in turn, the same\n"
@@ -48,7 +48,7 @@ bool variant_parse(const char *spec, struct variant *v)
 		return false;
 	snprintf(v->name, sizeof(v->name), "%s", spec);
 	/* Modifiers: a brightness model other than exact ("+even",
-	 * "+uniform"), and "+keep" (CPU: bins kept while the scene stays). */
+	 * "+uniform"), and "+keep" (bins kept while the scene stays). */
 	char base[32];
 	snprintf(base, sizeof(base), "%s", spec);
 	char *plus = strchr(base, '+');
@@ -71,7 +71,7 @@ bool variant_parse(const char *spec, struct variant *v)
 		if (strncmp(spec, gl[i], n) == 0 && (!spec[n] || !strcmp(spec + n, "-naive"))) {
 			snprintf(v->gl, sizeof(v->gl), "%s", gl[i]);
 			v->naive = spec[n] != '\0';
-			return !v->keep; /* the CPU renderer's */
+			return true;
 		}
 	}
 	if (strncmp(spec, "cpu", 3) != 0)

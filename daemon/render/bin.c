@@ -54,6 +54,12 @@ struct bin_work {
 	uint32_t *hist; /* threads x (prim keys + point keys) */
 	size_t hist_cap;
 	size_t prim_cap, point_cap, turn_cap; /* of the sorted arrays */
+	/* With bin_set.keep: the draws of the scene the set holds, while
+	 * valid. */
+	bool valid;
+	struct scene_draw *kept;
+	uint32_t kept_count;
+	size_t kept_cap;
 };
 
 static uint32_t prim_keys(const struct bin_set *b)
@@ -101,6 +107,7 @@ void bin_finish(struct bin_set *b)
 		free(w->point_recs);
 		free(w->point_keys);
 		free(w->hist);
+		free(w->kept);
 		free(w);
 	}
 	slot_table_finish(&b->slots);
@@ -664,12 +671,10 @@ static bool small_scene(const struct scene *scene)
 	return v <= BIN_SERIAL_VERTICES;
 }
 
-int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
+/* bin_build()'s build. */
+static int bin_scene(struct bin_set *b, const struct scene *scene, struct pool *pool)
 {
-	static const struct scene empty;
 	struct bin_work *w = b->work;
-	if (!scene)
-		scene = &empty;
 	bool serial = small_scene(scene);
 	int r = prepare(b, scene, serial ? 1 : pool_workers(pool));
 	if (r < 0)
@@ -691,6 +696,61 @@ int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
 	else
 		pool_run(pool, scatter_job, b);
 	return 0;
+}
+
+/* Whether a build would make the same of draws a and b: the same data (by
+ * number) drawn the same way. Grids are not binned, nor lifts read (a
+ * renderer bins each lift's draws apart, unlifted). */
+static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
+{
+	if (a->prim != b->prim)
+		return false;
+	if (a->prim == SCENE_GRID)
+		return true;
+	return a->data_id && a->data_id == b->data_id && a->xyz == b->xyz && a->count == b->count &&
+	       a->prim_rgb == b->prim_rgb && a->point_size == b->point_size && a->turn == b->turn &&
+	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
+}
+
+static bool scene_kept(const struct bin_work *w, const struct scene *scene)
+{
+	if (!w->valid || !scene->draw_count || scene->draw_count != w->kept_count)
+		return false;
+	for (uint32_t i = 0; i < scene->draw_count; i++)
+		if (!draw_same(&scene->draws[i], &w->kept[i]))
+			return false;
+	return true;
+}
+
+/* After a build of scene: its draws noted, where every one that is binned
+ * has a number. */
+static void keep_scene(struct bin_work *w, const struct scene *scene)
+{
+	for (uint32_t i = 0; i < scene->draw_count; i++)
+		if (scene->draws[i].prim != SCENE_GRID && !scene->draws[i].data_id)
+			return;
+	if (!scene->draw_count || grow((void **)&w->kept, &w->kept_cap, scene->draw_count, sizeof(*w->kept)) < 0)
+		return;
+	memcpy(w->kept, scene->draws, scene->draw_count * sizeof(*w->kept));
+	w->kept_count = scene->draw_count;
+	w->valid = true;
+}
+
+int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool)
+{
+	static const struct scene empty;
+	struct bin_work *w = b->work;
+	if (!scene)
+		scene = &empty;
+	b->kept = b->keep && scene_kept(w, scene);
+	if (b->kept)
+		return 0;
+	w->valid = false;
+	int r = bin_scene(b, scene, pool);
+	if (r == 0 && b->keep)
+		keep_scene(w, scene);
+	return r;
 }
 
 unsigned bin_runs(const struct bin_set *b, uint32_t k, struct bin_run *out)

@@ -111,6 +111,10 @@ struct bin_set {
 	/* Tests and the scalar renderer variant: triangles staged one at a
 	 * time (bin.c), not eight at a time; the records are the same. */
 	bool prims_scalar;
+	/* Set by the renderer: a build keeps its result while the scene's
+	 * draws stay the same, vertex data by number (scene_draw.data_id), and
+	 * builds nothing then; kept tells the last build found it so. */
+	bool keep, kept;
 
 	/* Work space of a build. */
 	struct bin_work *work;
@@ -120,8 +124,9 @@ struct bin_set {
 int bin_init(struct bin_set *b, const struct geometry *g);
 void bin_finish(struct bin_set *b);
 
-/* Transforms and bins scene on the pool's workers. Returns 0, or -ENOMEM
- * or -E2BIG (more than 2^31 primitives). */
+/* Transforms and bins scene on the pool's workers (with keep: unless b
+ * holds the same binning already). Returns 0, or -ENOMEM or -E2BIG (more
+ * than 2^31 primitives). */
 int bin_build(struct bin_set *b, const struct scene *scene, struct pool *pool);
 
 /* The runs of prims image k must look at; fills out (2 * BIN_MAX_CLASSES

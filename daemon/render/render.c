@@ -7,7 +7,7 @@
 
 struct renderer *render_create(const char *name, const struct geometry *geom, unsigned threads)
 {
-	struct render_gl_options gl = { .backend = name, .threads = threads };
+	struct render_gl_options gl = { .backend = name, .threads = threads, .keep = true };
 	if (name && (!strcmp(name, "egl") || !strcmp(name, "osmesa")))
 		return render_gl_create(geom, &gl);
 	if (name && strcmp(name, "auto") != 0 && strcmp(name, "cpu") != 0) {

@@ -65,11 +65,6 @@ struct render_cpu {
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
 	bool batch; /* unturned segments and triangles through section_lanes() (triangles binned eight at a time) */
-	/* render_cpu_options.keep: the draws of the scene r->bins holds,
-	 * while kept_valid; a render of the same draws bins nothing. */
-	bool keep, kept_valid;
-	struct scene_draw *kept;
-	uint32_t kept_count, kept_cap;
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
@@ -489,66 +484,14 @@ static const uint8_t *plain_colour(const struct scene *scene)
 	return best ? best->rgb : NULL;
 }
 
-/* Whether bin_build() would make the same of draws a and b: the same data
- * (by number: scene_draw.data_id) drawn the same way. Grids are not
- * binned, nor lifts read (a pass has none: render_lifted()). */
-static bool bin_same(const struct scene_draw *a, const struct scene_draw *b)
-{
-	if (a->prim != b->prim)
-		return false;
-	if (a->prim == SCENE_GRID)
-		return true;
-	return a->data_id && a->data_id == b->data_id && a->xyz == b->xyz && a->count == b->count &&
-	       a->prim_rgb == b->prim_rgb && a->point_size == b->point_size && a->turn == b->turn &&
-	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
-	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
-}
-
-/* Whether r->bins holds scene's binning already (render_cpu_options.keep). */
-static bool bins_kept(const struct render_cpu *r, const struct scene *scene)
-{
-	if (!r->kept_valid || !scene || scene->draw_count != r->kept_count)
-		return false;
-	for (uint32_t i = 0; i < scene->draw_count; i++)
-		if (!bin_same(&scene->draws[i], &r->kept[i]))
-			return false;
-	return true;
-}
-
-/* Bins scene into r->bins, or finds it there; notes what it holds. */
-static int bin_scene(struct render_cpu *r, const struct scene *scene)
-{
-	if (bins_kept(r, scene)) {
-		r->base.stats.bins_kept++;
-		return 0;
-	}
-	r->kept_valid = false;
-	int err = bin_build(&r->bins, scene, r->pool);
-	if (err < 0 || !r->keep || !scene || !scene->draw_count)
-		return err;
-	for (uint32_t i = 0; i < scene->draw_count; i++)
-		if (scene->draws[i].prim != SCENE_GRID && !scene->draws[i].data_id)
-			return 0; /* a draw without a number: not kept */
-	if (scene->draw_count > r->kept_cap) {
-		struct scene_draw *k = realloc(r->kept, scene->draw_count * sizeof(*k));
-		if (!k)
-			return 0; /* not kept, no harm */
-		r->kept = k;
-		r->kept_cap = scene->draw_count;
-	}
-	memcpy(r->kept, scene->draws, scene->draw_count * sizeof(*r->kept));
-	r->kept_count = scene->draw_count;
-	r->kept_valid = true;
-	return 0;
-}
-
 /* One pass: scene (no lifts) binned and drawn, image by image, into out or
  * canvas, with r->lifted merged; the stats add up over passes. */
 static int render_pass(struct render_cpu *r, const struct scene *scene, struct volume *out, struct rle_volume *canvas)
 {
 	struct renderer *base = &r->base;
 	int64_t start = now_ns();
-	int err = bin_scene(r, scene);
+	int err = bin_build(&r->bins, scene, r->pool);
+	base->stats.bins_kept += r->bins.kept;
 	if (err == 0)
 		err = prepare_grids(r, scene);
 	int64_t binned = now_ns();
@@ -746,7 +689,6 @@ static void cpu_destroy(struct renderer *base)
 	drop_lifted(r);
 	free(r->lifted);
 	free(r->by_lift);
-	free(r->kept);
 	free(r->wedges);
 	free(r->used);
 	free_grid_jobs(r);
@@ -804,7 +746,7 @@ struct renderer *render_cpu_create_opts(const struct geometry *geom, const struc
 static struct renderer *cpu_serial(const struct renderer *base)
 {
 	const struct render_cpu *r = (const struct render_cpu *)base;
-	return cpu_new(&base->geom, r->halftone, r->batch, r->keep, 1);
+	return cpu_new(&base->geom, r->halftone, r->batch, r->bins.keep, 1);
 }
 
 static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halftone, bool batch, bool keep,
@@ -821,7 +763,6 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->base.geom = *geom;
 	r->halftone = halftone;
 	r->batch = batch && section_batch_supported();
-	r->keep = keep;
 	unsigned n = pick_threads(geom, threads);
 	r->workers = aligned_alloc(64, n * sizeof(*r->workers));
 	if (r->workers)
@@ -834,6 +775,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
 		goto err_free;
 	r->bins.prims_scalar = !batch; /* the scalar variant bins one at a time too */
+	r->bins.keep = keep;
 	for (uint32_t k = 0; k < images; k++)
 		section_wedge_init(&r->wedges[k], geom, k);
 	for (unsigned i = 0; i < n; i++) {

@@ -597,6 +597,7 @@ static void set_stats(struct render_gl *r, uint64_t t0, uint64_t t1)
 	st->pack_ns = r->wait_ns + r->copy_ns;
 	st->raster_ns = st->total_ns - st->bin_ns - st->pack_ns;
 	st->prims = r->bins.prim_count + r->bins.point_count;
+	st->bins_kept = r->bins.kept;
 	st->threads = pool_workers(r->pool);
 	if (r->opts.naive)
 		st->tiles = volume_tile_count(r->vol);
@@ -761,6 +762,7 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 	r->fault = gl_fault_from_env();
 	r->images = geometry_images_per_volume(geom);
 	int err = bin_init(&r->bins, geom);
+	r->bins.keep = opts->keep;
 	if (err == 0)
 		err = brightness_map_init(&r->bright, geom);
 	r->bright_on = err == 0 && brightness_active(&r->bright);

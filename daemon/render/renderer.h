@@ -66,6 +66,8 @@ struct render_gl_options {
 	uint32_t max_prims;      /* binned primitives a volume may have on GL; more
 			      * render that volume on the CPU. 0 = as many as
 			      * the primitive texture holds (tests set less) */
+	bool keep;               /* keep the binning while the scene's draws stay
+			      * the same (render_cpu_options.keep) */
 	uint64_t max_grid_bytes; /* bytes of grid textures a volume may need on
 				  * GL; more render that volume on the CPU. 0 =
 				  * GL_GRID_BUDGET, 1 GiB (tests set less) */

@@ -6,13 +6,15 @@
  * draw added or removed, or new data (a new data_id, also at the same
  * address with other contents) bins again; a draw without a data_id is
  * never kept. On a mirrored and an unmirrored geometry, one and two
- * threads. */
+ * threads; and the GL renderer on OSMesa (where it runs) against a GL
+ * renderer that keeps nothing. */
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "check.h"
 #include "render_cpu.h"
+#include "render_gl.h"
 #include "rtest.h"
 
 static uint64_t rng = 0x2545f4914f6cdd1dull;
@@ -71,11 +73,14 @@ static void set_count(struct scene_draw *d)
 }
 
 /* One random change to the scene (or none). */
-static void change(struct scene *s, struct scene_draw *draws, struct data *data, uint32_t g_images)
+static void change(struct scene *s, struct scene_draw *draws, struct data *data, uint32_t g_images, bool turns)
 {
 	uint32_t i = (uint32_t)(rnd() * s->draw_count);
 	struct scene_draw *d = &draws[i];
-	switch ((int)(rnd() * 11)) {
+	int what = (int)(rnd() * 11);
+	if (!turns && (what == 5 || what == 6))
+		what = 0; /* the GL renderers hand turns and lifts to the CPU */
+	switch (what) {
 	case 0:
 	case 1:
 	case 2:
@@ -141,7 +146,18 @@ static bool same_pass(const struct pass *a, const struct pass *b)
 	return true;
 }
 
-static void check_sequence(const struct geometry *g, unsigned threads, int steps)
+/* A renderer: the CPU's, or (gl) a GL one, keeping bins or not. */
+static struct renderer *make(const struct geometry *g, const char *gl, unsigned threads, bool keep)
+{
+	if (gl) {
+		struct render_gl_options o = { .backend = gl, .threads = threads, .no_fallback = true, .keep = keep };
+		return render_gl_create(g, &o);
+	}
+	struct render_cpu_options o = { .threads = threads, .keep = keep };
+	return render_cpu_create_opts(g, &o);
+}
+
+static void check_sequence(const struct geometry *g, const char *gl, unsigned threads, int steps)
 {
 	static struct data data[DRAWS];
 	struct scene_draw draws[DRAWS];
@@ -156,19 +172,18 @@ static void check_sequence(const struct geometry *g, unsigned threads, int steps
 		random_transform(draws[i].transform);
 	}
 	struct scene s = { .draw_count = 2, .draws = draws };
-	struct render_cpu_options keep = { .threads = threads, .keep = true }, fresh = { .threads = threads };
-	struct renderer *kr = render_cpu_create_opts(g, &keep);
+	/* One renderer that keeps, one that never does. */
+	struct renderer *kr = make(g, gl, threads, true), *fr = make(g, gl, threads, false);
 	struct volume *kv = volume_create(g), *fv = volume_create(g);
-	CHECK(kr && kv && fv);
+	CHECK(kr && fr && kv && fv);
 	uint64_t kept = 0, rebinned = 0;
 	/* The draws the renderer binned last, when all have a number. */
 	struct pass last = { 0 };
 	for (int step = 0; step < steps; step++) {
-		struct renderer *fr = render_cpu_create_opts(g, &fresh);
-		CHECK(fr && render_volume(fr, &s, fv) == 0 && render_volume(kr, &s, kv) == 0);
-		render_destroy(fr);
-		CHECK_MSG(rtest_same(kv, fv), "%ux%u N %u, %u threads, step %d: a kept render differs", g->width,
-			  g->height, g->images_per_rev, threads, step);
+		CHECK(render_volume(fr, &s, fv) == 0 && render_volume(kr, &s, kv) == 0);
+		CHECK_EQ(fr->stats.bins_kept, 0u);
+		CHECK_MSG(rtest_same(kv, fv), "%s, %ux%u N %u, %u threads, step %d: a kept render differs",
+			  gl ? gl : "cpu", g->width, g->height, g->images_per_rev, threads, step);
 		/* The passes: each lift's draws (unlifted), lowest first,
 		 * then the draws without a lift (render_cpu.c). */
 		uint64_t want = 0;
@@ -203,11 +218,12 @@ static void check_sequence(const struct geometry *g, unsigned threads, int steps
 			draws[(uint32_t)(rnd() * s.draw_count)].data_id = 0;
 			continue;
 		}
-		change(&s, draws, data, g->images_per_rev);
+		change(&s, draws, data, g->images_per_rev, !gl);
 	}
 	CHECK_MSG(kept > (uint64_t)steps / 10 && rebinned > (uint64_t)steps / 4, "kept %llu, binned %llu",
 		  (unsigned long long)kept, (unsigned long long)rebinned);
 	render_destroy(kr);
+	render_destroy(fr);
 	volume_destroy(kv);
 	volume_destroy(fv);
 }
@@ -215,8 +231,10 @@ static void check_sequence(const struct geometry *g, unsigned threads, int steps
 int main(void)
 {
 	struct geometry small = rtest_small(), odd = rtest_odd();
-	check_sequence(&small, 1, 80);
-	check_sequence(&small, 2, 80);
-	check_sequence(&odd, 2, 80);
+	check_sequence(&small, NULL, 1, 80);
+	check_sequence(&small, NULL, 2, 80);
+	check_sequence(&odd, NULL, 2, 80);
+	if (rtest_have_gl(&small, "osmesa"))
+		check_sequence(&small, "osmesa", 2, 24);
 	return check_done();
 }
