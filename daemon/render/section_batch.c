@@ -347,12 +347,6 @@ static void light_lane(struct section_canvas *c, const struct section_wedge *w, 
 {
 	const uint8_t *rgb = t->rgb;
 	if (!(out->weighted >> l & 1)) {
-		if (section_is_plain(c, rgb)) {
-			for (uint32_t r = 0; r < out->rows; r++)
-				if (out->lit[r] >> l & 1)
-					section_plain_span(c, out->row[l] + r, out->u0[r][l], out->u1[r][l]);
-			return;
-		}
 		for (uint32_t r = 0; r < out->rows; r++)
 			if (out->lit[r] >> l & 1)
 				section_span(c, out->row[l] + r, out->u0[r][l], out->u1[r][l], rgb);
@@ -367,6 +361,53 @@ static void light_lane(struct section_canvas *c, const struct section_wedge *w, 
 		double v[3][3];
 		lane_vertices(t, verts, v);
 		section_weighted_runs(c, w, (const double(*)[3])v, verts, rgb, out->lo[l], out->hi[l], runs, count);
+	}
+}
+
+/* The spans of the plain lanes (of the plain colour, not weighted: a mask)
+ * as plain bits (section_plain_span()), a row of all eight at a time: the
+ * bits, the tile and the row worked out on the lanes, then ORed in one by
+ * one (lanes may share a tile row); a span across a tile edge by
+ * section_plain_span(). */
+TARGET static void light_plain(struct section_canvas *c, const struct lanes_out *out, __mmask8 plain)
+{
+	/* Each 32-bit lane's bytes swapped (bits x ^ 7 for pixel x). */
+	const __m256i swap = _mm256_setr_epi8(3, 2, 1, 0, 7, 6, 5, 4, 11, 10, 9, 8, 15, 14, 13, 12, 3, 2, 1, 0, 7, 6, 5,
+					      4, 11, 10, 9, 8, 15, 14, 13, 12);
+	const __m256i c31 = _mm256_set1_epi32(31), one = _mm256_set1_epi32(1);
+	const __m256i row0 = _mm256_loadu_si256((const __m256i *)out->row);
+	const __m256i tiles_x = _mm256_set1_epi32((int)c->tiles_x);
+	uint32_t *bits = c->plain_bits, *rows = c->plain_rows;
+	for (uint32_t r = 0; r < out->rows; r++) {
+		__mmask8 lit = out->lit[r] & plain;
+		if (!lit)
+			continue;
+		__m256i u0 = _mm256_loadu_si256((const __m256i *)out->u0[r]);
+		__m256i u1 = _mm256_loadu_si256((const __m256i *)out->u1[r]);
+		__m256i v = _mm256_add_epi32(row0, _mm256_set1_epi32((int)r));
+		__mmask8 cross = lit & _mm256_cmpneq_epi32_mask(_mm256_srli_epi32(u0, 5), _mm256_srli_epi32(u1, 5));
+		/* Pixels a..b at bits 31 - b .. 31 - a: 2^(32 - a) - 2^(31 - b),
+		 * modulo 2^32. */
+		__m256i a = _mm256_and_si256(u0, c31), b = _mm256_and_si256(u1, c31);
+		__m256i m = _mm256_sub_epi32(_mm256_sllv_epi32(_mm256_set1_epi32(2), _mm256_sub_epi32(c31, a)),
+					     _mm256_sllv_epi32(one, _mm256_sub_epi32(c31, b)));
+		m = _mm256_shuffle_epi8(m, swap);
+		__m256i t = _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 5), tiles_x),
+					     _mm256_srli_epi32(u0, 5));
+		__m256i y = _mm256_and_si256(v, c31);
+		uint32_t mm[8], tt[8], yy[8];
+		_mm256_storeu_si256((__m256i *)mm, m);
+		_mm256_storeu_si256((__m256i *)tt, t);
+		_mm256_storeu_si256((__m256i *)yy, y);
+		for (unsigned l = lit & ~cross; l; l &= l - 1) {
+			unsigned i = (unsigned)__builtin_ctz(l);
+			bits[(size_t)tt[i] * VOLUME_TILE + yy[i]] |= mm[i];
+			rows[tt[i]] |= 1u << yy[i];
+		}
+		for (unsigned l = cross; l; l &= l - 1) {
+			unsigned i = (unsigned)__builtin_ctz(l);
+			section_plain_span(c, out->row[i] + r, out->u0[r][i], out->u1[r][i]);
+		}
 	}
 }
 
@@ -394,7 +435,15 @@ TARGET static inline __attribute__((always_inline)) void batch(struct section_ca
 	struct lanes_out out;
 	__mmask8 pending;
 	batch8(c, w, &prims, (__mmask8)((1u << n) - 1), &out, &pending);
+	__mmask8 plain = 0;
+	for (unsigned l = 0; c->plain && l < n; l++)
+		if (!((pending | out.weighted) >> l & 1) && section_is_plain(c, t[l].rgb))
+			plain |= (__mmask8)(1u << l);
+	if (plain)
+		light_plain(c, &out, plain);
 	for (unsigned l = 0; l < n; l++) {
+		if (plain >> l & 1)
+			continue;
 		if (!(pending >> l & 1)) {
 			light_lane(c, w, &out, l, &t[l], verts);
 			continue;
