@@ -246,8 +246,11 @@ static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, ui
 {
 	const struct bin_set *b = &r->bins;
 	uint64_t sectioned = 0;
-	struct section_lane lanes[2][SECTION_BATCH]; /* segments, triangles */
-	unsigned queued[2] = { 0, 0 };
+	/* Segments, triangles; each of a one-image range (most often every
+	 * vertex inside the wedge: section_lanes() skips the clip where a
+	 * batch is all such pieces) or not. */
+	struct section_lane lanes[4][SECTION_BATCH];
+	unsigned queued[4] = { 0, 0, 0, 0 };
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
 			const struct bin_prim *p = &b->prims[i];
@@ -255,7 +258,7 @@ static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, ui
 				continue;
 			sectioned++;
 			if (r->batch && (!b->turned || !b->prim_turn[i])) {
-				unsigned q = p->nverts == 3;
+				unsigned q = 2 * (p->nverts == 3) + (p->count == 1);
 				lanes[q][queued[q]++] = (struct section_lane){ &p->v[0][0], p->rgb };
 				if (queued[q] == SECTION_BATCH) {
 					section_lanes(c, &r->wedges[k], lanes[q], queued[q], p->nverts);
@@ -277,9 +280,9 @@ static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, ui
 			}
 		}
 	}
-	for (unsigned q = 0; q < 2; q++)
+	for (unsigned q = 0; q < 4; q++)
 		if (queued[q])
-			section_lanes(c, &r->wedges[k], lanes[q], queued[q], q ? 3 : 2);
+			section_lanes(c, &r->wedges[k], lanes[q], queued[q], q >= 2 ? 3 : 2);
 	return sectioned;
 }
 

@@ -255,7 +255,7 @@ TARGET static inline void raster_slots(const struct section_canvas *c, const str
  * lobe's sign and the lanes with every vertex inside plane 1. */
 TARGET static inline __attribute__((always_inline)) __mmask8 lobe_lanes(
 	const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri, __mmask8 active,
-	__mmask8 *leave, __m512d *sign, __mmask8 *all1, struct lanes_out *out)
+	__mmask8 *leave, __m512d *sign, __mmask8 *all1, __mmask8 *all2, struct lanes_out *out)
 {
 	const __m512d zero = _mm512_setzero_pd();
 	const __m512d *x = tri->x, *z = tri->z;
@@ -285,12 +285,14 @@ TARGET static inline __attribute__((always_inline)) __mmask8 lobe_lanes(
 	*sign = _mm512_mask_blend_pd(front, _mm512_set1_pd(-1.0), _mm512_set1_pd(1.0));
 	/* lobe_piece()'s in-counts. */
 	__mmask8 any1 = 0, any2 = 0;
-	*all1 = 0xff;
+	*all1 = *all2 = 0xff;
 	for (int i = 0; i < nv; i++) {
 		__mmask8 in1 = _mm512_cmp_pd_mask(_mm512_mul_pd(*sign, d1[i]), zero, _CMP_GE_OQ);
+		__mmask8 in2 = _mm512_cmp_pd_mask(_mm512_mul_pd(*sign, d2[i]), zero, _CMP_GE_OQ);
 		any1 |= in1;
-		any2 |= _mm512_cmp_pd_mask(_mm512_mul_pd(*sign, d2[i]), zero, _CMP_GE_OQ);
+		any2 |= in2;
 		*all1 &= in1;
+		*all2 &= in2;
 	}
 	return active & ~*leave & (front | back) & any1 & any2;
 }
@@ -301,9 +303,20 @@ TARGET static inline __attribute__((always_inline)) void batch8(
 	const struct section_canvas *c, const struct section_wedge *w, const struct slots *tri, __mmask8 active,
 	struct lanes_out *out, __mmask8 *pending)
 {
-	__mmask8 leave, all1;
+	__mmask8 leave, all1, all2;
 	__m512d sign;
-	__mmask8 live = lobe_lanes(c, w, tri, active, &leave, &sign, &all1, out);
+	__mmask8 live = lobe_lanes(c, w, tri, active, &leave, &sign, &all1, &all2, out);
+	if (!(live & ~(all1 & all2))) {
+		/* Every piece is its primitive whole (each vertex inside both
+		 * planes): the clip would keep each vertex and repeat it, and
+		 * the raster skips repeats, so the primitive's own slots give
+		 * the same spans. Most of a dense mesh's pieces where the
+		 * batch holds primitives of a one-image range (render_cpu.c
+		 * queues those apart). */
+		raster_slots(c, w, tri, &live, &leave, out);
+		*pending = active & leave;
+		return;
+	}
 	/* The clip: plane 1 where some vertex is outside it (then plane 2 on
 	 * what is left), else plane 2 alone (every vertex inside both: the
 	 * pass keeps them as they are). */

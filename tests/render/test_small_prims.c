@@ -168,10 +168,21 @@ static void check_geometry(const struct geometry *g, uint32_t cases)
 			phi += M_PI; /* the s < 0 lobe */
 		double cx = r * cos(phi), cz = r * sin(phi), cy = range(-1.05, 1.05) * g->half_height;
 		double size = col_w * exp(range(log(1e-4), log(3.0)));
+		if (i % 64 >= 40) { /* runs wholly inside the wedge: batches the clip leaves be */
+			r = range(0.3, 1.0);
+			phi = atan2(w.dz, w.dx) + (unit() < 0.3 ? M_PI : 0) +
+			      range(-0.2, 0.2) * M_PI / g->images_per_rev;
+			cx = r * cos(phi), cz = r * sin(phi);
+			size = r * M_PI / g->images_per_rev * range(0.01, 0.2);
+		}
 		int n = unit() < 0.8 ? 3 : 2;
 		double v[3][3] = { { 0 } };
-		for (int a = 0; a < n; a++)
+		for (int a = 0; a < n; a++) {
 			vertex(g, &w, cx, cy, cz, size, v[a]);
+			if (i % 64 >= 40) /* not moved onto a plane */
+				for (int j = 0; j < 3; j++)
+					v[a][j] = F((j == 0 ? cx : j == 1 ? cy : cz) + range(-size, size));
+		}
 		double pick = unit();
 		if (pick < 0.05) { /* two vertices the same */
 			memcpy(v[1], v[0], sizeof(v[0]));
