@@ -346,3 +346,16 @@ bool rtest_have_gl(const struct geometry *g, const char *backend)
 	render_destroy(r);
 	return true;
 }
+
+double rtest_rnd(uint64_t *state)
+{
+	*state ^= *state << 13;
+	*state ^= *state >> 7;
+	*state ^= *state << 17;
+	return (double)(*state >> 11) / 9007199254740992.0;
+}
+
+double rtest_range(uint64_t *state, double a, double b)
+{
+	return a + (b - a) * rtest_rnd(state);
+}

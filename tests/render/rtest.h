@@ -52,6 +52,11 @@ struct rtest_voxel {
 };
 void rtest_point_voxels(const struct geometry *g, const float p[3], struct rtest_voxel out[2]);
 
+/* xorshift64: the next of *state's numbers, uniform in [0, 1), the same
+ * on every machine; and one in [a, b). */
+double rtest_rnd(uint64_t *state);
+double rtest_range(uint64_t *state, double a, double b);
+
 /* Colour i of a fixed spread of values, dark and bright; and the seven
  * saturated colours (channels 0 or 255), one channel pattern each. */
 void rtest_colour(uint32_t i, uint8_t out[3]);

@@ -16,17 +16,9 @@
 
 static uint64_t rng = 0x9e3779b97f4a7c15ull;
 
-static double rnd(void)
-{
-	rng ^= rng << 13;
-	rng ^= rng >> 7;
-	rng ^= rng << 17;
-	return (double)(rng >> 11) / 9007199254740992.0;
-}
-
 static double range(double a, double b)
 {
-	return a + (b - a) * rnd();
+	return rtest_range(&rng, a, b);
 }
 
 static uint32_t exact_slot(uint32_t n, double x, double z)

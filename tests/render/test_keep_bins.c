@@ -21,15 +21,12 @@ static uint64_t rng = 0x2545f4914f6cdd1dull;
 
 static double rnd(void)
 {
-	rng ^= rng << 13;
-	rng ^= rng >> 7;
-	rng ^= rng << 17;
-	return (double)(rng >> 11) / 9007199254740992.0;
+	return rtest_rnd(&rng);
 }
 
 static double range(double a, double b)
 {
-	return a + (b - a) * rnd();
+	return rtest_range(&rng, a, b);
 }
 
 #define DRAWS 4
