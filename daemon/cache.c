@@ -180,14 +180,6 @@ static struct entry *lookup_or_add(struct cache *c, uint64_t key)
 	return e;
 }
 
-/* The same but perhaps for the turn and the lift. */
-static bool draw_alike(const struct scene_draw *a, const struct scene_draw *b)
-{
-	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->prim_rgb == b->prim_rgb &&
-	       a->point_size == b->point_size && memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
-	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0 && (a->prim != SCENE_GRID || scene_grid_same(a, b));
-}
-
 enum change {
 	CHANGED,
 	SAME,   /* draw for draw the same */
@@ -200,7 +192,7 @@ static enum change compare(const struct entry *e, const struct scene_draw *draws
 		return CHANGED;
 	bool same_turn = true;
 	for (uint32_t i = 0; i < n; i++) {
-		if (!draw_alike(&e->draws[i], &draws[i]) || draws[i].turn != draws[0].turn ||
+		if (!scene_draw_alike(&e->draws[i], &draws[i]) || draws[i].turn != draws[0].turn ||
 		    draws[i].lift != draws[0].lift)
 			return CHANGED;
 		same_turn &= e->draws[i].turn == draws[i].turn && e->draws[i].lift == draws[i].lift;

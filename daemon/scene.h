@@ -6,6 +6,7 @@
 
 #include <stdbool.h>
 #include <stdint.h>
+#include <string.h>
 
 enum scene_prim {
 	SCENE_POINTS = 0,    /* count points */
@@ -157,6 +158,24 @@ static inline bool scene_grid_same(const struct scene_draw *a, const struct scen
 	const struct scene_transfer *x = &a->transfer, *y = &b->transfer;
 	return a->grid == b->grid && x->threshold == y->threshold && x->lo == y->lo && x->hi == y->hi &&
 	       x->sampling == y->sampling && x->lut == y->lut && x->lut_count == y->lut_count;
+}
+
+/* Whether a and b draw the same but perhaps for their turn and lift: the
+ * same primitives of the same data (address, per-primitive colours and
+ * number), placed and coloured the same. Callers hold the data (the
+ * daemon's references), or compare numbers (scene_draw.data_id). */
+static inline bool scene_draw_alike(const struct scene_draw *a, const struct scene_draw *b)
+{
+	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->prim_rgb == b->prim_rgb &&
+	       a->data_id == b->data_id && a->point_size == b->point_size &&
+	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
+	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0 && (a->prim != SCENE_GRID || scene_grid_same(a, b));
+}
+
+/* The same, turn and lift included. */
+static inline bool scene_draw_same(const struct scene_draw *a, const struct scene_draw *b)
+{
+	return scene_draw_alike(a, b) && a->turn == b->turn && a->lift == b->lift;
 }
 
 /* A retained object: the draws of one layer (its list placed by its

@@ -194,20 +194,12 @@ int snapshot_build(struct snapshot *snap, const struct stage *stage, uint64_t bu
 	return 0;
 }
 
-static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
-{
-	return a->prim == b->prim && a->count == b->count && a->xyz == b->xyz && a->point_size == b->point_size &&
-	       a->turn == b->turn && a->lift == b->lift &&
-	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
-	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0 && (a->prim != SCENE_GRID || scene_grid_same(a, b));
-}
-
 bool snapshot_same(const struct snapshot *a, const struct snapshot *b)
 {
 	if (a->scene.draw_count != b->scene.draw_count)
 		return false;
 	for (uint32_t i = 0; i < a->scene.draw_count; i++)
-		if (!draw_same(&a->draws[i], &b->draws[i]))
+		if (!scene_draw_same(&a->draws[i], &b->draws[i]))
 			return false;
 	return true;
 }

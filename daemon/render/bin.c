@@ -698,27 +698,15 @@ static int bin_scene(struct bin_set *b, const struct scene *scene, struct pool *
 	return 0;
 }
 
-/* Whether a build would make the same of draws a and b: the same data (by
- * number) drawn the same way. Grids are not binned, nor lifts read (a
- * renderer bins each lift's draws apart, unlifted). */
-static bool draw_same(const struct scene_draw *a, const struct scene_draw *b)
-{
-	if (a->prim != b->prim)
-		return false;
-	if (a->prim == SCENE_GRID)
-		return true;
-	return a->data_id && a->data_id == b->data_id && a->xyz == b->xyz && a->count == b->count &&
-	       a->prim_rgb == b->prim_rgb && a->point_size == b->point_size && a->turn == b->turn &&
-	       memcmp(a->transform, b->transform, sizeof(a->transform)) == 0 &&
-	       memcmp(a->rgb, b->rgb, sizeof(a->rgb)) == 0;
-}
-
+/* Whether the set holds scene's binning: the draws it was built from, each
+ * the same (scene.h) and numbered where it is binned (keep_scene()), which
+ * makes the data the same too. */
 static bool scene_kept(const struct bin_work *w, const struct scene *scene)
 {
 	if (!w->valid || !scene->draw_count || scene->draw_count != w->kept_count)
 		return false;
 	for (uint32_t i = 0; i < scene->draw_count; i++)
-		if (!draw_same(&scene->draws[i], &w->kept[i]))
+		if (!scene_draw_same(&scene->draws[i], &w->kept[i]))
 			return false;
 	return true;
 }
