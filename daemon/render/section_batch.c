@@ -33,6 +33,25 @@
 #define SECTION_BATCH_X86 1
 #endif
 
+/* A lane's vertices as doubles (as raster_image() converts them). */
+static void lane_vertices(const struct section_lane *t, int verts, double v[3][3])
+{
+	for (int i = 0; i < verts; i++)
+		for (int j = 0; j < 3; j++)
+			v[i][j] = t->v[3 * i + j];
+}
+
+/* section_prim() of each of the n primitives, one by one. */
+static void one_by_one(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t,
+		       unsigned n, int verts)
+{
+	for (unsigned l = 0; l < n; l++) {
+		double v[3][3] = { { 0 } };
+		lane_vertices(&t[l], verts, v);
+		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
+	}
+}
+
 #ifdef SECTION_BATCH_X86
 
 #define TARGET __attribute__((target("avx512f,avx512dq,avx512vl")))
@@ -345,14 +364,6 @@ bool section_batch_supported(void)
 	       __builtin_cpu_supports("avx512vl");
 }
 
-/* Primitive l's vertices as doubles (as raster_image() converts them). */
-static void lane_vertices(const struct section_lane *t, int verts, double v[3][3])
-{
-	for (int i = 0; i < verts; i++)
-		for (int j = 0; j < 3; j++)
-			v[i][j] = t->v[3 * i + j];
-}
-
 /* What the lanes found for lane l, lit: its spans, weighted where its
  * piece is in the brightness band. */
 static void light_lane(struct section_canvas *c, const struct section_wedge *w, const struct lanes_out *out, unsigned l,
@@ -461,9 +472,7 @@ TARGET static inline __attribute__((always_inline)) void batch(struct section_ca
 			light_lane(c, w, &out, l, &t[l], verts);
 			continue;
 		}
-		double v[3][3];
-		lane_vertices(&t[l], verts, v);
-		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
+		one_by_one(c, w, &t[l], 1, verts);
 	}
 }
 
@@ -489,11 +498,7 @@ void section_lanes(struct section_canvas *c, const struct section_wedge *w, cons
 			batch_segments(c, w, t, n);
 		return;
 	}
-	for (unsigned l = 0; l < n; l++) {
-		double v[3][3];
-		lane_vertices(&t[l], verts, v);
-		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
-	}
+	one_by_one(c, w, t, n, verts);
 }
 
 #else
@@ -506,13 +511,7 @@ bool section_batch_supported(void)
 void section_lanes(struct section_canvas *c, const struct section_wedge *w, const struct section_lane *t, unsigned n,
 		   int verts)
 {
-	for (unsigned l = 0; l < n; l++) {
-		double v[3][3] = { { 0 } };
-		for (int i = 0; i < verts; i++)
-			for (int j = 0; j < 3; j++)
-				v[i][j] = t[l].v[3 * i + j];
-		section_prim(c, w, (const double(*)[3])v, verts, t[l].rgb);
-	}
+	one_by_one(c, w, t, n, verts);
 }
 
 #endif
