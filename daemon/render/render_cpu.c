@@ -28,20 +28,17 @@
 #include "pool.h"
 #include "section.h"
 
-/* What a tile of the canvas's plain colour (section_canvas_plain()) in
- * every row halftones to, for the last few tables a worker asked for: its
- * rows y % 16 (a table's period) in the layout of volume.h. A tile whose
- * only content is plain bits packs as those bits ANDed with this. */
+/* The halftone of a canvas's plain colour (section_canvas_plain()) under
+ * the last few threshold tables a worker asked for: what a tile of that
+ * colour in every row packs to, rows y % 16 (a table's period), in the
+ * layout of volume.h (section_canvas_pack_plain()). */
 #define PLAIN_PATTERNS 4
 struct plain_patterns {
-	uint8_t tile[HALFTONE_TILE_BYTES]; /* rows 0..15 of colour rgb (the rest zero) */
-	uint8_t rgb[3];
-	bool ready;
 	unsigned next;
 	struct plain_pattern {
 		const struct halftone_table *thr; /* NULL: unused */
 		uint8_t rgb[3];
-		uint32_t bits[3][VOLUME_TILE]; /* rows 0..15 */
+		uint32_t bits[3][16];
 	} pattern[PLAIN_PATTERNS];
 };
 
@@ -50,7 +47,7 @@ struct plain_patterns {
  * cores on every primitive. */
 struct cpu_worker {
 	struct section_canvas canvas;
-	struct plain_patterns *plain;
+	struct plain_patterns plain; /* emptied with the counters each pass */
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
 } __attribute__((aligned(64)));
@@ -93,26 +90,7 @@ struct render_cpu {
 	unsigned stages;
 };
 
-/* The first tile of c from t on that something touched (bytes or plain
- * bits), or tiles: four at a time through the untouched (most, for a small
- * object). */
-static uint32_t next_touched(const struct section_canvas *c, uint32_t t, uint32_t tiles)
-{
-	const uint32_t *rows = c->rows, *plain = c->plain_rows;
-	for (uint64_t a, b, pa, pb; t + 4 <= tiles; t += 4) {
-		memcpy(&a, rows + t, sizeof(a));
-		memcpy(&b, rows + t + 2, sizeof(b));
-		memcpy(&pa, plain + t, sizeof(pa));
-		memcpy(&pb, plain + t + 2, sizeof(pb));
-		if (a | b | pa | pb)
-			break;
-	}
-	while (t < tiles && !rows[t] && !plain[t])
-		t++;
-	return t;
-}
-
-/* The halftone of the plain colour of canvas c under table thr (struct
+/* The halftone of canvas c's plain colour under table thr (struct
  * plain_patterns), made the first time it is asked for. */
 static const struct plain_pattern *plain_pattern(const struct render_cpu *r, struct plain_patterns *p,
 						 const struct section_canvas *c, const struct halftone_table *thr)
@@ -120,44 +98,17 @@ static const struct plain_pattern *plain_pattern(const struct render_cpu *r, str
 	for (unsigned i = 0; i < PLAIN_PATTERNS; i++)
 		if (p->pattern[i].thr == thr && !memcmp(p->pattern[i].rgb, c->plain_rgb, 3))
 			return &p->pattern[i];
-	if (!p->ready || memcmp(p->rgb, c->plain_rgb, 3)) {
-		for (int i = 0; i < 3; i++)
-			memset(p->tile + i * HALFTONE_PLANE_BYTES, c->plain_rgb[i], 16 * HALFTONE_ROW_BYTES);
-		memcpy(p->rgb, c->plain_rgb, 3);
-		p->ready = true;
-	}
+	uint8_t tile[HALFTONE_TILE_BYTES], out[VOLUME_TILE_BYTES];
+	for (int i = 0; i < 3; i++) /* rows 0..15 of the colour */
+		memset(tile + i * HALFTONE_PLANE_BYTES, c->plain_rgb[i], 16 * HALFTONE_ROW_BYTES);
+	r->halftone(tile, 0xffff, thr, out);
 	struct plain_pattern *pt = &p->pattern[p->next];
 	p->next = (p->next + 1) % PLAIN_PATTERNS;
-	uint8_t out[VOLUME_TILE_BYTES];
-	r->halftone(p->tile, 0xffff, thr, out);
-	memcpy(pt->bits, out, sizeof(pt->bits));
+	for (int i = 0; i < 3; i++)
+		memcpy(pt->bits[i], out + i * VOLUME_TILE_PLANE_BYTES, sizeof(pt->bits[i]));
 	pt->thr = thr;
 	memcpy(pt->rgb, c->plain_rgb, 3);
 	return pt;
-}
-
-/* Tile t's plain bits halftoned under thr, ORed into out (the halftone of
- * its bytes, or zeros), and cleared; whether out has a bit set. */
-static bool pack_plain(const struct render_cpu *r, struct cpu_worker *w, uint32_t t, const struct halftone_table *thr,
-		       uint8_t *out)
-{
-	struct section_canvas *c = &w->canvas;
-	const struct plain_pattern *pt = plain_pattern(r, w->plain, c, thr);
-	uint32_t *bits = c->plain_bits + (size_t)t * VOLUME_TILE, any = 0;
-	for (int i = 0; i < 3; i++) {
-		uint8_t *plane = out + i * VOLUME_TILE_PLANE_BYTES;
-		for (uint32_t y = 0; y < VOLUME_TILE; y++) {
-			uint32_t row;
-			memcpy(&row, plane + 4 * y, sizeof(row));
-			row |= bits[y] & pt->bits[i][y % 16];
-			memcpy(plane + 4 * y, &row, sizeof(row));
-			any |= row;
-		}
-	}
-	for (uint32_t p = c->plain_rows[t]; p; p &= p - 1)
-		bits[__builtin_ctz(p)] = 0;
-	c->plain_rows[t] = 0;
-	return any != 0;
 }
 
 /* Copies the touched tiles of image k's canvas, with their row masks, into
@@ -167,7 +118,7 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 	struct section_canvas *c = &w->canvas;
 	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
 	memset(st->mask, 0, r->canvas_out->mask_bytes);
-	for (uint32_t t = next_touched(c, 0, tiles); t < tiles; t = next_touched(c, t + 1, tiles)) {
+	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1)) {
 		uint8_t *dst = st->tiles + (size_t)n++ * CANVAS_TILE_BYTES;
 		section_canvas_fold_tile(c, t);
 		memcpy(dst, &c->rows[t], sizeof(uint32_t));
@@ -186,7 +137,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 	struct section_canvas *c = &w->canvas;
 	int err = 0;
 	uint32_t tiles = c->tiles_x * c->tiles_y;
-	for (uint32_t t = next_touched(c, 0, tiles); t < tiles; t = next_touched(c, t + 1, tiles)) {
+	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1)) {
 		w->canvas_tiles++;
 		/* Halftoned straight into the volume's storage. */
 		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
@@ -199,7 +150,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		else if (dst)
 			memset(dst, 0, VOLUME_TILE_BYTES);
 		if (dst && c->plain_rows[t])
-			lit |= pack_plain(r, w, t, thr, dst);
+			lit |= section_canvas_pack_plain(c, t, plain_pattern(r, &w->plain, c, thr)->bits, dst);
 		if (lit) {
 			err = volume_image_push(r->out, k, t);
 			w->tiles++;
@@ -506,7 +457,7 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		section_canvas_plain(&c, plain);
-		r->workers[i] = (struct cpu_worker){ .canvas = c, .plain = r->workers[i].plain };
+		r->workers[i] = (struct cpu_worker){ .canvas = c };
 	}
 	r->out = out;
 	r->canvas_out = canvas;
@@ -683,10 +634,8 @@ static void cpu_destroy(struct renderer *base)
 {
 	struct render_cpu *r = (struct render_cpu *)base;
 	pool_destroy(r->pool);
-	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++) {
+	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++)
 		section_canvas_finish(&r->workers[i].canvas);
-		free(r->workers[i].plain);
-	}
 	free(r->workers);
 	free_stage(r);
 	drop_lifted(r);
@@ -785,10 +734,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
 			goto err_free;
 		r->workers[i].canvas.bright = &r->bright;
-		r->base.stats.threads = i + 1; /* canvases (and patterns) to free */
-		r->workers[i].plain = calloc(1, sizeof(*r->workers[i].plain));
-		if (!r->workers[i].plain)
-			goto err_free;
+		r->base.stats.threads = i + 1; /* canvases to free */
 	}
 	r->pool = pool_create(n);
 	if (!r->pool)

@@ -68,6 +68,39 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
 	c->plain_rows[t] = 0;
 }
 
+uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t)
+{
+	const uint32_t *rows = c->rows, *plain = c->plain_rows, tiles = c->tiles_x * c->tiles_y;
+	for (uint64_t a, b, pa, pb; t + 4 <= tiles; t += 4) { /* four at a time through the untouched */
+		memcpy(&a, rows + t, sizeof(a));
+		memcpy(&b, rows + t + 2, sizeof(b));
+		memcpy(&pa, plain + t, sizeof(pa));
+		memcpy(&pb, plain + t + 2, sizeof(pb));
+		if (a | b | pa | pb)
+			break;
+	}
+	while (t < tiles && !rows[t] && !plain[t])
+		t++;
+	return t;
+}
+
+bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out)
+{
+	const uint32_t *bits = c->plain_bits + (size_t)t * VOLUME_TILE;
+	uint32_t any = 0;
+	for (int i = 0; i < 3; i++) {
+		uint8_t *plane = out + i * VOLUME_TILE_PLANE_BYTES;
+		for (uint32_t y = 0; y < VOLUME_TILE; y++) {
+			uint32_t row;
+			memcpy(&row, plane + 4 * y, sizeof(row));
+			row |= bits[y] & pattern[i][y % 16];
+			memcpy(plane + 4 * y, &row, sizeof(row));
+			any |= row;
+		}
+	}
+	return any != 0;
+}
+
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb)
 {
 	c->plain = rgb != NULL && !c->general;

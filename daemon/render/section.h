@@ -84,6 +84,16 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
  * c->general, whose byte loops the tests compare. */
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
 
+/* The first tile from t on that something touched (bytes or plain bits),
+ * or the tile count. */
+uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t);
+
+/* Tile t's plain bits halftoned, ORed into out (a packed tile: the halftone
+ * of its bytes, or zeros): ANDed with pattern, the halftone of the plain
+ * colour under the tile's thresholds (rows y % 16, packed). Whether out
+ * has a bit set. The bits stay (section_canvas_clear_tile()). */
+bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out);
+
 /* Tile t's plain bits MAXed into its bytes (rows[t] gains their rows), and
  * cleared: its bytes are then what section_span() would have written.
  * Before tile t's bytes are read (section_canvas_fold_tile() where it has
