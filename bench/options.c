@@ -41,29 +41,37 @@ static void usage(FILE *f)
 		REFERENCE_VARIANT, BENCH_DATA_DIR);
 }
 
+/* The modifiers after a variant's first '+', '+' separated, into v: a
+ * brightness model other than exact ("even", "uniform"), and "keep" (bins
+ * kept while the scene stays). */
+static bool parse_modifiers(char *m, struct variant *v)
+{
+	for (char *next; m; m = next) {
+		next = strchr(m, '+');
+		if (next)
+			*next++ = '\0';
+		if (!strcmp(m, "keep"))
+			v->keep = true;
+		else if (geometry_brightness_parse(m, &v->brightness) < 0)
+			return false;
+	}
+	return true;
+}
+
 bool variant_parse(const char *spec, struct variant *v)
 {
 	memset(v, 0, sizeof(*v));
 	if (strlen(spec) >= sizeof(v->name))
 		return false;
 	snprintf(v->name, sizeof(v->name), "%s", spec);
-	/* Modifiers: a brightness model other than exact ("+even",
-	 * "+uniform"), and "+keep" (bins kept while the scene stays). */
 	char base[32];
 	snprintf(base, sizeof(base), "%s", spec);
 	char *plus = strchr(base, '+');
 	if (plus) {
 		*plus = '\0';
 		spec = base;
-		for (char *m = plus + 1, *next; m; m = next) {
-			next = strchr(m, '+');
-			if (next)
-				*next++ = '\0';
-			if (!strcmp(m, "keep"))
-				v->keep = true;
-			else if (geometry_brightness_parse(m, &v->brightness) < 0)
-				return false;
-		}
+		if (!parse_modifiers(plus + 1, v))
+			return false;
 	}
 	static const char *const gl[] = { "egl", "osmesa" };
 	for (size_t i = 0; i < sizeof(gl) / sizeof(gl[0]); i++) {

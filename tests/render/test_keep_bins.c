@@ -143,6 +143,45 @@ static bool same_pass(const struct pass *a, const struct pass *b)
 	return true;
 }
 
+/* How many of the renderer's passes over s keep the binning of the pass
+ * before (the last pass of the render before: *last, which becomes this
+ * render's): each lift's draws, unlifted, lowest lift first, then the
+ * draws without a lift (render_cpu.c). */
+static uint64_t passes_kept(const struct scene *s, struct pass *last)
+{
+	uint64_t kept = 0;
+	static const int32_t lifts[] = { -2, 3, 0 }; /* change()'s, in order */
+	for (int l = 0; l < 3; l++) {
+		struct pass p = { 0 };
+		for (uint32_t i = 0; i < s->draw_count; i++) {
+			if (s->draws[i].lift != lifts[l])
+				continue;
+			p.draws[p.n] = s->draws[i];
+			p.draws[p.n++].lift = 0;
+		}
+		if (lifts[l] == 0 || p.n) {
+			kept += same_pass(&p, last);
+			*last = p;
+		}
+	}
+	return kept;
+}
+
+/* The draws a sequence starts from: random data, numbered. */
+static void first_draws(struct scene_draw draws[DRAWS], struct data data[DRAWS])
+{
+	for (int i = 0; i < DRAWS; i++) {
+		struct rtest_mesh none = { 0 };
+		uint8_t rgb[3];
+		rtest_colour((uint32_t)i, rgb);
+		draws[i] = rtest_draw(SCENE_TRIANGLES, &none, rgb[0], rgb[1], rgb[2]);
+		draws[i].xyz = data[i].xyz;
+		draws[i].data_id = fill(&data[i]);
+		set_count(&draws[i]);
+		random_transform(draws[i].transform);
+	}
+}
+
 /* A renderer: the CPU's, or (gl) a GL one, keeping bins or not. */
 static struct renderer *make(const struct geometry *g, const char *gl, unsigned threads, bool keep)
 {
@@ -158,16 +197,7 @@ static void check_sequence(const struct geometry *g, const char *gl, unsigned th
 {
 	static struct data data[DRAWS];
 	struct scene_draw draws[DRAWS];
-	for (int i = 0; i < DRAWS; i++) {
-		struct rtest_mesh none = { 0 };
-		uint8_t rgb[3];
-		rtest_colour((uint32_t)i, rgb);
-		draws[i] = rtest_draw(SCENE_TRIANGLES, &none, rgb[0], rgb[1], rgb[2]);
-		draws[i].xyz = data[i].xyz;
-		draws[i].data_id = fill(&data[i]);
-		set_count(&draws[i]);
-		random_transform(draws[i].transform);
-	}
+	first_draws(draws, data);
 	struct scene s = { .draw_count = 2, .draws = draws };
 	/* One renderer that keeps, one that never does. */
 	struct renderer *kr = make(g, gl, threads, true), *fr = make(g, gl, threads, false);
@@ -181,31 +211,14 @@ static void check_sequence(const struct geometry *g, const char *gl, unsigned th
 		CHECK_EQ(fr->stats.bins_kept, 0u);
 		CHECK_MSG(rtest_same(kv, fv), "%s, %ux%u N %u, %u threads, step %d: a kept render differs",
 			  gl ? gl : "cpu", g->width, g->height, g->images_per_rev, threads, step);
-		/* The passes: each lift's draws (unlifted), lowest first,
-		 * then the draws without a lift (render_cpu.c). */
-		uint64_t want = 0;
-		for (int32_t lift = -2;; lift = lift == -2 ? 3 : lift == 3 ? 0 : 1) {
-			struct pass p = { 0 };
-			for (uint32_t i = 0; i < s.draw_count; i++) {
-				if (s.draws[i].lift != lift)
-					continue;
-				p.draws[p.n] = s.draws[i];
-				p.draws[p.n++].lift = 0;
-			}
-			if (lift == 0 || p.n) {
-				want += same_pass(&p, &last);
-				last = p;
-			}
-			if (lift == 0)
-				break;
-		}
+		uint64_t want = passes_kept(&s, &last);
 		CHECK_MSG(kr->stats.bins_kept == want, "step %d: kept %llu, wanted %llu", step,
 			  (unsigned long long)kr->stats.bins_kept, (unsigned long long)want);
 		kept += want;
 		rebinned += !want;
-		/* A lift, or a draw without a number, lasts one render
-		 * (lifted renders bin their parts apart and keep nothing;
-		 * draws without a number are never kept). */
+		/* A lift, or a draw without a number, lasts one render, so
+		 * that most steps can keep (lifted renders bin each lift's
+		 * draws apart; draws without a number are never kept). */
 		for (uint32_t i = 0; i < DRAWS; i++) {
 			draws[i].lift = 0;
 			if (!draws[i].data_id)

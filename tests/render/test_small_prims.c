@@ -126,6 +126,45 @@ static void batch_add(struct batch *b, const struct section_wedge *w, const doub
 		batch_flush(b);
 }
 
+/* Case i in w's image: a segment or triangle (the count returned) into v,
+ * mostly about the planes of the wedge, some across the axis; runs of
+ * cases wholly inside it (i % 64 >= 40: whole batches the clip leaves be);
+ * some degenerate. */
+static int random_case(const struct geometry *g, const struct section_wedge *w, uint32_t i, double v[3][3])
+{
+	double col_w = 2.0 / g->width;
+	double r = unit() < 0.15 ? range(0.0, 3.0 * col_w) : range(0.0, 1.1);
+	double phi = atan2(w->dz, w->dx) + range(-1.5, 1.5) * 2.0 * M_PI / g->images_per_rev;
+	if (unit() < 0.3)
+		phi += M_PI; /* the s < 0 lobe */
+	double cx = r * cos(phi), cz = r * sin(phi), cy = range(-1.05, 1.05) * g->half_height;
+	double size = col_w * exp(range(log(1e-4), log(3.0)));
+	if (i % 64 >= 40) { /* runs wholly inside the wedge: batches the clip leaves be */
+		r = range(0.3, 1.0);
+		phi = atan2(w->dz, w->dx) + (unit() < 0.3 ? M_PI : 0) + range(-0.2, 0.2) * M_PI / g->images_per_rev;
+		cx = r * cos(phi), cz = r * sin(phi);
+		size = r * M_PI / g->images_per_rev * range(0.01, 0.2);
+	}
+	int n = unit() < 0.8 ? 3 : 2;
+	for (int a = 0; a < n; a++) {
+		vertex(g, w, cx, cy, cz, size, v[a]);
+		if (i % 64 >= 40) /* not moved onto a plane */
+			for (int j = 0; j < 3; j++)
+				v[a][j] = F((j == 0 ? cx : j == 1 ? cy : cz) + range(-size, size));
+	}
+	double pick = unit();
+	if (pick < 0.05) { /* two vertices the same */
+		memcpy(v[1], v[0], sizeof(v[0]));
+	} else if (pick < 0.08) { /* all the same: a point */
+		memcpy(v[1], v[0], sizeof(v[0]));
+		memcpy(v[2], v[0], sizeof(v[0]));
+	} else if (pick < 0.12 && n == 3) { /* collinear */
+		for (int j = 0; j < 3; j++)
+			v[2][j] = F(v[0][j] + 0.5 * (v[1][j] - v[0][j]));
+	}
+	return n;
+}
+
 static void check_geometry(const struct geometry *g, uint32_t cases)
 {
 	struct batch bt = { .verts = 3 }, bs = { .verts = 2 }; /* triangles, segments */
@@ -148,51 +187,17 @@ static void check_geometry(const struct geometry *g, uint32_t cases)
 	/* A third of the cases in the plain colour (section_canvas_plain()),
 	 * kept as bits where the canvas is not general. */
 	static const uint8_t plain[3] = { 90, 0, 255 };
-	section_canvas_plain(&fast, plain);
-	section_canvas_plain(&slow, plain);
-	for (int q = 0; q < 2; q++) {
-		section_canvas_plain(&both[q]->lanes, plain);
-		section_canvas_plain(&both[q]->general, plain);
-	}
+	struct section_canvas *all[] = { &fast, &slow, &bs.lanes, &bs.general, &bt.lanes, &bt.general };
+	for (int q = 0; q < 6; q++)
+		section_canvas_plain(all[q], plain);
 	uint32_t images = geometry_images_per_volume(g);
-	double col_w = 2.0 / g->width;
 	for (uint32_t i = 0; i < cases; i++) {
 		/* Runs of cases in one image, so that batches fill. */
 		uint32_t k = i % 64 ? bt.w.image : (uint32_t)(unit() * images);
 		struct section_wedge w;
 		section_wedge_init(&w, g, k);
-		/* Mostly about the planes of the wedge, some across the axis. */
-		double r = unit() < 0.15 ? range(0.0, 3.0 * col_w) : range(0.0, 1.1);
-		double phi = atan2(w.dz, w.dx) + range(-1.5, 1.5) * 2.0 * M_PI / g->images_per_rev;
-		if (unit() < 0.3)
-			phi += M_PI; /* the s < 0 lobe */
-		double cx = r * cos(phi), cz = r * sin(phi), cy = range(-1.05, 1.05) * g->half_height;
-		double size = col_w * exp(range(log(1e-4), log(3.0)));
-		if (i % 64 >= 40) { /* runs wholly inside the wedge: batches the clip leaves be */
-			r = range(0.3, 1.0);
-			phi = atan2(w.dz, w.dx) + (unit() < 0.3 ? M_PI : 0) +
-			      range(-0.2, 0.2) * M_PI / g->images_per_rev;
-			cx = r * cos(phi), cz = r * sin(phi);
-			size = r * M_PI / g->images_per_rev * range(0.01, 0.2);
-		}
-		int n = unit() < 0.8 ? 3 : 2;
 		double v[3][3] = { { 0 } };
-		for (int a = 0; a < n; a++) {
-			vertex(g, &w, cx, cy, cz, size, v[a]);
-			if (i % 64 >= 40) /* not moved onto a plane */
-				for (int j = 0; j < 3; j++)
-					v[a][j] = F((j == 0 ? cx : j == 1 ? cy : cz) + range(-size, size));
-		}
-		double pick = unit();
-		if (pick < 0.05) { /* two vertices the same */
-			memcpy(v[1], v[0], sizeof(v[0]));
-		} else if (pick < 0.08) { /* all the same: a point */
-			memcpy(v[1], v[0], sizeof(v[0]));
-			memcpy(v[2], v[0], sizeof(v[0]));
-		} else if (pick < 0.12 && n == 3) { /* collinear */
-			for (int j = 0; j < 3; j++)
-				v[2][j] = F(v[0][j] + 0.5 * (v[1][j] - v[0][j]));
-		}
+		int n = random_case(g, &w, i, v);
 		uint8_t rgb[3] = { (uint8_t)(1 + i % 255), (uint8_t)(i * 7 % 256), 255 };
 		if (i % 3 == 0)
 			memcpy(rgb, plain, 3);
