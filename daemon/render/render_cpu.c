@@ -62,6 +62,7 @@ struct render_cpu {
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
 	bool batch; /* unturned segments and triangles through section_lanes() (triangles binned eight at a time) */
+	bool plain; /* the canvases keep a plain colour as bits (not in the scalar variant) */
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
@@ -453,7 +454,7 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	if (err < 0)
 		return err;
 	base->stats.prims += r->bins.prim_count + r->bins.point_count;
-	const uint8_t *plain = r->batch ? plain_colour(scene) : NULL;
+	const uint8_t *plain = r->plain ? plain_colour(scene) : NULL;
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		section_canvas_plain(&c, plain);
@@ -715,6 +716,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->base.geom = *geom;
 	r->halftone = halftone;
 	r->batch = batch && section_batch_supported();
+	r->plain = batch; /* any CPU: section_span() and the pack take bits */
 	unsigned n = pick_threads(geom, threads);
 	r->workers = aligned_alloc(64, n * sizeof(*r->workers));
 	if (r->workers)
