@@ -190,39 +190,51 @@ static void free_grid_jobs(struct render_cpu *r)
 	r->grid_count = 0;
 }
 
+/* An image's unturned segments and triangles for section_lanes(), queued
+ * by vertex count and by whether their range is one image (most often
+ * every vertex inside the wedge: section_lanes() skips the clip where a
+ * batch is all such pieces); 2 * (triangle) + (one image) picks a queue. */
+struct lane_queues {
+	struct section_lane lanes[4][SECTION_BATCH];
+	unsigned n[4];
+};
+
+static void queue_lane(struct lane_queues *q, struct section_canvas *c, const struct section_wedge *w,
+		       const struct bin_prim *p)
+{
+	unsigned l = 2 * (p->nverts == 3) + (p->count == 1);
+	q->lanes[l][q->n[l]++] = (struct section_lane){ &p->v[0][0], p->rgb };
+	if (q->n[l] == SECTION_BATCH) {
+		section_lanes(c, w, q->lanes[l], q->n[l], p->nverts);
+		q->n[l] = 0;
+	}
+}
+
 /* Sections image k's segments and triangles (its n runs, image_runs())
  * into the canvas; returns how many. Unturned ones go eight at a time
- * (section_lanes()), segments and triangles apart. */
+ * (section_lanes(), queued as struct lane_queues says). */
 static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, uint32_t k, const struct bin_run *runs,
 			      unsigned n)
 {
 	const struct bin_set *b = &r->bins;
 	uint64_t sectioned = 0;
-	/* Segments, triangles; each of a one-image range (most often every
-	 * vertex inside the wedge: section_lanes() skips the clip where a
-	 * batch is all such pieces) or not. */
-	struct section_lane lanes[4][SECTION_BATCH];
-	unsigned queued[4] = { 0, 0, 0, 0 };
+	struct lane_queues q = { .n = { 0 } };
 	for (unsigned j = 0; j < n; j++) {
 		for (uint32_t i = runs[j].begin; i < runs[j].end; i++) {
 			const struct bin_prim *p = &b->prims[i];
 			if (!bin_prim_in_image(b, p, k))
 				continue;
 			sectioned++;
-			if (r->batch && (!b->turned || !b->prim_turn[i])) {
-				unsigned q = 2 * (p->nverts == 3) + (p->count == 1);
-				lanes[q][queued[q]++] = (struct section_lane){ &p->v[0][0], p->rgb };
-				if (queued[q] == SECTION_BATCH) {
-					section_lanes(c, &r->wedges[k], lanes[q], queued[q], p->nverts);
-					queued[q] = 0;
-				}
+			bool turned = b->turned && b->prim_turn[i];
+			if (r->batch && !turned) {
+				queue_lane(&q, c, &r->wedges[k], p);
 				continue;
 			}
 			double v[3][3];
 			for (int a = 0; a < p->nverts; a++)
 				for (int e = 0; e < 3; e++)
 					v[a][e] = p->v[a][e];
-			if (!b->turned || !b->prim_turn[i]) {
+			if (!turned) {
 				section_prim(c, &r->wedges[k], (const double(*)[3])v, p->nverts, p->rgb);
 			} else { /* what it lights unturned in its source image */
 				bool mirror;
@@ -232,9 +244,9 @@ static uint64_t section_image(struct render_cpu *r, struct section_canvas *c, ui
 			}
 		}
 	}
-	for (unsigned q = 0; q < 4; q++)
-		if (queued[q])
-			section_lanes(c, &r->wedges[k], lanes[q], queued[q], q >= 2 ? 3 : 2);
+	for (unsigned l = 0; l < 4; l++)
+		if (q.n[l])
+			section_lanes(c, &r->wedges[k], q.lanes[l], q.n[l], l >= 2 ? 3 : 2);
 	return sectioned;
 }
 
