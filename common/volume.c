@@ -150,7 +150,29 @@ int volume_image_push(struct volume *vol, uint32_t k, uint32_t t)
 	img->tile_count++;
 	img->next_tile = t + 1;
 	img->mask[t / 8] |= (uint8_t)(1u << (t % 8));
-	vol->origin = 0;
+	if (vol->origin) /* not written when it is already 0: the line stays shared */
+		vol->origin = 0;
+	return 0;
+}
+
+int volume_image_set(struct volume *vol, uint32_t k, const uint8_t *mask, uint32_t count)
+{
+	if (k >= vol->image_count)
+		return -EINVAL;
+	struct volume_image *img = &vol->images[k];
+	uint32_t tiles = volume_tiles_per_image(vol), n = 0, last = 0;
+	for (uint32_t i = 0; i < vol->mask_bytes; i++) {
+		n += volume_mask_bits(mask[i]);
+		if (mask[i])
+			last = 8 * i + 31 - (uint32_t)__builtin_clz(mask[i]);
+	}
+	if (n != count || count > img->tile_cap || (count && last >= tiles))
+		return -EINVAL;
+	memcpy(img->mask, mask, vol->mask_bytes);
+	img->tile_count = count;
+	img->next_tile = count ? last + 1 : 0;
+	if (vol->origin)
+		vol->origin = 0;
 	return 0;
 }
 

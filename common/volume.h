@@ -85,6 +85,14 @@ uint8_t *volume_image_next(struct volume *vol, uint32_t k);
 /* Commits the bytes at volume_image_next(vol, k) as tile t, which must be
  * greater than every stored tile and not all zero. 0 or -EINVAL. */
 int volume_image_push(struct volume *vol, uint32_t k, uint32_t t);
+/* Sets image k whole, for a writer that fills its storage alone (room
+ * made with volume_image_reserve()): its first count stored tiles are the
+ * tiles set in mask, in increasing order, none all zero. It writes the
+ * image's fields and mask once, where volume_image_push() writes them a
+ * tile at a time (they share cache lines with the next image's, which
+ * another thread may be writing). 0 or -EINVAL (count is not the number of
+ * tiles in mask, or more than the room). */
+int volume_image_set(struct volume *vol, uint32_t k, const uint8_t *mask, uint32_t count);
 
 /* Empties image k; keeps its storage. */
 void volume_image_clear(struct volume *vol, uint32_t k);

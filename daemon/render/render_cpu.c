@@ -48,6 +48,7 @@ struct plain_patterns {
 struct cpu_worker {
 	struct section_canvas canvas;
 	struct plain_patterns plain; /* emptied with the counters each pass */
+	uint8_t *mask;               /* pack_image()'s image mask (volume mask_bytes) */
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
 } __attribute__((aligned(64)));
@@ -131,19 +132,22 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 	return rle_volume_set_image(r->canvas_out, k, st->mask, st->tiles, n, &st->rle);
 }
 
-/* Halftones and packs the touched tiles of image k in increasing order and
- * leaves the canvas all zero again, whether or not packing succeeded. */
+/* Halftones and packs the touched tiles of image k in increasing order
+ * straight into the volume's storage, and leaves the canvas all zero again, whether
+ * or not packing succeeded. The image's mask is made in the worker's own
+ * (w->mask) and set once at the end (volume_image_set()). */
 static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	struct section_canvas *c = &w->canvas;
-	int err = 0;
-	uint32_t tiles = c->tiles_x * c->tiles_y;
+	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
+	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1))
+		n++;
+	int err = volume_image_reserve(r->out, k, n);
+	uint8_t *dst = err == 0 ? r->out->images[k].tiles : NULL;
+	uint32_t count = 0;
+	memset(w->mask, 0, r->out->mask_bytes);
 	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1)) {
 		w->canvas_tiles++;
-		/* Halftoned straight into the volume's storage. */
-		uint8_t *dst = err == 0 ? volume_image_next(r->out, k) : NULL;
-		if (!dst && err == 0)
-			err = -ENOMEM;
 		const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
 		bool lit = false;
 		if (dst && c->rows[t])
@@ -153,12 +157,14 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		if (dst && c->plain_rows[t])
 			lit |= section_canvas_pack_plain(c, t, plain_pattern(r, &w->plain, c, thr)->bits, dst);
 		if (lit) {
-			err = volume_image_push(r->out, k, t);
-			w->tiles++;
+			w->mask[t / 8] |= (uint8_t)(1u << (t % 8));
+			dst += VOLUME_TILE_BYTES;
+			count++;
 		}
 		section_canvas_clear_tile(c, t);
 	}
-	return err;
+	w->tiles += count;
+	return err < 0 ? err : volume_image_set(r->out, k, w->mask, count);
 }
 
 /* Lights a binned point's square (bin.h), clipped to the image. */
@@ -470,7 +476,7 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		section_canvas_plain(&c, plain);
-		r->workers[i] = (struct cpu_worker){ .canvas = c };
+		r->workers[i] = (struct cpu_worker){ .canvas = c, .mask = r->workers[i].mask };
 	}
 	r->out = out;
 	r->canvas_out = canvas;
@@ -647,8 +653,10 @@ static void cpu_destroy(struct renderer *base)
 {
 	struct render_cpu *r = (struct render_cpu *)base;
 	pool_destroy(r->pool);
-	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++)
+	for (unsigned i = 0; r->workers && i < r->base.stats.threads; i++) {
 		section_canvas_finish(&r->workers[i].canvas);
+		free(r->workers[i].mask);
+	}
 	free(r->workers);
 	free_stage(r);
 	drop_lifted(r);
@@ -744,10 +752,17 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->bins.keep = keep;
 	for (uint32_t k = 0; k < images; k++)
 		section_wedge_init(&r->wedges[k], geom, k);
+	uint32_t tiles =
+		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
 	for (unsigned i = 0; i < n; i++) {
-		if (section_canvas_init(&r->workers[i].canvas, geom) < 0)
+		struct cpu_worker *w = &r->workers[i];
+		w->mask = calloc((tiles + 7) / 8, 1);
+		if (!w->mask || section_canvas_init(&w->canvas, geom) < 0) {
+			free(w->mask);
+			w->mask = NULL;
 			goto err_free;
-		r->workers[i].canvas.bright = &r->bright;
+		}
+		w->canvas.bright = &r->bright;
 		r->base.stats.threads = i + 1; /* canvases to free */
 	}
 	r->pool = pool_create(n);

@@ -66,6 +66,41 @@ static void check_append(void)
 	volume_destroy(v);
 }
 
+/* volume_image_set(): an image written in place and set at once is the
+ * image appended tile by tile; a count that is not the mask's, more than
+ * the room, or a mask past the image is refused and changes nothing. */
+static void check_set(void)
+{
+	struct volume *a = volume_create(&odd), *b = volume_create(&odd);
+	uint8_t tile[VOLUME_TILE_BYTES] = { 0 }, mask[2] = { 0x21, 0x08 }; /* tiles 0, 5, 11 */
+	const uint32_t at[3] = { 0, 5, 11 };
+	CHECK(volume_image_reserve(b, 7, 3) == 0);
+	for (int i = 0; i < 3; i++) {
+		memset(tile, 0, sizeof(tile));
+		tile_set(tile, (uint32_t)i, 2, i);
+		CHECK(volume_image_append(a, 7, at[i], tile) == 0);
+		memcpy(b->images[7].tiles + (size_t)i * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
+	}
+	b->origin = 5;
+	CHECK(volume_image_set(b, 7, mask, 2) == -EINVAL); /* not the mask's count */
+	CHECK(volume_image_set(b, 7, mask, 4) == -EINVAL);
+	uint8_t past[2] = { 0x21, 0x18 }; /* tile 12: past the image's 12 */
+	CHECK(volume_image_set(b, 7, past, 4) == -EINVAL);
+	CHECK(volume_image_set(b, 50, mask, 3) == -EINVAL);
+	CHECK(b->images[7].tile_count == 0 && b->images[7].mask[0] == 0 && b->origin == 5);
+	CHECK(volume_image_set(b, 7, mask, 3) == 0);
+	CHECK(b->origin == 0 && b->images[7].tile_count == 3 && b->images[7].next_tile == 12);
+	CHECK(memcmp(a->images[7].mask, b->images[7].mask, 2) == 0);
+	CHECK(memcmp(a->images[7].tiles, b->images[7].tiles, 3 * VOLUME_TILE_BYTES) == 0);
+	CHECK(volume_image_append(b, 7, 10, tile) == -EINVAL); /* in order after them */
+	uint8_t few[2] = { 0x01, 0 }, none[2] = { 0, 0 };
+	CHECK(volume_image_set(b, 8, few, 1) == -EINVAL); /* no room made */
+	CHECK(volume_image_set(b, 7, none, 0) == 0);
+	CHECK(b->images[7].tile_count == 0 && b->images[7].next_tile == 0 && volume_tile_count(b) == 0);
+	volume_destroy(a);
+	volume_destroy(b);
+}
+
 /* Random pixels into image k, tile by tile (never past W or H). Returns the
  * expected image as one byte per pixel and channel. */
 static uint8_t *fill_random(struct volume *v, uint32_t k, uint32_t seed)
@@ -187,6 +222,7 @@ int main(void)
 	geometry_from_profile("small", &small);
 	check_create();
 	check_append();
+	check_set();
 	check_pixels_and_dense(&odd);
 	check_pixels_and_dense(&small);
 	check_update(&odd);
