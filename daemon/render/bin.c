@@ -448,6 +448,83 @@ static inline void lane_record(float v[3][3][8], unsigned l, const uint8_t rgb[3
 	s->key = key;
 }
 
+/* The staged records of eight triangles (struct stage_prim: 12 words,
+ * the nine coordinates, nverts and colour, first and count, key) from
+ * their words by column (v: vertex, coordinate, lane; word9 the same for
+ * all; first, count and key by lane), a transpose: eight rows of the
+ * first eight columns, eight of the last four. */
+_Static_assert(sizeof(struct stage_prim) == 48 && offsetof(struct stage_prim, key) == 44 &&
+		       offsetof(struct bin_prim, nverts) == 36 && offsetof(struct bin_prim, first) == 40 &&
+		       offsetof(struct bin_prim, count) == 42,
+	       "store_records8() writes a staged triangle as 12 little-endian words");
+TRIS_TARGET static inline void store_records8(float v[3][3][8], uint32_t word9, const uint32_t first[8],
+					      const uint32_t count[8], const uint32_t key[8], struct stage_prim *out)
+{
+	__m256i c[8];
+	for (int k = 0; k < 8; k++)
+		c[k] = _mm256_loadu_si256((const __m256i *)v[k / 3][k % 3]);
+	/* 8 x 8: pairs of columns interleaved, then pairs of pairs, then
+	 * halves swapped */
+	__m256i a[8], bq[8];
+	for (int k = 0; k < 8; k += 2) {
+		a[k] = _mm256_unpacklo_epi32(c[k], c[k + 1]);
+		a[k + 1] = _mm256_unpackhi_epi32(c[k], c[k + 1]);
+	}
+	for (int k = 0; k < 8; k += 4)
+		for (int h = 0; h < 2; h++) {
+			bq[k + h] = _mm256_unpacklo_epi64(a[k + h], a[k + 2 + h]);
+			bq[k + 2 + h] = _mm256_unpackhi_epi64(a[k + h], a[k + 2 + h]);
+		}
+	/* bq[0..3]: columns 0..3 of lanes (0, 4), (2, 6)... by 128-bit half */
+	__m256i w8 = _mm256_loadu_si256((const __m256i *)v[2][2]);
+	__m256i w9 = _mm256_set1_epi32((int)word9);
+	__m256i w10 = _mm256_or_si256(_mm256_loadu_si256((const __m256i *)first),
+				      _mm256_slli_epi32(_mm256_loadu_si256((const __m256i *)count), 16));
+	__m256i w11 = _mm256_loadu_si256((const __m256i *)key);
+	__m256i t0 = _mm256_unpacklo_epi32(w8, w9), t1 = _mm256_unpackhi_epi32(w8, w9);
+	__m256i t2 = _mm256_unpacklo_epi32(w10, w11), t3 = _mm256_unpackhi_epi32(w10, w11);
+	__m256i tail[4] = { _mm256_unpacklo_epi64(t0, t2), _mm256_unpackhi_epi64(t0, t2), _mm256_unpacklo_epi64(t1, t3),
+			    _mm256_unpackhi_epi64(t1, t3) };
+	/* lane l: row l % 4 of each group, half l / 4; the unpacks' order is
+	 * lanes 0, 1, 4, 5 in a[k], a[k + 1]: see the index below */
+	static const int row[4] = { 0, 2, 1, 3 };
+	for (int l = 0; l < 8; l++) {
+		int r = row[l % 4], half = l / 4;
+		__m256i lo = half ? _mm256_permute2x128_si256(bq[r], bq[4 + r], 0x31)
+				  : _mm256_permute2x128_si256(bq[r], bq[4 + r], 0x20);
+		__m128i hi = half ? _mm256_extracti128_si256(tail[l % 4], 1) : _mm256_castsi256_si128(tail[l % 4]);
+		uint8_t *dst = (uint8_t *)&out[l];
+		_mm256_storeu_si256((__m256i *)dst, lo);
+		_mm_storeu_si128((__m128i *)(dst + 32), hi);
+	}
+}
+
+/* The staged records of triangles j .. j + 7 of d into out, turned and
+ * counted in hist, from the lanes' vertices v, images and keys; a lane not
+ * in fin (a coordinate that is not a finite float) by bin_one_prim(). A
+ * draw of one colour and no turn has its records written at once. */
+TRIS_TARGET static inline void records8(
+	const struct bin_set *b, const struct scene_draw *d, uint64_t j, float v[3][3][8], __mmask8 fin,
+	const uint32_t first[8], const uint32_t count[8], const uint32_t key[8], struct stage_prim *out, uint32_t *hist)
+{
+	const uint32_t turn = bin_draw_turn(b, d);
+	const bool whole = !turn && !d->prim_rgb;
+	if (whole)
+		store_records8(v, 3u | (uint32_t)d->rgb[0] << 8 | (uint32_t)d->rgb[1] << 16 | (uint32_t)d->rgb[2] << 24,
+			       first, count, key, out);
+	for (unsigned l = 0; l < 8; l++) {
+		const uint8_t *rgb = d->prim_rgb ? d->prim_rgb + 3 * (j + l) : d->rgb;
+		if (!(fin >> l & 1))
+			bin_one_prim(b, d, d->xyz + 9 * (j + l), 3, rgb, &out[l]);
+		else if (whole)
+			hist[key[l]]++; /* written, unturned */
+		else
+			lane_record(v, l, rgb, first[l], count[l], key[l], &out[l]);
+		if (!whole || !(fin >> l & 1))
+			finish_item(b, turn, &out[l], hist);
+	}
+}
+
 /* bin_one_prim() of triangles j0 .. j1 - 1 of d, eight at a time, on a
  * mirrored geometry: the same operations lane for lane (the transform
  * grouped as bin_transform() groups it, the slots as slot_of() finds
@@ -456,7 +533,6 @@ static inline void lane_record(float v[3][3][8], unsigned l, const uint8_t rgb[3
 TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
 					struct stage_prim *out, uint32_t *hist)
 {
-	const uint32_t turn = bin_draw_turn(b, d);
 	const float *m = d->transform;
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
@@ -476,16 +552,7 @@ TRIS_TARGET static uint64_t stage_tris8(const struct bin_set *b, const struct sc
 		}
 		uint32_t first[8], count[8], key[8];
 		arcs8(b, sl, near, axis, first, count, key);
-		for (unsigned l = 0; l < 8; l++) {
-			uint64_t k = j + l;
-			const uint8_t *rgb = d->prim_rgb ? d->prim_rgb + 3 * k : d->rgb;
-			struct stage_prim *s = &out[k - j0];
-			if (!(fin >> l & 1))
-				bin_one_prim(b, d, d->xyz + 9 * k, 3, rgb, s);
-			else
-				lane_record(v, l, rgb, first[l], count[l], key[l], s);
-			finish_item(b, turn, s, hist);
-		}
+		records8(b, d, j, v, fin, first, count, key, &out[j - j0], hist);
 	}
 	return j;
 }

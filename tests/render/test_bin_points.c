@@ -187,7 +187,7 @@ static void check_triangles(const struct geometry *g)
 	CHECK(rgbs != NULL);
 	for (uint32_t i = 0; i < n; i++)
 		rtest_colour(i, rgbs + 3 * i);
-	struct scene_draw draws[6];
+	struct scene_draw draws[8];
 	for (int i = 0; i < 6; i++) {
 		uint32_t len = i == 5 ? n - first : n / 7 + (uint32_t)i;
 		draws[i] = rtest_draw(SCENE_TRIANGLES, &m, 255, (uint8_t)(40 * i), 7);
@@ -198,7 +198,17 @@ static void check_triangles(const struct geometry *g)
 		set_transforms(&draws[i], i % 4);
 		first += len;
 	}
-	struct scene scene = { .draw_count = 6, .draws = draws };
+	/* One colour and no turn (records written eight at once) with lanes
+	 * the scalar rule drops: draw 4's range holds the special vertices
+	 * (NaN, infinite, past the float range), drawn as they are and under
+	 * the huge transform. */
+	for (int i = 6; i < 8; i++) {
+		draws[i] = draws[4];
+		draws[i].turn = 0;
+		draws[i].prim_rgb = NULL;
+		set_transforms(&draws[i], i == 6 ? 0 : 3);
+	}
+	struct scene scene = { .draw_count = 8, .draws = draws };
 	for (unsigned threads = 1; threads <= 2; threads++) {
 		struct pool *pool = pool_create(threads);
 		CHECK(pool != NULL);
