@@ -144,6 +144,9 @@ struct render_gl {
 	uint32_t *staging;  /* primitives in the texture's layout */
 	uint32_t triangles; /* of them, triangles: the edge draws are skipped without */
 	size_t staging_cap; /* primitives */
+	/* The primitive texture and point buffer hold r->bins as last built:
+	 * kept bins (bin_set.keep) are not uploaded again. */
+	bool uploaded;
 	struct gl_batch out[2];
 	int32_t *slot_of; /* per tile of a batch: its slot in the output, or -1 */
 	uint8_t *rgba;    /* naive: one image read back */
