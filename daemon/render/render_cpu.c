@@ -133,21 +133,23 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 }
 
 /* Halftones and packs the touched tiles of image k in increasing order
- * straight into the volume's storage, and leaves the canvas all zero again, whether
- * or not packing succeeded. The image's mask is made in the worker's own
- * (w->mask) and set once at the end (volume_image_set()). */
+ * straight into the volume's storage, and leaves the canvas all zero
+ * again, whether or not packing succeeded. The image's storage grows when
+ * full (it is kept from volume to volume, so seldom); its mask is made in
+ * the worker's own (w->mask) and set once at the end
+ * (volume_image_set()). */
 static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
 	struct section_canvas *c = &w->canvas;
-	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
-	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1))
-		n++;
-	int err = volume_image_reserve(r->out, k, n);
-	uint8_t *dst = err == 0 ? r->out->images[k].tiles : NULL;
-	uint32_t count = 0;
+	const struct volume_image *img = &r->out->images[k];
+	uint32_t tiles = c->tiles_x * c->tiles_y, count = 0;
+	int err = 0;
 	memset(w->mask, 0, r->out->mask_bytes);
 	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1)) {
 		w->canvas_tiles++;
+		if (err == 0 && count == img->tile_cap)
+			err = volume_image_reserve(r->out, k, count + 1);
+		uint8_t *dst = err == 0 ? img->tiles + (size_t)count * VOLUME_TILE_BYTES : NULL;
 		const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
 		bool lit = false;
 		if (dst && c->rows[t])
@@ -158,7 +160,6 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 			lit |= section_canvas_pack_plain(c, t, plain_pattern(r, &w->plain, c, thr)->bits, dst);
 		if (lit) {
 			w->mask[t / 8] |= (uint8_t)(1u << (t % 8));
-			dst += VOLUME_TILE_BYTES;
 			count++;
 		}
 		section_canvas_clear_tile(c, t);
