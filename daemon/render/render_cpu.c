@@ -723,6 +723,22 @@ static struct renderer *cpu_serial(const struct renderer *base)
 	return cpu_new(&base->geom, r->halftone, r->batch, r->bins.keep, 1);
 }
 
+/* A worker's canvas (weighted by bright) and pack mask; all or nothing.
+ * 0 or -ENOMEM. */
+static int worker_init(struct cpu_worker *w, const struct geometry *geom, const struct brightness_map *bright)
+{
+	uint32_t tiles =
+		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	w->mask = calloc((tiles + 7) / 8, 1);
+	if (!w->mask || section_canvas_init(&w->canvas, geom) < 0) {
+		free(w->mask);
+		w->mask = NULL;
+		return -ENOMEM;
+	}
+	w->canvas.bright = bright;
+	return 0;
+}
+
 static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halftone, bool batch, bool keep,
 				unsigned threads)
 {
@@ -753,18 +769,10 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->bins.keep = keep;
 	for (uint32_t k = 0; k < images; k++)
 		section_wedge_init(&r->wedges[k], geom, k);
-	uint32_t tiles =
-		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
 	for (unsigned i = 0; i < n; i++) {
-		struct cpu_worker *w = &r->workers[i];
-		w->mask = calloc((tiles + 7) / 8, 1);
-		if (!w->mask || section_canvas_init(&w->canvas, geom) < 0) {
-			free(w->mask);
-			w->mask = NULL;
+		if (worker_init(&r->workers[i], geom, &r->bright) < 0)
 			goto err_free;
-		}
-		w->canvas.bright = &r->bright;
-		r->base.stats.threads = i + 1; /* canvases to free */
+		r->base.stats.threads = i + 1; /* workers to free */
 	}
 	r->pool = pool_create(n);
 	if (!r->pool)

@@ -338,15 +338,11 @@ static void stage_worker(void *arg, unsigned worker)
 	atomic_fetch_add(&j->triangles, t);
 }
 
-/* Uploads the binned primitives and points, unless the bins were kept and
- * are there already. */
-static int upload(struct render_gl *r)
+/* Stages the binned primitives in the texture's layout and uploads them. */
+static int upload_prims(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	const struct bin_set *b = &r->bins;
-	if (b->kept && r->uploaded)
-		return 0;
-	r->uploaded = false;
 	uint64_t texels = (uint64_t)b->prim_count * GL_PRIM_TEXELS;
 	uint64_t rows = (texels + r->tex_width - 1) / r->tex_width;
 	GLint max_tex = 0;
@@ -381,6 +377,21 @@ static int upload(struct render_gl *r)
 	if (rest)
 		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, (GLint)full, (GLsizei)rest, 1, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
 				  r->staging + full * r->tex_width * 4);
+	return 0;
+}
+
+/* Uploads the binned primitives and points, unless the bins were kept and
+ * are there already. */
+static int upload(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
+	const struct bin_set *b = &r->bins;
+	if (b->kept && r->uploaded)
+		return 0;
+	r->uploaded = false;
+	int err = upload_prims(r);
+	if (err < 0)
+		return err;
 	size_t pbytes = (size_t)b->point_count * sizeof(struct bin_point);
 	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
 	gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(pbytes ? pbytes : 8), pbytes ? b->points : NULL, GL_STREAM_DRAW);
@@ -624,10 +635,8 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	r->wait_ns = r->copy_ns = 0;
 	int err = bin_build(&r->bins, scene, r->pool);
 	uint64_t t1 = (uint64_t)now_ns();
-	if (err < 0) {
-		r->uploaded = false;
+	if (err < 0) /* the next build bins again (bin_build()), and uploads */
 		return err;
-	}
 	err = gl_context_bind(&r->ctx);
 	if (err == 0)
 		err = gl_grid_prepare(r, scene);
@@ -639,8 +648,7 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 		int lost = check_context(r);
 		err = lost < 0 ? lost : err;
 	}
-	if (err < 0) /* what the texture holds is not known */
-		r->uploaded = false;
+	r->uploaded = r->uploaded && err == 0; /* after an error, what the texture holds is not known */
 	gl_context_unbind(&r->ctx);
 	r->volumes++;
 	if (err == -EFBIG && !r->opts.no_fallback) /* grids too large: logged, this scene only */

@@ -178,36 +178,44 @@ static void make_triangles(const struct geometry *g, struct rtest_mesh *m)
 	}
 }
 
-static void check_triangles(const struct geometry *g)
+/* The draws of the n triangles of m (per-triangle colours rgbs): six
+ * over consecutive ranges, with and without turns and colours of their
+ * own, under each transform of set_transforms(); then two of one colour
+ * and no turn (records written eight at once) with lanes the scalar rule
+ * drops: draw 4's range holds the special vertices (NaN, infinite, past
+ * the float range), drawn as they are and under the huge transform. */
+static void triangle_draws(struct rtest_mesh *m, uint32_t n, uint8_t *rgbs, struct scene_draw draws[8])
 {
-	struct rtest_mesh m = { 0 };
-	make_triangles(g, &m);
-	uint32_t n = m.count / 3, first = 0;
-	uint8_t *rgbs = malloc(3 * (size_t)n);
-	CHECK(rgbs != NULL);
-	for (uint32_t i = 0; i < n; i++)
-		rtest_colour(i, rgbs + 3 * i);
-	struct scene_draw draws[8];
+	uint32_t first = 0;
 	for (int i = 0; i < 6; i++) {
 		uint32_t len = i == 5 ? n - first : n / 7 + (uint32_t)i;
-		draws[i] = rtest_draw(SCENE_TRIANGLES, &m, 255, (uint8_t)(40 * i), 7);
-		draws[i].xyz = m.xyz + 9 * (size_t)first;
+		draws[i] = rtest_draw(SCENE_TRIANGLES, m, 255, (uint8_t)(40 * i), 7);
+		draws[i].xyz = m->xyz + 9 * (size_t)first;
 		draws[i].count = 3 * len;
 		draws[i].turn = (uint16_t)(i % 3 == 0 ? 0 : i * 37 + 1);
 		draws[i].prim_rgb = i % 2 ? rgbs + 3 * (size_t)first : NULL;
 		set_transforms(&draws[i], i % 4);
 		first += len;
 	}
-	/* One colour and no turn (records written eight at once) with lanes
-	 * the scalar rule drops: draw 4's range holds the special vertices
-	 * (NaN, infinite, past the float range), drawn as they are and under
-	 * the huge transform. */
 	for (int i = 6; i < 8; i++) {
 		draws[i] = draws[4];
 		draws[i].turn = 0;
 		draws[i].prim_rgb = NULL;
 		set_transforms(&draws[i], i == 6 ? 0 : 3);
 	}
+}
+
+static void check_triangles(const struct geometry *g)
+{
+	struct rtest_mesh m = { 0 };
+	make_triangles(g, &m);
+	uint32_t n = m.count / 3;
+	uint8_t *rgbs = malloc(3 * (size_t)n);
+	CHECK(rgbs != NULL);
+	for (uint32_t i = 0; i < n; i++)
+		rtest_colour(i, rgbs + 3 * i);
+	struct scene_draw draws[8];
+	triangle_draws(&m, n, rgbs, draws);
 	struct scene scene = { .draw_count = 8, .draws = draws };
 	for (unsigned threads = 1; threads <= 2; threads++) {
 		struct pool *pool = pool_create(threads);

@@ -182,6 +182,23 @@ static void first_draws(struct scene_draw draws[DRAWS], struct data data[DRAWS])
 	}
 }
 
+/* The scene of the next step: a lift, or a draw without a number, lasts
+ * one render, so that most steps can keep (lifted renders bin each lift's
+ * draws apart; draws without a number are never kept); then one draw
+ * loses its number, or change() changes something. */
+static void next_step(struct scene *s, struct scene_draw *draws, struct data *data, uint32_t g_images, bool turns)
+{
+	for (uint32_t i = 0; i < DRAWS; i++) {
+		draws[i].lift = 0;
+		if (!draws[i].data_id)
+			draws[i].data_id = ++data_ids;
+	}
+	if (rnd() < 0.05)
+		draws[(uint32_t)(rnd() * s->draw_count)].data_id = 0;
+	else
+		change(s, draws, data, g_images, turns);
+}
+
 /* A renderer: the CPU's, or (gl) a GL one, keeping bins or not. */
 static struct renderer *make(const struct geometry *g, const char *gl, unsigned threads, bool keep)
 {
@@ -223,19 +240,7 @@ static void check_sequence(const struct geometry *g, const char *gl, unsigned th
 			  (unsigned long long)kr->stats.bins_kept, (unsigned long long)want);
 		kept += want;
 		rebinned += !want;
-		/* A lift, or a draw without a number, lasts one render, so
-		 * that most steps can keep (lifted renders bin each lift's
-		 * draws apart; draws without a number are never kept). */
-		for (uint32_t i = 0; i < DRAWS; i++) {
-			draws[i].lift = 0;
-			if (!draws[i].data_id)
-				draws[i].data_id = ++data_ids;
-		}
-		if (rnd() < 0.05) {
-			draws[(uint32_t)(rnd() * s.draw_count)].data_id = 0;
-			continue;
-		}
-		change(&s, draws, data, g->images_per_rev, !gl);
+		next_step(&s, draws, data, g->images_per_rev, !gl);
 	}
 	CHECK_MSG(kept > (uint64_t)steps / 10 && rebinned > (uint64_t)steps / 4, "kept %llu, binned %llu",
 		  (unsigned long long)kept, (unsigned long long)rebinned);
