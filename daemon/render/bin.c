@@ -120,7 +120,8 @@ static int draw_verts(const struct scene_draw *d)
 /* The closed arc of slots [*first, *first + *len) (mod N) holding the
  * xz projection of the n vertices (negated when neg: the s < 0 lobe).
  * False when the projection may touch the axis: every slot. */
-static bool prim_arc(const struct bin_set *b, const float (*v)[3], int n, bool neg, uint32_t *first, uint32_t *len)
+static inline __attribute__((always_inline)) bool prim_arc(const struct bin_set *b, const float (*v)[3], int n,
+							   bool neg, uint32_t *first, uint32_t *len)
 {
 	uint32_t s[3] = { 0 }, N = b->slots.n;
 	bool near = false;
