@@ -7,7 +7,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bin_stage.h"
 #include "pool.h"
 
 /* The first primitive and first point item of a draw. */
@@ -22,7 +21,7 @@ struct bin_work {
 	struct draw_base *base; /* per draw */
 	size_t base_cap;
 	/* bin_slots() staging entries per item (unmirrored, a primitive
-	 * may need two records); unused ones have key KEY_NONE. */
+	 * may need two records); unused ones have key BIN_KEY_NONE. */
 	struct stage_prim *stage_prims;
 	size_t stage_prims_cap;
 	/* bin_slots() records and keys per point (bin.h), as for the
@@ -178,9 +177,9 @@ void bin_one_prim(const struct bin_set *b, const struct scene_draw *d, const flo
 		  struct stage_prim *out)
 {
 	double t[3][3];
-	out[0].key = KEY_NONE;
+	out[0].key = BIN_KEY_NONE;
 	if (!b->geom.mirrored)
-		out[1].key = KEY_NONE;
+		out[1].key = BIN_KEY_NONE;
 	for (int i = 0; i < n; i++)
 		if (!bin_transform(d->transform, xyz + 3 * i, t[i]))
 			return; /* NaN or infinite: nothing sensible to light */
@@ -209,14 +208,14 @@ void bin_turn_prims(const struct bin_set *b, uint32_t turn, struct stage_prim *s
 {
 	uint32_t M = b->images;
 	for (uint32_t i = 0; i < bin_slots(b); i++) {
-		if (s[i].key == KEY_NONE)
+		if (s[i].key == BIN_KEY_NONE)
 			continue;
 		uint32_t was = s[i].rec.first, first = was;
 		if (s[i].rec.count < M) {
 			first = (was + turn % M) % M;
 			s[i].rec.first = (uint16_t)first;
 		}
-		s[i].key = (s[i].key - was + first) | turn << KEY_BITS; /* class * M + first */
+		s[i].key = (s[i].key - was + first) | turn << BIN_KEY_BITS; /* class * M + first */
 	}
 }
 
@@ -312,16 +311,16 @@ static void scatter_job(void *arg, unsigned t)
 	const uint32_t slots = bin_slots(b);
 	if (!b->turned) {
 		for (uint64_t i = slots * c.lo; i < slots * c.hi; i++)
-			if (w->stage_prims[i].key != KEY_NONE)
+			if (w->stage_prims[i].key != BIN_KEY_NONE)
 				b->prims[off[w->stage_prims[i].key]++] = w->stage_prims[i].rec;
 	} else {
 		for (uint64_t i = slots * c.lo; i < slots * c.hi; i++) {
 			uint32_t key = w->stage_prims[i].key;
-			if (key == KEY_NONE)
+			if (key == BIN_KEY_NONE)
 				continue;
-			uint32_t o = off[key & KEY_MASK]++;
+			uint32_t o = off[key & BIN_KEY_MASK]++;
 			b->prims[o] = w->stage_prims[i].rec;
-			b->prim_turn[o] = (uint16_t)(key >> KEY_BITS);
+			b->prim_turn[o] = (uint16_t)(key >> BIN_KEY_BITS);
 		}
 	}
 	c = chunk_of(w->point_items, w->threads, t);

@@ -1,7 +1,7 @@
-/* Triangles staged eight at a time (bin_stage.h): the transform, the
+/* Triangles staged eight at a time (bin.h): the transform, the
  * slots (slot.h), the arcs and keys of bin_one_prim() on eight lanes, with
  * the same operations lane for lane, and the records written at once. */
-#include "bin_stage.h"
+#include "bin.h"
 
 #include <float.h>
 #include <stdbool.h>
