@@ -81,15 +81,22 @@ static void set_transforms(struct scene_draw *d, int kind)
 	}
 }
 
+/* n colours of rtest_colour(), for per-item colours (freed by the caller). */
+static uint8_t *colours(uint32_t n)
+{
+	uint8_t *rgbs = malloc(3 * (size_t)n);
+	CHECK(rgbs != NULL);
+	for (uint32_t i = 0; rgbs && i < n; i++)
+		rtest_colour(i, rgbs + 3 * i);
+	return rgbs;
+}
+
 static void check_geometry(const struct geometry *g)
 {
 	struct rtest_mesh m = { 0 };
 	make_points(g, &m, 20000);
 	uint32_t n = m.count / 3;
-	uint8_t *rgbs = malloc(3 * (size_t)n);
-	CHECK(rgbs != NULL);
-	for (uint32_t i = 0; i < n; i++)
-		rtest_colour(i, rgbs + 3 * i);
+	uint8_t *rgbs = colours(n);
 	/* draws of awkward lengths over the same vertices */
 	struct scene_draw draws[8];
 	uint32_t first = 0;
@@ -210,10 +217,7 @@ static void check_triangles(const struct geometry *g)
 	struct rtest_mesh m = { 0 };
 	make_triangles(g, &m);
 	uint32_t n = m.count / 3;
-	uint8_t *rgbs = malloc(3 * (size_t)n);
-	CHECK(rgbs != NULL);
-	for (uint32_t i = 0; i < n; i++)
-		rtest_colour(i, rgbs + 3 * i);
+	uint8_t *rgbs = colours(n);
 	struct scene_draw draws[8];
 	triangle_draws(&m, n, rgbs, draws);
 	struct scene scene = { .draw_count = 8, .draws = draws };
