@@ -90,8 +90,8 @@ bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const
 	uint32_t any = 0;
 	for (int i = 0; i < 3; i++) {
 		uint8_t *plane = out + i * VOLUME_TILE_PLANE_BYTES;
-		for (uint32_t y = 0; y < VOLUME_TILE; y++) {
-			uint32_t row;
+		for (uint32_t rows = c->plain_rows[t]; rows; rows &= rows - 1) { /* the others have no bits */
+			uint32_t y = (uint32_t)__builtin_ctz(rows), row;
 			memcpy(&row, plane + 4 * y, sizeof(row));
 			row |= bits[y] & pattern[i][y % 16];
 			memcpy(plane + 4 * y, &row, sizeof(row));

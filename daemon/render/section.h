@@ -90,8 +90,10 @@ uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t);
 
 /* Tile t's plain bits halftoned, ORed into out (a packed tile: the halftone
  * of its bytes, or zeros): ANDed with pattern, the halftone of the plain
- * colour under the tile's thresholds (rows y % 16, packed). Whether out
- * has a bit set. The bits stay (section_canvas_clear_tile()). */
+ * colour under the tile's thresholds (rows y % 16, packed), in the rows
+ * plain_rows[t] flags. Whether those rows of out have a bit set (the
+ * caller knows whether its bytes lit any). The bits stay
+ * (section_canvas_clear_tile()). */
 bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out);
 
 /* Tile t's plain bits MAXed into its bytes (rows[t] gains their rows), and
