@@ -193,7 +193,8 @@ static int build_model(struct bench_scene *s, struct scene_data *d, const struct
 		return r;
 	}
 	model_apply_fit(d->model, &fit);
-	if (alloc_draws(s, 1) < 0)
+	/* in spatial order, as spindlectl show sends a model */
+	if (model_order_spatial(d->model) < 0 || alloc_draws(s, 1) < 0)
 		return -ENOMEM;
 	const float *xyz = d->model->triangles;
 	uint32_t count = (uint32_t)(d->model->triangle_count * 3);

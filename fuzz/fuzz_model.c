@@ -40,6 +40,8 @@ static void check_model(struct model *m, const struct model_mesh *mesh)
 	if (m->triangle_count != mesh->triangle_count || m->line_count != mesh->line_count ||
 	    m->point_count != mesh->point_count || !m->triangle_colors != !mesh->colored)
 		fuzz_fail("the parent's model differs from the loader's mesh");
+	if (model_order_spatial(m) != 0) /* as spindlectl show orders it */
+		fuzz_fail("no spatial order");
 	if (model_compute_fit(m, 1.0f, 0.95f, &fit) != 0 || !isfinite(fit.scale) || !isfinite(fit.centre[0]) ||
 	    !isfinite(fit.centre[1]) || !isfinite(fit.centre[2]))
 		fuzz_fail("no finite fit");

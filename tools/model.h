@@ -79,4 +79,19 @@ int model_compute_fit(const struct model *m, float half_height, float margin, st
 /* Applies a fit to every vertex in place. */
 void model_apply_fit(struct model *m, const struct model_fit *fit);
 
+/* Puts each primitive array (and its colours) in spatial order: sorted by
+ * the Morton code of each primitive's centroid over the array's bounding
+ * box (model_morton_code()), equal codes in file order. A volume shows the
+ * same whatever the order (overlaps combine by MAX), but neighbours in
+ * space then sit together in memory, which the renderers' binning and
+ * sectioning read faster than a file's order (docs/performance.md, "Vertex
+ * order"). 0, or -ENOMEM (-E2BIG for an array of 2^32 primitives or
+ * more) with the model as it was. */
+int model_order_spatial(struct model *m);
+
+/* The Morton code (x in bit 0, y in bit 1, z in bit 2, and so on) of point
+ * c on a grid of 1024 cells a side spanning lo .. hi (a flat axis: cell 0;
+ * outside: the nearest cell): 30 bits. */
+uint32_t model_morton_code(const float c[3], const float lo[3], const float hi[3]);
+
 #endif

@@ -322,6 +322,12 @@ static int cmd_show(const struct ctl_args *a)
 		fprintf(stderr, "spindlectl: %s\n", err);
 		return CTL_INPUT;
 	}
+	int ret = model_order_spatial(m); /* neighbours together: binned and sectioned faster */
+	if (ret < 0) {
+		fprintf(stderr, "spindlectl: %s: %s\n", a->operand[0], strerror(-ret));
+		model_destroy(m);
+		return CTL_FAILED;
+	}
 	struct spindle *sp = ctl_connect(a);
 	status = sp ? CTL_FAILED : CTL_CONNECT;
 	if (sp) {
