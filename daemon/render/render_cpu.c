@@ -379,15 +379,34 @@ static void mark_used(struct render_cpu *r)
 			r->used[k / 8] |= (uint8_t)(1u << (k % 8));
 }
 
-/* Images are handed out one at a time; each image's result depends on
- * nothing but the scene, so any split gives identical output. */
+/* Claims the next images for a worker, [*k, *end): consecutive ones,
+ * whose bins share the primitives that span several images (these then
+ * stay in the worker's cache), fewer as fewer remain so that the workers
+ * finish together. False when none is left. */
+static bool claim_images(struct render_cpu *r, uint32_t *k, uint32_t *end)
+{
+	const uint32_t M = r->bins.images, share = 2 * pool_workers(r->pool);
+	uint32_t next = atomic_load(&r->next_image), n;
+	do {
+		if (next >= M)
+			return false;
+		n = (M - next) / share;
+		n = n ? n : 1;
+	} while (!atomic_compare_exchange_weak(&r->next_image, &next, next + n));
+	*k = next;
+	*end = next + n;
+	return true;
+}
+
+/* Each image's result depends on nothing but the scene, so any split
+ * gives identical output. */
 static void image_job(void *arg, unsigned index)
 {
 	struct render_cpu *r = arg;
 	struct cpu_worker *w = &r->workers[index];
-	for (;;) {
-		uint32_t k = atomic_fetch_add(&r->next_image, 1);
-		if (k >= r->bins.images)
+	uint32_t k = 0, end = 0;
+	for (;; k++) {
+		if (k == end && !claim_images(r, &k, &end))
 			break;
 		struct bin_run runs[2 * BIN_MAX_CLASSES];
 		unsigned n;
