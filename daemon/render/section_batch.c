@@ -435,27 +435,50 @@ TARGET static void light_plain(struct section_canvas *c, const struct lanes_out 
 	}
 }
 
+/* The n (1 .. 8) lanes' vertices as lanes of doubles, lanes past n the
+ * first's: each lane's coordinates loaded as a row (the first eight; a
+ * triangle's ninth apart) and the rows transposed, where scalar loads into
+ * a buffer read back whole stalled on store forwarding. */
+TARGET static inline void lane_coordinates(const struct section_lane *t, unsigned n, int verts, struct slots *p)
+{
+	__m256 r[8], u[8], col[9];
+	for (unsigned l = 0; l < 8; l++) /* a segment has six */
+		r[l] = _mm256_maskz_loadu_ps(verts == 3 ? 0xFF : 0x3F, t[l < n ? l : 0].v);
+	for (int l = 0; l < 8; l += 2) {
+		u[l] = _mm256_unpacklo_ps(r[l], r[l + 1]);
+		u[l + 1] = _mm256_unpackhi_ps(r[l], r[l + 1]);
+	}
+	for (int l = 0; l < 8; l += 4) {
+		r[l] = _mm256_shuffle_ps(u[l], u[l + 2], 0x44);
+		r[l + 1] = _mm256_shuffle_ps(u[l], u[l + 2], 0xEE);
+		r[l + 2] = _mm256_shuffle_ps(u[l + 1], u[l + 3], 0x44);
+		r[l + 3] = _mm256_shuffle_ps(u[l + 1], u[l + 3], 0xEE);
+	}
+	for (int j = 0; j < 4; j++) {
+		col[j] = _mm256_permute2f128_ps(r[j], r[4 + j], 0x20);
+		col[4 + j] = _mm256_permute2f128_ps(r[j], r[4 + j], 0x31);
+	}
+	if (verts == 3) {
+		const float *v[8];
+		for (unsigned l = 0; l < 8; l++)
+			v[l] = t[l < n ? l : 0].v;
+		col[8] = _mm256_setr_ps(v[0][8], v[1][8], v[2][8], v[3][8], v[4][8], v[5][8], v[6][8], v[7][8]);
+	}
+	p->n = verts;
+	for (int i = 0; i < verts; i++) {
+		p->x[i] = _mm512_cvtps_pd(col[3 * i]);
+		p->y[i] = _mm512_cvtps_pd(col[3 * i + 1]);
+		p->z[i] = _mm512_cvtps_pd(col[3 * i + 2]);
+	}
+}
+
 /* The eight lanes for verts 2 or 3, a constant in each caller (so the
  * vertex loops unroll). */
 TARGET static inline __attribute__((always_inline)) void batch(struct section_canvas *c, const struct section_wedge *w,
 							       const struct section_lane *t, unsigned n, int verts)
 {
-	double lx[3][8], ly[3][8], lz[3][8];
-	for (unsigned l = 0; l < 8; l++) {
-		const float *v = t[l < n ? l : 0].v;
-		for (int i = 0; i < verts; i++) {
-			lx[i][l] = v[3 * i];
-			ly[i][l] = v[3 * i + 1];
-			lz[i][l] = v[3 * i + 2];
-		}
-	}
 	struct slots prims; /* not zeroed: 2.3 KB a batch */
-	prims.n = verts;
-	for (int i = 0; i < verts; i++) {
-		prims.x[i] = _mm512_loadu_pd(lx[i]);
-		prims.y[i] = _mm512_loadu_pd(ly[i]);
-		prims.z[i] = _mm512_loadu_pd(lz[i]);
-	}
+	lane_coordinates(t, n, verts, &prims);
 	struct lanes_out out;
 	__mmask8 pending;
 	batch8(c, w, &prims, (__mmask8)((1u << n) - 1), &out, &pending);
