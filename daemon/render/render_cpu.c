@@ -382,7 +382,10 @@ static void mark_used(struct render_cpu *r)
 /* Claims the next images for a worker, [*k, *end): consecutive ones,
  * whose bins share the primitives that span several images (these then
  * stay in the worker's cache), fewer as fewer remain so that the workers
- * finish together. False when none is left. */
+ * finish together, and at most CLAIM_MAX, so that a worker the system
+ * stops for a while holds back little (7 in 8 neighbours already share a
+ * worker). False when none is left. */
+#define CLAIM_MAX 8
 static bool claim_images(struct render_cpu *r, uint32_t *k, uint32_t *end)
 {
 	const uint32_t M = r->bins.images, share = 2 * pool_workers(r->pool);
@@ -391,7 +394,7 @@ static bool claim_images(struct render_cpu *r, uint32_t *k, uint32_t *end)
 		if (next >= M)
 			return false;
 		n = (M - next) / share;
-		n = n ? n : 1;
+		n = n < 1 ? 1 : n > CLAIM_MAX ? CLAIM_MAX : n;
 	} while (!atomic_compare_exchange_weak(&r->next_image, &next, next + n));
 	*k = next;
 	*end = next + n;
