@@ -30,7 +30,6 @@
 
 #include <errno.h>
 #include <math.h>
-#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -42,6 +41,7 @@
 #include "gl_grid.h"
 #include "gl_pack.h"
 #include "gl_shaders.h"
+#include "gl_upload.h"
 #include "log.h"
 #include "pool.h"
 #include "render_cpu.h"
@@ -126,17 +126,6 @@ static int build_programs(struct render_gl *r)
 	return 0;
 }
 
-static GLuint make_texture(const struct gl_api *gl, GLenum fmt, uint32_t w, uint32_t h)
-{
-	GLuint t;
-	gl->GenTextures(1, &t);
-	gl->BindTexture(GL_TEXTURE_2D, t);
-	gl->TexStorage2D(GL_TEXTURE_2D, 1, fmt, (GLsizei)w, (GLsizei)h);
-	gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-	gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-	return t;
-}
-
 /* Checks what the pipeline needs of the context and sizes the batch and the
  * primitive texture from its limits. */
 static int check_limits(struct render_gl *r)
@@ -202,7 +191,7 @@ static int create_bright_tables(struct render_gl *r)
 	}
 	for (uint32_t i = 0; i < phases; i++)
 		buf[w + i] = m->phase[i];
-	r->bright_tex = make_texture(gl, GL_R32UI, w, GL_BRIGHT_ROWS);
+	r->bright_tex = gl_make_texture(gl, GL_R32UI, w, GL_BRIGHT_ROWS);
 	gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)w, GL_BRIGHT_ROWS, GL_RED_INTEGER, GL_UNSIGNED_INT, t);
 	gl->GenBuffers(1, &r->bright_buf);
 	gl->BindBuffer(GL_SHADER_STORAGE_BUFFER, r->bright_buf);
@@ -211,13 +200,12 @@ static int create_bright_tables(struct render_gl *r)
 	return 0;
 }
 
-static int create_objects(struct render_gl *r)
+/* The vertex array of the points and the atlas the batches draw into, as
+ * a framebuffer. */
+static int create_atlas(struct render_gl *r)
 {
 	const struct gl_api *gl = r->gl;
 	const struct geometry *g = &r->base.geom;
-	int e = check_limits(r);
-	if (e < 0)
-		return e;
 	gl->GenVertexArrays(1, &r->vao);
 	gl->BindVertexArray(r->vao);
 	gl->GenBuffers(1, &r->point_buf);
@@ -225,7 +213,7 @@ static int create_objects(struct render_gl *r)
 	gl->VertexAttribIPointer(0, 2, GL_UNSIGNED_INT, sizeof(struct bin_point), NULL);
 	gl->EnableVertexAttribArray(0);
 
-	r->atlas = make_texture(gl, GL_RGBA8, g->width, g->height * r->batch);
+	r->atlas = gl_make_texture(gl, GL_RGBA8, g->width, g->height * r->batch);
 	gl->GenFramebuffers(1, &r->fbo);
 	gl->BindFramebuffer(GL_FRAMEBUFFER, r->fbo);
 	gl->FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, r->atlas, 0);
@@ -233,25 +221,14 @@ static int create_objects(struct render_gl *r)
 		log_warn("GL renderer: the RGBA8 atlas is not a complete framebuffer");
 		return -ENOTSUP;
 	}
-	e = gl_pack_create_buffers(r);
-	if (e < 0)
-		return e;
 	r->atlas_dirty = true;
-	r->slot_of = malloc((size_t)r->batch * r->tiles_per_image * sizeof(*r->slot_of));
-	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
-	if (!r->slot_of || (r->opts.naive && !r->rgba))
-		return -ENOMEM;
-	if (r->bright_on) {
-		e = create_bright_tables(r);
-		if (e < 0)
-			return e;
-	}
-	e = gl_grid_create(r);
-	if (e < 0) {
-		log_warn("GL renderer: no 3-D textures here");
-		return e;
-	}
+	return 0;
+}
 
+/* The fixed state: overlaps combine by MAX (blending), rows packed. */
+static int set_state(struct render_gl *r)
+{
+	const struct gl_api *gl = r->gl;
 	gl->ClearColor(0, 0, 0, 0);
 	if (r->ctx.backend == GL_BACKEND_OSMESA)
 		gl->Enable(GL_PROGRAM_POINT_SIZE);
@@ -265,6 +242,29 @@ static int create_objects(struct render_gl *r)
 		return -EIO;
 	}
 	return 0;
+}
+
+static int create_objects(struct render_gl *r)
+{
+	const struct geometry *g = &r->base.geom;
+	int e = check_limits(r);
+	if (e == 0)
+		e = create_atlas(r);
+	if (e == 0)
+		e = gl_pack_create_buffers(r);
+	if (e < 0)
+		return e;
+	r->slot_of = malloc((size_t)r->batch * r->tiles_per_image * sizeof(*r->slot_of));
+	r->rgba = r->opts.naive ? malloc((size_t)g->width * g->height * 4) : NULL;
+	if (!r->slot_of || (r->opts.naive && !r->rgba))
+		return -ENOMEM;
+	if (r->bright_on && (e = create_bright_tables(r)) < 0)
+		return e;
+	if ((e = gl_grid_create(r)) < 0) {
+		log_warn("GL renderer: no 3-D textures here");
+		return e;
+	}
+	return set_state(r);
 }
 
 static void destroy_gl(struct render_gl *r)
@@ -300,103 +300,6 @@ static void destroy_gl(struct render_gl *r)
 	gl_context_destroy(&r->ctx);
 	r->have_ctx = false;
 	memset(r->out, 0, sizeof(r->out));
-}
-
-/* Rearranges primitives [begin, end) of the bins into the texture layout
- * of gl_shaders.h: each vertex in a texel of its own, with the two words of
- * flags in the texels' fourth components. */
-static uint32_t stage_prims(const struct bin_prim *src, uint32_t *dst, uint32_t begin, uint32_t end)
-{
-	uint32_t triangles = 0;
-	for (uint32_t i = begin; i < end; i++) {
-		const uint32_t *w = (const uint32_t *)&src[i];
-		triangles += src[i].nverts == 3;
-		uint32_t *d = dst + (size_t)i * 12;
-		memcpy(d, w, 12);
-		d[3] = w[9];
-		memcpy(d + 4, w + 3, 12);
-		d[7] = w[10];
-		memcpy(d + 8, w + 6, 12);
-		d[11] = 0;
-	}
-	return triangles;
-}
-
-struct stage_job {
-	const struct bin_set *bins;
-	uint32_t *dst;
-	unsigned workers;
-	atomic_uint triangles;
-};
-
-static void stage_worker(void *arg, unsigned worker)
-{
-	struct stage_job *j = arg;
-	uint64_t n = j->bins->prim_count;
-	uint32_t t = stage_prims(j->bins->prims, j->dst, (uint32_t)(n * worker / j->workers),
-				 (uint32_t)(n * (worker + 1) / j->workers));
-	atomic_fetch_add(&j->triangles, t);
-}
-
-/* Stages the binned primitives in the texture's layout and uploads them. */
-static int upload_prims(struct render_gl *r)
-{
-	const struct gl_api *gl = r->gl;
-	const struct bin_set *b = &r->bins;
-	uint64_t texels = (uint64_t)b->prim_count * GL_PRIM_TEXELS;
-	uint64_t rows = (texels + r->tex_width - 1) / r->tex_width;
-	GLint max_tex = 0;
-	gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_tex);
-	if (rows > (uint64_t)max_tex || (r->opts.max_prims && b->prim_count > r->opts.max_prims))
-		return -E2BIG;
-	if (b->prim_count > r->staging_cap) {
-		size_t cap = b->prim_count + b->prim_count / 2;
-		uint32_t *s = realloc(r->staging, cap * GL_PRIM_TEXELS * 16);
-		if (!s)
-			return -ENOMEM;
-		r->staging = s;
-		r->staging_cap = cap;
-	}
-	struct stage_job job = { b, r->staging, pool_workers(r->pool), 0 };
-	pool_run(r->pool, stage_worker, &job);
-	r->triangles = atomic_load(&job.triangles);
-	if (rows < 1)
-		rows = 1;
-	if (rows > r->tex_rows) {
-		uint64_t cap = rows + rows / 2 < (uint64_t)max_tex ? rows + rows / 2 : (uint64_t)max_tex;
-		gl->DeleteTextures(1, &r->prim_tex);
-		r->prim_tex = make_texture(gl, GL_RGBA32UI, r->tex_width, (uint32_t)cap);
-		r->tex_rows = (uint32_t)cap;
-	}
-	gl->ActiveTexture(GL_TEXTURE0);
-	gl->BindTexture(GL_TEXTURE_2D, r->prim_tex);
-	uint64_t full = texels / r->tex_width, rest = texels % r->tex_width;
-	if (full)
-		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, (GLsizei)r->tex_width, (GLsizei)full, GL_RGBA_INTEGER,
-				  GL_UNSIGNED_INT, r->staging);
-	if (rest)
-		gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, (GLint)full, (GLsizei)rest, 1, GL_RGBA_INTEGER, GL_UNSIGNED_INT,
-				  r->staging + full * r->tex_width * 4);
-	return 0;
-}
-
-/* Uploads the binned primitives and points, unless the bins were kept and
- * are there already. */
-static int upload(struct render_gl *r)
-{
-	const struct gl_api *gl = r->gl;
-	const struct bin_set *b = &r->bins;
-	if (b->kept && r->uploaded)
-		return 0;
-	r->uploaded = false;
-	int err = upload_prims(r);
-	if (err < 0)
-		return err;
-	size_t pbytes = (size_t)b->point_count * sizeof(struct bin_point);
-	gl->BindBuffer(GL_ARRAY_BUFFER, r->point_buf);
-	gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)(pbytes ? pbytes : 8), pbytes ? b->points : NULL, GL_STREAM_DRAW);
-	r->uploaded = true;
-	return 0;
 }
 
 /* The drawing programs' uniforms for image k in batch slot `slot`
@@ -619,29 +522,15 @@ static void set_stats(struct render_gl *r, uint64_t t0, uint64_t t1)
 		st->tiles = volume_tile_count(r->vol);
 }
 
-static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
+/* The GL part of a volume binned in r->bins: in the bound context, the
+ * grids, the upload, the batches, and whether the context survived. */
+static int gl_pass(struct render_gl *r, const struct scene *scene)
 {
-	struct render_gl *r = (struct render_gl *)base;
-	/* Turned draws (scene.h) are drawn by the CPU renderer only: the whole
-	 * scene goes there, whatever no_fallback says. Grids are drawn here
-	 * (gl_grid.c), unless they exceed the 3-D texture size or the budget
-	 * (-EFBIG below). */
-	if (r->gl_dead || (scene && scene_has_turn(scene->draws, scene->draw_count)))
-		return render_on_cpu(r, scene, out);
-	uint64_t t0 = (uint64_t)now_ns();
-	memset(&r->base.stats, 0, sizeof(r->base.stats));
-	volume_clear(out);
-	r->vol = out;
-	r->wait_ns = r->copy_ns = 0;
-	int err = bin_build(&r->bins, scene, r->pool);
-	uint64_t t1 = (uint64_t)now_ns();
-	if (err < 0) /* the next build bins again (bin_build()), and uploads */
-		return err;
-	err = gl_context_bind(&r->ctx);
+	int err = gl_context_bind(&r->ctx);
 	if (err == 0)
 		err = gl_grid_prepare(r, scene);
 	if (err == 0)
-		err = upload(r);
+		err = gl_upload(r);
 	if (err == 0)
 		err = render_batches(r);
 	if (err == 0 || err == -ETIMEDOUT || err == -EIO) {
@@ -651,6 +540,14 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 	r->uploaded = r->uploaded && err == 0; /* after an error, what the texture holds is not known */
 	gl_context_unbind(&r->ctx);
 	r->volumes++;
+	return err;
+}
+
+/* After a GL pass that failed with err: the scene on the CPU (grids or
+ * primitives too many for GL: this scene only; a lost or untrusted
+ * context: for good), or err (no memory, or no fallback wanted). */
+static int gl_failed(struct render_gl *r, const struct scene *scene, struct volume *out, int err)
+{
 	if (err == -EFBIG && !r->opts.no_fallback) /* grids too large: logged, this scene only */
 		return render_on_cpu(r, scene, out);
 	if (err == -E2BIG && !r->opts.no_fallback) {
@@ -662,16 +559,37 @@ static int render_gl_volume(struct renderer *base, const struct scene *scene, st
 		r->told_too_big = true;
 		return render_on_cpu(r, scene, out);
 	}
-	if (err < 0 && (err == -ENOMEM || r->opts.no_fallback))
+	if (err == -ENOMEM || r->opts.no_fallback)
 		return err;
-	if (err < 0) {
-		/* For good: the context is gone or cannot be trusted. */
-		log_error("GL renderer (%s) failed (%s): falling back to the CPU renderer",
-			  gl_backend_name(r->ctx.backend), strerror(-err));
-		destroy_gl(r);
-		r->gl_dead = true;
+	/* For good: the context is gone or cannot be trusted. */
+	log_error("GL renderer (%s) failed (%s): falling back to the CPU renderer", gl_backend_name(r->ctx.backend),
+		  strerror(-err));
+	destroy_gl(r);
+	r->gl_dead = true;
+	return render_on_cpu(r, scene, out);
+}
+
+static int render_gl_volume(struct renderer *base, const struct scene *scene, struct volume *out)
+{
+	struct render_gl *r = (struct render_gl *)base;
+	/* Turned draws (scene.h) are drawn by the CPU renderer only: the whole
+	 * scene goes there, whatever no_fallback says. Grids are drawn here
+	 * (gl_grid.c), unless they exceed the 3-D texture size or the budget
+	 * (-EFBIG, gl_failed()). */
+	if (r->gl_dead || (scene && scene_has_turn(scene->draws, scene->draw_count)))
 		return render_on_cpu(r, scene, out);
-	}
+	uint64_t t0 = (uint64_t)now_ns();
+	memset(&r->base.stats, 0, sizeof(r->base.stats));
+	volume_clear(out);
+	r->vol = out;
+	r->wait_ns = r->copy_ns = 0;
+	int err = bin_build(&r->bins, scene, r->pool);
+	uint64_t t1 = (uint64_t)now_ns();
+	if (err < 0) /* the next build bins again (bin_build()), and uploads */
+		return err;
+	err = gl_pass(r, scene);
+	if (err < 0)
+		return gl_failed(r, scene, out, err);
 	set_stats(r, t0, t1);
 	return 0;
 }
@@ -754,17 +672,25 @@ static int open_gl(struct render_gl *r, enum gl_backend backend)
 	return err;
 }
 
+/* The backend an options' name picks (NULL: EGL); false for none. */
+static bool backend_of(const char *name, enum gl_backend *out)
+{
+	if (!name || !strcmp(name, "egl"))
+		*out = GL_BACKEND_EGL;
+	else if (!strcmp(name, "osmesa"))
+		*out = GL_BACKEND_OSMESA;
+	else
+		return false;
+	return true;
+}
+
 struct renderer *render_gl_create(const struct geometry *geom, const struct render_gl_options *opts)
 {
 	static const struct render_gl_options defaults = { 0 };
 	if (!opts)
 		opts = &defaults;
 	enum gl_backend backend;
-	if (!opts->backend || !strcmp(opts->backend, "egl")) {
-		backend = GL_BACKEND_EGL;
-	} else if (!strcmp(opts->backend, "osmesa")) {
-		backend = GL_BACKEND_OSMESA;
-	} else {
+	if (!backend_of(opts->backend, &backend)) {
 		errno = ENOENT;
 		return NULL;
 	}
