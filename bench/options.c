@@ -203,6 +203,88 @@ static void set_quick(struct options *o)
 	o->memcpy_bytes = 16 << 20;
 }
 
+/* The counts the command line gave, which --quick leaves alone. */
+struct given {
+	bool volumes, seconds, warmup;
+};
+
+/* --quick: small counts but those given, before it or after it. */
+static void quick(struct options *o, const struct given *g)
+{
+	struct options keep = *o;
+	set_quick(o);
+	if (g->volumes)
+		o->volumes = keep.volumes;
+	if (g->seconds)
+		o->seconds = keep.seconds;
+	if (g->warmup)
+		o->warmup = keep.warmup;
+}
+
+/* Where an option that names something (a profile, a file, a
+ * directory) keeps its argument, or NULL for another option. */
+static const char **name_slot(int c, struct options *o)
+{
+	switch (c) {
+	case 'p':
+		return &o->profile;
+	case OPT_BUNNY:
+		return &o->files.bunny;
+	case OPT_DRAGON:
+		return &o->files.dragon;
+	case OPT_DRAGON2:
+		return &o->files.dragon_res2;
+	case OPT_SAVE:
+		return &o->save_dir;
+	}
+	return NULL;
+}
+
+/* getopt's option c (its argument in optarg): 0 to go on, 1 to exit
+ * successfully, -1 on a usage error. */
+static int parse_option(int c, struct options *o, struct given *g, const char **variants)
+{
+	const char **name = name_slot(c, o);
+	if (name) {
+		*name = optarg;
+		return 0;
+	}
+	char *end = NULL;
+	switch (c) {
+	case 's':
+		return add_scenes(o, optarg) == 0 ? 0 : -1;
+	case 'l':
+		list_scenes();
+		return 1;
+	case 'V':
+		*variants = optarg;
+		return 0;
+	case 'n':
+		return (g->volumes = parse_uint(optarg, 1, &o->volumes)) ? 0 : -1;
+	case 't':
+		o->seconds = strtod(optarg, &end);
+		return (g->seconds = *end == '\0' && o->seconds > 0 && o->seconds < 1e5) ? 0 : -1;
+	case OPT_WARMUP:
+		return (g->warmup = parse_uint(optarg, 0, &o->warmup)) ? 0 : -1;
+	case OPT_NO_MICRO:
+		o->micro = false;
+		return 0;
+	case OPT_MICRO_ONLY:
+		o->renders = false;
+		return 0;
+	case OPT_INTERLEAVE:
+		o->interleave = true;
+		return 0;
+	case 'q':
+		quick(o, g);
+		return 0;
+	case 'h':
+		usage(stdout);
+		return 1;
+	}
+	return -1;
+}
+
 /* Returns 0 to run, 1 to exit successfully, -1 on a usage error. */
 int options_parse(int argc, char **argv, struct options *o)
 {
@@ -219,84 +301,17 @@ int options_parse(int argc, char **argv, struct options *o)
 		.memcpy_bytes = 64 << 20,
 	};
 	const char *variants = "cpu," REFERENCE_VARIANT;
-	bool volumes = false, seconds = false, warmup = false;
+	struct given g = { 0 };
 	int c;
 	while ((c = getopt_long(argc, argv, "s:lp:V:n:t:qh", long_opts, NULL)) != -1) {
-		bool ok = true;
-		char *end = NULL;
-		switch (c) {
-		case 's':
-			ok = add_scenes(o, optarg) == 0;
-			break;
-		case 'l':
-			list_scenes();
-			return 1;
-		case 'p':
-			o->profile = optarg;
-			break;
-		case 'V':
-			variants = optarg;
-			break;
-		case 'n':
-			ok = volumes = parse_uint(optarg, 1, &o->volumes);
-			break;
-		case 't':
-			o->seconds = strtod(optarg, &end);
-			ok = seconds = *end == '\0' && o->seconds > 0 && o->seconds < 1e5;
-			break;
-		case OPT_WARMUP:
-			ok = warmup = parse_uint(optarg, 0, &o->warmup);
-			break;
-		case OPT_BUNNY:
-			o->files.bunny = optarg;
-			break;
-		case OPT_DRAGON:
-			o->files.dragon = optarg;
-			break;
-		case OPT_DRAGON2:
-			o->files.dragon_res2 = optarg;
-			break;
-		case OPT_NO_MICRO:
-			o->micro = false;
-			break;
-		case OPT_MICRO_ONLY:
-			o->renders = false;
-			break;
-		case OPT_SAVE:
-			o->save_dir = optarg;
-			break;
-		case OPT_INTERLEAVE:
-			o->interleave = true;
-			break;
-		case 'q': {
-			struct options keep = *o;
-			set_quick(o);
-			/* Explicit counts win over --quick, in any order. */
-			if (volumes)
-				o->volumes = keep.volumes;
-			if (seconds)
-				o->seconds = keep.seconds;
-			if (warmup)
-				o->warmup = keep.warmup;
-			break;
-		}
-		case 'h':
-			usage(stdout);
-			return 1;
-		default:
-			ok = false;
-		}
-		if (!ok) {
-			usage(stderr);
-			return -1;
+		int r = parse_option(c, o, &g, &variants);
+		if (r != 0) {
+			if (r < 0)
+				usage(stderr);
+			return r;
 		}
 	}
-	if (optind < argc) {
-		usage(stderr);
-		return -1;
-	}
-	o->nvars = parse_variants(variants, o->vars);
-	if (o->nvars <= 0) {
+	if (optind < argc || (o->nvars = parse_variants(variants, o->vars)) <= 0) {
 		usage(stderr);
 		return -1;
 	}
