@@ -761,6 +761,34 @@ static int worker_init(struct cpu_worker *w, const struct geometry *geom, const 
 	return 0;
 }
 
+/* r's storage and tables for geom, its n workers and their pool: 0 or
+ * -ENOMEM (what was made is then freed by cpu_destroy()). */
+static int cpu_init(struct render_cpu *r, const struct geometry *geom, unsigned n)
+{
+	r->workers = aligned_alloc(64, n * sizeof(*r->workers));
+	if (r->workers)
+		memset(r->workers, 0, n * sizeof(*r->workers));
+	uint32_t images = geometry_images_per_volume(geom);
+	r->wedges = calloc(images, sizeof(*r->wedges));
+	r->used = calloc((images + 7) / 8, 1);
+	if (!r->workers || !r->wedges || !r->used || bin_init(&r->bins, geom) < 0)
+		return -ENOMEM;
+	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
+		return -ENOMEM;
+	for (uint32_t k = 0; k < images; k++)
+		section_wedge_init(&r->wedges[k], geom, k);
+	for (unsigned i = 0; i < n; i++) {
+		if (worker_init(&r->workers[i], geom, &r->bright) < 0)
+			return -ENOMEM;
+		r->base.stats.threads = i + 1; /* workers to free */
+	}
+	r->pool = pool_create(n);
+	if (!r->pool)
+		return -ENOMEM;
+	r->base.stats.threads = n;
+	return 0;
+}
+
 static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halftone, bool batch, bool keep,
 				unsigned threads)
 {
@@ -776,34 +804,12 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 	r->halftone = halftone;
 	r->batch = batch && section_batch_supported();
 	r->plain = batch; /* any CPU: section_span() and the pack take bits */
-	unsigned n = pick_threads(geom, threads);
-	r->workers = aligned_alloc(64, n * sizeof(*r->workers));
-	if (r->workers)
-		memset(r->workers, 0, n * sizeof(*r->workers));
-	uint32_t images = geometry_images_per_volume(geom);
-	r->wedges = calloc(images, sizeof(*r->wedges));
-	r->used = calloc((images + 7) / 8, 1);
-	if (!r->workers || !r->wedges || !r->used || bin_init(&r->bins, geom) < 0)
-		goto err_free;
-	if (brightness_map_init(&r->bright, geom) < 0 || brightness_tables_init(&r->thr, &r->bright) < 0)
-		goto err_free;
+	if (cpu_init(r, geom, pick_threads(geom, threads)) < 0) {
+		cpu_destroy(&r->base);
+		errno = ENOMEM;
+		return NULL;
+	}
 	r->bins.prims_scalar = !batch; /* the scalar variant bins one at a time too */
 	r->bins.keep = keep;
-	for (uint32_t k = 0; k < images; k++)
-		section_wedge_init(&r->wedges[k], geom, k);
-	for (unsigned i = 0; i < n; i++) {
-		if (worker_init(&r->workers[i], geom, &r->bright) < 0)
-			goto err_free;
-		r->base.stats.threads = i + 1; /* workers to free */
-	}
-	r->pool = pool_create(n);
-	if (!r->pool)
-		goto err_free;
-	r->base.stats.threads = n;
 	return &r->base;
-
-err_free:
-	cpu_destroy(&r->base);
-	errno = ENOMEM;
-	return NULL;
 }
