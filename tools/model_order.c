@@ -76,10 +76,11 @@ static int order_array(float **xyz, uint8_t **rgba, size_t n, unsigned verts)
 		return 0;
 	const size_t floats = 3 * (size_t)verts, bytes = 4 * (size_t)verts;
 	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-	for (size_t i = 0; i < n * verts; i++)
+	for (size_t i = 0; i < n * verts; i++) /* finite (model_load() checks); a NaN: cell 0 */
 		for (int c = 0; c < 3; c++) {
-			lo[c] = fminf(lo[c], (*xyz)[3 * i + c]);
-			hi[c] = fmaxf(hi[c], (*xyz)[3 * i + c]);
+			float v = (*xyz)[3 * i + c];
+			lo[c] = v < lo[c] ? v : lo[c];
+			hi[c] = v > hi[c] ? v : hi[c];
 		}
 	if (n > UINT32_MAX)
 		return -E2BIG;
