@@ -89,6 +89,10 @@ void model_apply_fit(struct model *m, const struct model_fit *fit);
  * more) with the model as it was. */
 int model_order_spatial(struct model *m);
 
+/* The centroid of a primitive of verts (1 .. 3) vertices at v (x, y, z
+ * each), summed in double: what model_order_spatial() sorts by. */
+void model_centroid(const float *v, unsigned verts, float out[3]);
+
 /* The Morton code (x in bit 0, y in bit 1, z in bit 2, and so on) of point
  * c on a grid of 1024 cells a side spanning lo .. hi (a flat axis: cell 0;
  * outside: the nearest cell): 30 bits. */

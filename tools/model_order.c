@@ -57,7 +57,7 @@ static void radix_sort(struct keyed *a, struct keyed *tmp, size_t n)
 	}
 }
 
-static void centroid(const float *v, unsigned verts, float out[3])
+void model_centroid(const float *v, unsigned verts, float out[3])
 {
 	for (int i = 0; i < 3; i++) {
 		double s = 0.0;
@@ -67,6 +67,20 @@ static void centroid(const float *v, unsigned verts, float out[3])
 	}
 }
 
+/* The box of the n vertices at xyz: finite (model_load() checks them; a
+ * NaN would only land in cell 0). */
+static void bounds(const float *xyz, size_t n, float lo[3], float hi[3])
+{
+	for (int c = 0; c < 3; c++)
+		lo[c] = hi[c] = xyz[c];
+	for (size_t i = 0; i < n; i++)
+		for (int c = 0; c < 3; c++) {
+			float v = xyz[3 * i + c];
+			lo[c] = v < lo[c] ? v : lo[c];
+			hi[c] = v > hi[c] ? v : hi[c];
+		}
+}
+
 /* Sorts the n primitives of verts vertices in *xyz (and their colours,
  * 4 bytes a vertex, when *rgba is not NULL): 0, or -ENOMEM (-E2BIG past
  * 2^32 primitives) with both left as they were. */
@@ -74,16 +88,11 @@ static int order_array(float **xyz, uint8_t **rgba, size_t n, unsigned verts)
 {
 	if (n < 2)
 		return 0;
-	const size_t floats = 3 * (size_t)verts, bytes = 4 * (size_t)verts;
-	float lo[3] = { INFINITY, INFINITY, INFINITY }, hi[3] = { -INFINITY, -INFINITY, -INFINITY };
-	for (size_t i = 0; i < n * verts; i++) /* finite (model_load() checks); a NaN: cell 0 */
-		for (int c = 0; c < 3; c++) {
-			float v = (*xyz)[3 * i + c];
-			lo[c] = v < lo[c] ? v : lo[c];
-			hi[c] = v > hi[c] ? v : hi[c];
-		}
 	if (n > UINT32_MAX)
 		return -E2BIG;
+	const size_t floats = 3 * (size_t)verts, bytes = 4 * (size_t)verts;
+	float lo[3], hi[3];
+	bounds(*xyz, n * verts, lo, hi);
 	struct keyed *k = malloc(2 * n * sizeof(*k));
 	float *sorted = malloc(n * floats * sizeof(float));
 	uint8_t *colours = *rgba ? malloc(n * bytes) : NULL;
@@ -95,7 +104,7 @@ static int order_array(float **xyz, uint8_t **rgba, size_t n, unsigned verts)
 	}
 	for (size_t i = 0; i < n; i++) {
 		float c[3];
-		centroid(*xyz + i * floats, verts, c);
+		model_centroid(*xyz + i * floats, verts, c);
 		k[i] = (struct keyed){ model_morton_code(c, lo, hi), (uint32_t)i };
 	}
 	radix_sort(k, k + n, n);

@@ -207,3 +207,22 @@ int halftone_rgba_image(struct volume *vol, uint32_t k, const uint8_t *rgba)
 {
 	return halftone_rgba_with(vol, k, rgba, ordered_threshold, NULL);
 }
+
+const struct halftone_pattern *halftone_pattern(struct halftone_patterns *p, const uint8_t rgb[3],
+						const struct halftone_table *thr, halftone_fn fn)
+{
+	for (unsigned i = 0; i < HALFTONE_PATTERNS; i++)
+		if (p->pattern[i].thr == thr && !memcmp(p->pattern[i].rgb, rgb, 3))
+			return &p->pattern[i];
+	uint8_t tile[HALFTONE_TILE_BYTES], out[VOLUME_TILE_BYTES];
+	for (int i = 0; i < 3; i++) /* rows 0..15 of the colour */
+		memset(tile + i * HALFTONE_PLANE_BYTES, rgb[i], 16 * HALFTONE_ROW_BYTES);
+	fn(tile, 0xffff, thr, out);
+	struct halftone_pattern *pt = &p->pattern[p->next];
+	p->next = (p->next + 1) % HALFTONE_PATTERNS;
+	for (int i = 0; i < 3; i++)
+		memcpy(pt->bits[i], out + i * VOLUME_TILE_PLANE_BYTES, sizeof(pt->bits[i]));
+	pt->thr = thr;
+	memcpy(pt->rgb, rgb, 3);
+	return pt;
+}

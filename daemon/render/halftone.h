@@ -47,6 +47,24 @@ struct halftone_variant {
 	halftone_fn fn;
 };
 
+/* The halftone of one colour under the last few tables asked for: what a
+ * tile of that colour in every row packs to, rows y % 16 (a table's
+ * period), each plane's rows as in volume.h. A thread's own. */
+#define HALFTONE_PATTERNS 4
+struct halftone_patterns {
+	unsigned next;
+	struct halftone_pattern {
+		const struct halftone_table *thr; /* NULL: unused */
+		uint8_t rgb[3];
+		uint32_t bits[3][16];
+	} pattern[HALFTONE_PATTERNS];
+};
+
+/* rgb's pattern under thr, halftoned by fn the first time it is asked
+ * for (the oldest of p's patterns then gives way). */
+const struct halftone_pattern *halftone_pattern(struct halftone_patterns *p, const uint8_t rgb[3],
+						const struct halftone_table *thr, halftone_fn fn);
+
 /* The variants this CPU can run, best first, ending with "scalar" and then
  * an entry whose name is NULL. */
 const struct halftone_variant *halftone_variants(void);

@@ -28,27 +28,15 @@
 #include "pool.h"
 #include "section.h"
 
-/* The halftone of a canvas's plain colour (section_canvas_plain()) under
- * the last few threshold tables a worker asked for: what a tile of that
- * colour in every row packs to, rows y % 16 (a table's period), in the
- * layout of volume.h (section_canvas_pack_plain()). */
-#define PLAIN_PATTERNS 4
-struct plain_patterns {
-	unsigned next;
-	struct plain_pattern {
-		const struct halftone_table *thr; /* NULL: unused */
-		uint8_t rgb[3];
-		uint32_t bits[3][16];
-	} pattern[PLAIN_PATTERNS];
-};
-
 /* One per thread, each on cache lines of its own: a worker's counters
  * beside the next one's canvas fields would bounce a line between the
  * cores on every primitive. */
 struct cpu_worker {
 	struct section_canvas canvas;
-	struct plain_patterns plain; /* emptied with the counters each pass */
-	uint8_t *mask;               /* pack_image()'s image mask (volume mask_bytes) */
+	/* The canvas's plain colour under recent tables, for
+	 * section_canvas_pack_plain(); emptied with the counters each pass. */
+	struct halftone_patterns plain;
+	uint8_t *mask; /* pack_image()'s image mask (volume mask_bytes) */
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
 } __attribute__((aligned(64)));
@@ -91,27 +79,6 @@ struct render_cpu {
 	} * stage;
 	unsigned stages;
 };
-
-/* The halftone of canvas c's plain colour under table thr (struct
- * plain_patterns), made the first time it is asked for. */
-static const struct plain_pattern *plain_pattern(const struct render_cpu *r, struct plain_patterns *p,
-						 const struct section_canvas *c, const struct halftone_table *thr)
-{
-	for (unsigned i = 0; i < PLAIN_PATTERNS; i++)
-		if (p->pattern[i].thr == thr && !memcmp(p->pattern[i].rgb, c->plain_rgb, 3))
-			return &p->pattern[i];
-	uint8_t tile[HALFTONE_TILE_BYTES], out[VOLUME_TILE_BYTES];
-	for (int i = 0; i < 3; i++) /* rows 0..15 of the colour */
-		memset(tile + i * HALFTONE_PLANE_BYTES, c->plain_rgb[i], 16 * HALFTONE_ROW_BYTES);
-	r->halftone(tile, 0xffff, thr, out);
-	struct plain_pattern *pt = &p->pattern[p->next];
-	p->next = (p->next + 1) % PLAIN_PATTERNS;
-	for (int i = 0; i < 3; i++)
-		memcpy(pt->bits[i], out + i * VOLUME_TILE_PLANE_BYTES, sizeof(pt->bits[i]));
-	pt->thr = thr;
-	memcpy(pt->rgb, c->plain_rgb, 3);
-	return pt;
-}
 
 /* Copies the touched tiles of image k's canvas, with their row masks, into
  * r->canvas_out (coded) and leaves the canvas all zero again. */
@@ -157,7 +124,8 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		else if (dst)
 			memset(dst, 0, VOLUME_TILE_BYTES);
 		if (dst && c->plain_rows[t])
-			lit |= section_canvas_pack_plain(c, t, plain_pattern(r, &w->plain, c, thr)->bits, dst);
+			lit |= section_canvas_pack_plain(
+				c, t, halftone_pattern(&w->plain, c->plain_rgb, thr, r->halftone)->bits, dst);
 		if (lit) {
 			w->mask[t / 8] |= (uint8_t)(1u << (t % 8));
 			count++;
@@ -749,12 +717,11 @@ static struct renderer *cpu_serial(const struct renderer *base)
  * 0 or -ENOMEM. */
 static int worker_init(struct cpu_worker *w, const struct geometry *geom, const struct brightness_map *bright)
 {
-	uint32_t tiles =
-		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
-	w->mask = calloc((tiles + 7) / 8, 1);
-	if (!w->mask || section_canvas_init(&w->canvas, geom) < 0) {
-		free(w->mask);
-		w->mask = NULL;
+	if (section_canvas_init(&w->canvas, geom) < 0)
+		return -ENOMEM;
+	w->mask = calloc((w->canvas.tiles_x * w->canvas.tiles_y + 7) / 8, 1);
+	if (!w->mask) {
+		section_canvas_finish(&w->canvas);
 		return -ENOMEM;
 	}
 	w->canvas.bright = bright;

@@ -91,6 +91,29 @@ static uint8_t *colours(uint32_t n)
 	return rgbs;
 }
 
+/* The path pth's binning of scene against ref (the scalar rule's), record
+ * for record, twice (the second time in the storage kept). */
+static void compare_path(const struct geometry *g, const struct scene *scene, struct pool *pool,
+			 const struct bin_set *ref, enum bin_points_isa path, const char *name, unsigned threads)
+{
+	struct bin_set simd;
+	CHECK(bin_init(&simd, g) == 0);
+	simd.points_isa = path;
+	CHECK(bin_build(&simd, scene, pool) == 0);
+	CHECK_MSG(ref->point_count == simd.point_count, "N %u, %s: %u points against %u", g->images_per_rev, name,
+		  simd.point_count, ref->point_count);
+	CHECK(memcmp(ref->point_start, simd.point_start, (ref->images + 1) * sizeof(uint32_t)) == 0);
+	uint32_t differ = 0;
+	for (uint32_t i = 0; i < ref->point_count && i < simd.point_count; i++)
+		differ += memcmp(&ref->points[i], &simd.points[i], sizeof(struct bin_point)) != 0;
+	CHECK_MSG(differ == 0, "N %u, %s, %u threads: %u of %u records differ", g->images_per_rev, name, threads,
+		  differ, ref->point_count);
+	CHECK(bin_build(&simd, scene, pool) == 0);
+	CHECK(simd.point_count == ref->point_count &&
+	      memcmp(ref->points, simd.points, ref->point_count * sizeof(struct bin_point)) == 0);
+	bin_finish(&simd);
+}
+
 static void check_geometry(const struct geometry *g)
 {
 	struct rtest_mesh m = { 0 };
@@ -123,27 +146,10 @@ static void check_geometry(const struct geometry *g)
 		CHECK(bin_build(&ref, &scene, pool) == 0);
 		CHECK(ref.point_count > n / 2);
 		for (size_t pth = 0; pth < sizeof(paths) / sizeof(paths[0]); pth++) {
-			if (!bin_points_isa_supported(paths[pth])) {
+			if (bin_points_isa_supported(paths[pth]))
+				compare_path(g, &scene, pool, &ref, paths[pth], names[pth], threads);
+			else
 				printf("N %u: no %s on this CPU, not compared\n", g->images_per_rev, names[pth]);
-				continue;
-			}
-			struct bin_set simd;
-			CHECK(bin_init(&simd, g) == 0);
-			simd.points_isa = paths[pth];
-			CHECK(bin_build(&simd, &scene, pool) == 0);
-			CHECK_MSG(ref.point_count == simd.point_count, "N %u, %s: %u points against %u",
-				  g->images_per_rev, names[pth], simd.point_count, ref.point_count);
-			CHECK(memcmp(ref.point_start, simd.point_start, (ref.images + 1) * sizeof(uint32_t)) == 0);
-			uint32_t differ = 0;
-			for (uint32_t i = 0; i < ref.point_count && i < simd.point_count; i++)
-				differ += memcmp(&ref.points[i], &simd.points[i], sizeof(struct bin_point)) != 0;
-			CHECK_MSG(differ == 0, "N %u, %s, %u threads: %u of %u records differ", g->images_per_rev,
-				  names[pth], threads, differ, ref.point_count);
-			/* and again, the storage reused */
-			CHECK(bin_build(&simd, &scene, pool) == 0);
-			CHECK(simd.point_count == ref.point_count &&
-			      memcmp(ref.points, simd.points, ref.point_count * sizeof(struct bin_point)) == 0);
-			bin_finish(&simd);
 		}
 		bin_finish(&ref);
 		pool_destroy(pool);

@@ -1,7 +1,8 @@
 /* model_order_spatial() and model_morton_code(): the order is a permutation
  * that keeps each primitive with its colours, sorted by the Morton code of
- * its centroid as an independent bit-by-bit interleave computes it, equal
- * codes in their first order; flat and one-primitive arrays. */
+ * its centroid (model_centroid()) as an independent bit-by-bit interleave
+ * computes it, equal codes in their first order; flat and one-primitive
+ * arrays. */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -66,16 +67,6 @@ static void check_codes(void)
 	CHECK(model_morton_code(on, flat_lo, flat_hi) == 0x9249249u * 5); /* x and z 1023, y 0 */
 }
 
-static void centroid(const float *v, unsigned verts, float c[3])
-{
-	for (int a = 0; a < 3; a++) {
-		double s = 0;
-		for (unsigned j = 0; j < verts; j++)
-			s += v[3 * j + a];
-		c[a] = (float)(s / verts);
-	}
-}
-
 /* An array of n primitives of verts vertices: random, or with every
  * primitive repeated (same place, another colour) when dup, or flat in y. */
 static void fill(float *xyz, uint8_t *rgba, size_t n, unsigned verts, bool dup, bool flat)
@@ -115,7 +106,7 @@ static void check_order(const float *in, const uint8_t *in_rgba, const float *ou
 		CHECK(from < n); /* a primitive of the input, with its colours */
 		used[from] = true;
 		float c[3];
-		centroid(&out[fl * i], verts, c);
+		model_centroid(&out[fl * i], verts, c);
 		uint32_t code = naive_code(c, lo, hi);
 		CHECK(i == 0 || code > last_code || (code == last_code && from > last_from));
 		last_code = code;
@@ -156,9 +147,17 @@ static void check_model(size_t n, bool dup, bool flat)
 	model_destroy(m);
 }
 
-/* Without colours, and with nothing or one of a kind. */
+/* Without colours, and with nothing or one of a kind; centroids. */
 static void check_plain(void)
 {
+	const float tri[9] = { 0, 0, 0, 3, 0, 0, 0, 3, 3 }, seg[6] = { -1, 2, 4, 1, 2, 0 };
+	float c[3];
+	model_centroid(tri, 3, c);
+	CHECK(c[0] == 1 && c[1] == 1 && c[2] == 1);
+	model_centroid(seg, 2, c);
+	CHECK(c[0] == 0 && c[1] == 2 && c[2] == 2);
+	model_centroid(seg, 1, c);
+	CHECK(c[0] == -1 && c[1] == 2 && c[2] == 4);
 	struct model *m = calloc(1, sizeof(*m));
 	CHECK(m);
 	m->point_count = 1;
