@@ -51,7 +51,8 @@ struct render_cpu {
 	struct brightness_tables thr; /* per volume image, made once */
 	halftone_fn halftone;
 	bool batch; /* unturned segments and triangles through section_lanes() (triangles binned eight at a time) */
-	bool plain; /* the canvases keep a plain colour as bits (not in the scalar variant) */
+	bool plain; /* the canvases keep a plain colour as bits, and points
+		     * halftoned as lit bits (not in the scalar variant) */
 	/* Per render: the scene's grid draws, prepared (grid.h). */
 	struct grid_job *grids;
 	uint32_t grid_count, grid_cap;
@@ -121,8 +122,11 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		bool lit = false;
 		if (dst && c->rows[t])
 			lit = r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst);
-		else if (dst)
+		if (dst && c->lit_rows[t]) /* lit_rows only flags rows with a bit set */
+			section_canvas_pack_lit(c, t, dst, !c->rows[t]);
+		else if (dst && !c->rows[t])
 			memset(dst, 0, VOLUME_TILE_BYTES);
+		lit |= dst && c->lit_rows[t];
 		if (dst && c->plain_rows[t])
 			lit |= section_canvas_pack_plain(
 				c, t, halftone_pattern(&w->plain, c->plain_rgb, thr, r->halftone)->bits, dst);
@@ -136,9 +140,16 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 	return err < 0 ? err : volume_image_set(r->out, k, w->mask, count);
 }
 
-/* Lights a binned point's square (bin.h), clipped to the image. */
-static void light_point(struct section_canvas *c, const struct bin_point *p)
+/* Lights a binned point's square (bin.h), clipped to the image; a
+ * one-pixel point as lit bits under image k's tables where thr is given
+ * (section_lit_pixel(): a canvas packed as it stands). */
+static void light_point(struct section_canvas *c, const struct bin_point *p, const struct brightness_tables *thr,
+			uint32_t k)
 {
+	if (p->size == 1 && thr) {
+		section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(thr, k, p->u / VOLUME_TILE));
+		return;
+	}
 	if (p->size == 1) { /* the common case: section_pixel() without branches */
 		uint32_t u = p->u, v = p->v, t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE;
 		uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES +
@@ -233,8 +244,11 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
+	/* Points straight to bits where the image is packed now; kept as
+	 * bytes (canvas_out), they stay bytes. */
+	const struct brightness_tables *thr = r->plain && !r->canvas_out ? &r->thr : NULL;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
-		light_point(c, &b->points[i]);
+		light_point(c, &b->points[i], thr, k);
 	uint64_t sectioned = section_image(r, c, k, runs, n);
 	w->prim_images += sectioned;
 	drawn += sectioned;

@@ -25,7 +25,9 @@ int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 	c->weighted = calloc((size_t)c->weighted_plane, 3);
 	c->plain_bits = calloc(tiles * VOLUME_TILE, sizeof(*c->plain_bits));
 	c->plain_rows = calloc(tiles, sizeof(*c->plain_rows));
-	if (!c->rgb || !c->rows || !c->weighted || !c->plain_bits || !c->plain_rows) {
+	c->lit_bits = calloc(tiles * SECTION_LIT_TILE, sizeof(*c->lit_bits));
+	c->lit_rows = calloc(tiles, sizeof(*c->lit_rows));
+	if (!c->rgb || !c->rows || !c->weighted || !c->plain_bits || !c->plain_rows || !c->lit_bits || !c->lit_rows) {
 		section_canvas_finish(c);
 		return -ENOMEM;
 	}
@@ -39,6 +41,8 @@ void section_canvas_finish(struct section_canvas *c)
 	free(c->weighted);
 	free(c->plain_bits);
 	free(c->plain_rows);
+	free(c->lit_bits);
+	free(c->lit_rows);
 	free(c->scratch);
 	c->scratch = NULL;
 	c->scratch_floats = 0;
@@ -47,6 +51,8 @@ void section_canvas_finish(struct section_canvas *c)
 	c->weighted = NULL;
 	c->plain_bits = NULL;
 	c->plain_rows = NULL;
+	c->lit_bits = NULL;
+	c->lit_rows = NULL;
 }
 
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
@@ -66,22 +72,40 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t)
 	for (uint32_t p = c->plain_rows[t]; p; p &= p - 1)
 		c->plain_bits[(size_t)t * VOLUME_TILE + (uint32_t)__builtin_ctz(p)] = 0;
 	c->plain_rows[t] = 0;
+	uint32_t *lit = c->lit_bits + (size_t)t * SECTION_LIT_TILE;
+	for (uint32_t p = c->lit_rows[t]; p; p &= p - 1) { /* stores, not a memset call's start */
+		uint32_t y = (uint32_t)__builtin_ctz(p);
+		lit[y] = lit[VOLUME_TILE + y] = lit[2 * VOLUME_TILE + y] = 0;
+	}
+	c->lit_rows[t] = 0;
 }
 
 uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t)
 {
-	const uint32_t *rows = c->rows, *plain = c->plain_rows, tiles = c->tiles_x * c->tiles_y;
-	for (uint64_t a, b, pa, pb; t + 4 <= tiles; t += 4) { /* four at a time through the untouched */
+	const uint32_t *rows = c->rows, *plain = c->plain_rows, *lit = c->lit_rows, tiles = c->tiles_x * c->tiles_y;
+	for (uint64_t a, b, pa, pb, la, lb; t + 4 <= tiles; t += 4) { /* four at a time through the untouched */
 		memcpy(&a, rows + t, sizeof(a));
 		memcpy(&b, rows + t + 2, sizeof(b));
 		memcpy(&pa, plain + t, sizeof(pa));
 		memcpy(&pb, plain + t + 2, sizeof(pb));
-		if (a | b | pa | pb)
+		memcpy(&la, lit + t, sizeof(la));
+		memcpy(&lb, lit + t + 2, sizeof(lb));
+		if (a | b | pa | pb | la | lb)
 			break;
 	}
-	while (t < tiles && !rows[t] && !plain[t])
+	while (t < tiles && !rows[t] && !plain[t] && !lit[t])
 		t++;
 	return t;
+}
+
+void section_canvas_pack_lit(const struct section_canvas *c, uint32_t t, uint8_t *out, bool fresh)
+{
+	typedef uint8_t chunk __attribute__((vector_size(16), aligned(1))); /* 16-byte moves, not a rep movs */
+	const uint8_t *bits = (const uint8_t *)(c->lit_bits + (size_t)t * SECTION_LIT_TILE);
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(chunk)) {
+		chunk v = *(const chunk *)(bits + i);
+		*(chunk *)(out + i) = fresh ? v : v | *(const chunk *)(out + i);
+	}
 }
 
 bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out)

@@ -22,6 +22,8 @@
  * bytes, pixel x at byte x ^ 7), so that halftoning and clearing a tile
  * touch one contiguous block. rows[t] has bit y set when row y of tile t
  * may hold non-zero bytes; all other rows are zero. */
+#define SECTION_LIT_TILE (3 * VOLUME_TILE) /* uint32_t words of a tile's lit bits */
+
 struct section_canvas {
 	struct geometry geom;
 	uint32_t tiles_x, tiles_y;
@@ -51,6 +53,17 @@ struct section_canvas {
 	uint8_t plain_rgb[3];
 	uint32_t *plain_bits; /* tiles_x * tiles_y * VOLUME_TILE */
 	uint32_t *plain_rows; /* tiles_x * tiles_y */
+	/* Points lit as bits, halftoned already (section_lit_pixel()): tile
+	 * t as a packed tile of volume.h (planes R, G, B of 32 rows; bit
+	 * x ^ 7 of a row's word for pixel x), lit_bits[96 t + 32 i + y]
+	 * plane i's row y; lit_rows[t] flags the rows with a bit set. The
+	 * pack takes them as they are or ORs them in
+	 * (section_canvas_pack_lit()): exact, as the halftone of a MAX
+	 * under one table is the OR of the halftones. Only for a canvas
+	 * packed as it stands, never one kept as bytes. All zero outside the
+	 * flagged rows. */
+	uint32_t *lit_bits; /* tiles_x * tiles_y * SECTION_LIT_TILE */
+	uint32_t *lit_rows; /* tiles_x * tiles_y */
 	/* Tests: none of section.c's shortcuts, which light the same voxels
 	 * (lobes the clip cannot reach, planes every vertex is inside, rows
 	 * by a product, spans by half rows): both lobes, both planes,
@@ -75,8 +88,8 @@ void section_canvas_finish(struct section_canvas *c);
  * mask, then the planes) into tile t of c. */
 void section_canvas_max_tile(struct section_canvas *c, uint32_t t, const uint8_t *src);
 
-/* Zeroes the rows of tile t that rows[t] flags, its plain bits, and the
- * flags. */
+/* Zeroes the rows of tile t that rows[t] flags, its plain and lit bits,
+ * and the flags. */
 void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
 
 /* From now on spans of colour rgb are kept as bits (rgb NULL: none are).
@@ -84,8 +97,8 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
  * c->general, whose byte loops the tests compare. */
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
 
-/* The first tile from t on that something touched (bytes or plain bits),
- * or the tile count. */
+/* The first tile from t on that something touched (bytes, plain or lit
+ * bits), or the tile count. */
 uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t);
 
 /* Tile t's plain bits halftoned, ORed into out (a packed tile: the halftone
@@ -95,6 +108,11 @@ uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t);
  * caller knows whether its bytes lit any). The bits stay
  * (section_canvas_clear_tile()). */
 bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out);
+
+/* Tile t's lit bits into out (a packed tile): copied where fresh (out
+ * not written yet), else ORed in. They stay
+ * (section_canvas_clear_tile()). */
+void section_canvas_pack_lit(const struct section_canvas *c, uint32_t t, uint8_t *out, bool fresh);
 
 /* Tile t's plain bits MAXed into its bytes (rows[t] gains their rows), and
  * cleared: its bytes are then what section_span() would have written.
@@ -117,6 +135,23 @@ static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t 
 		if (px[i * HALFTONE_PLANE_BYTES] < rgb[i])
 			px[i * HALFTONE_PLANE_BYTES] = rgb[i];
 	c->rows[t] |= 1u << (v % VOLUME_TILE);
+}
+
+/* section_pixel() halftoned at once: pixel (u, v) of colour rgb as the
+ * bits it lights under thr, its tile's thresholds, in the lit bits. */
+static inline void section_lit_pixel(struct section_canvas *c, uint32_t u, uint32_t v, const uint8_t rgb[3],
+				     const struct halftone_table *thr)
+{
+	uint32_t t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE, x = u % VOLUME_TILE, y = v % VOLUME_TILE;
+	uint8_t level = thr->thr[y % 16][halftone_pos(x)];
+	uint32_t bit = 1u << (x ^ 7);
+	uint32_t r = -(uint32_t)(rgb[0] > level) & bit, g = -(uint32_t)(rgb[1] > level) & bit;
+	uint32_t b = -(uint32_t)(rgb[2] > level) & bit;
+	uint32_t *row = c->lit_bits + (size_t)t * SECTION_LIT_TILE + y;
+	row[0] |= r;
+	row[VOLUME_TILE] |= g;
+	row[2 * VOLUME_TILE] |= b;
+	c->lit_rows[t] |= (uint32_t)((r | g | b) != 0) << y;
 }
 
 /* A segment or triangle for section_lanes(): its vertices (x, y, z each,
