@@ -16,8 +16,8 @@ struct volume *volume_create(const struct geometry *geom)
 		return NULL;
 	vol->geom = *geom;
 	vol->image_count = geometry_images_per_volume(geom);
-	vol->tiles_x = (geom->width + VOLUME_TILE - 1) / VOLUME_TILE;
-	vol->tiles_y = (geom->height + VOLUME_TILE - 1) / VOLUME_TILE;
+	vol->tiles_x = volume_tiles_across(geom->width);
+	vol->tiles_y = volume_tiles_across(geom->height);
 	vol->mask_bytes = (vol->tiles_x * vol->tiles_y + 7) / 8;
 	vol->images = calloc(vol->image_count, sizeof(*vol->images));
 	uint8_t *masks = calloc(vol->image_count, vol->mask_bytes);

@@ -51,6 +51,18 @@ void volume_destroy(struct volume *vol);
 /* Empties every image; keeps storage. */
 void volume_clear(struct volume *vol);
 
+/* Tiles across n pixels: ceil(n / VOLUME_TILE). */
+static inline uint32_t volume_tiles_across(uint32_t n)
+{
+	return (n + VOLUME_TILE - 1) / VOLUME_TILE;
+}
+
+/* Tiles of an image of geometry g: tiles_x * tiles_y. */
+static inline uint32_t volume_geometry_tiles(const struct geometry *g)
+{
+	return volume_tiles_across(g->width) * volume_tiles_across(g->height);
+}
+
 static inline uint32_t volume_tiles_per_image(const struct volume *vol)
 {
 	return vol->tiles_x * vol->tiles_y;

@@ -246,7 +246,7 @@ int projwire_info_decode(const uint8_t *in, size_t len, struct projwire_info *ou
 	if (out->images_per_volume != geometry_images_per_volume(&g))
 		return -EINVAL;
 	/* A device must take at least one whole tile. */
-	uint32_t tiles = ((g.width + 31) / 32) * ((g.height + 31) / 32);
+	uint32_t tiles = volume_geometry_tiles(&g);
 	if (out->max_record < PROJWIRE_IMAGE_HEAD + (tiles + 7) / 8 + VOLUME_TILE_BYTES ||
 	    out->max_record > PROJWIRE_MAX_PAYLOAD)
 		return -EINVAL;
@@ -313,8 +313,7 @@ static void header_encode(uint8_t *out, uint8_t type, uint32_t payload)
 
 uint32_t projwire_max_image_payload(const struct geometry *geom)
 {
-	uint32_t tiles =
-		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t tiles = volume_geometry_tiles(geom);
 	return PROJWIRE_IMAGE_HEAD + (tiles + 7) / 8 + tiles * VOLUME_TILE_BYTES;
 }
 

@@ -71,8 +71,8 @@ struct projwire_decoder *projwire_decoder_create(const struct geometry *geom, ui
 	d->geom = *geom;
 	d->buffers = buffers;
 	d->image_count = geometry_images_per_volume(geom);
-	d->tiles_x = (geom->width + VOLUME_TILE - 1) / VOLUME_TILE;
-	d->tiles_per_image = d->tiles_x * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	d->tiles_x = volume_tiles_across(geom->width);
+	d->tiles_per_image = d->tiles_x * volume_tiles_across(geom->height);
 	d->mask_bytes = (d->tiles_per_image + 7) / 8;
 	uint32_t need = projwire_max_image_payload(geom);
 	d->max_record = max_record && max_record < need ? max_record : need;

@@ -119,7 +119,7 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	uint32_t radii = g->width / 2 + 1;
 	m->phase = malloc(radii * 16 * sizeof(*m->phase));
 	m->solid = malloc(g->width * sizeof(*m->solid));
-	m->lanes = calloc((g->width + 31) / 32, sizeof(*m->lanes));
+	m->lanes = calloc(volume_tiles_across(g->width), sizeof(*m->lanes));
 	if (!m->rate || !m->line_rate || !m->n || !m->phase || !m->solid || !m->lanes) {
 		brightness_map_finish(m);
 		return -ENOMEM;
@@ -136,7 +136,7 @@ int brightness_map_init(struct brightness_map *m, const struct geometry *g)
 	/* Outside the band every weight is 1: every byte stays. */
 	for (uint32_t u = 0; u < g->width; u++)
 		m->solid[u] = u >= m->band_lo && u <= m->band_hi ? solid_mul_of(m, u) : BRIGHTNESS_KEEP;
-	for (uint32_t tu = 0; tu < (g->width + 31) / 32; tu++)
+	for (uint32_t tu = 0; tu < volume_tiles_across(g->width); tu++)
 		set_lanes(m, tu);
 	/* Columns band_lo..band_hi lie within |s| < band_s (symmetric). */
 	if (brightness_active(m)) {

@@ -530,7 +530,7 @@ static void halftone_into(struct compose *c, struct compose_worker *w, uint32_t 
 			  uint32_t *count)
 {
 	uint8_t packed[VOLUME_TILE_BYTES];
-	uint32_t rows, tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	uint32_t rows, tiles_x = volume_tiles_across(c->geom.width);
 	memcpy(&rows, tile, sizeof(rows));
 	if (c->halftone(tile + sizeof(rows), rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
 		*count += !w->touched[t];
@@ -552,7 +552,7 @@ static size_t turn_tile(struct compose *c, struct compose_worker *w, uint32_t k,
 	if (!used)
 		return 0;
 	const uint8_t *tile = buf;
-	uint32_t tiles_x = (c->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	uint32_t tiles_x = volume_tiles_across(c->geom.width);
 	if (mirror) {
 		memcpy(mirrored, buf, sizeof(uint32_t)); /* the row mask */
 		mirror_canvas(buf + sizeof(uint32_t), mirrored + sizeof(uint32_t));

@@ -436,7 +436,7 @@ int gl_grid_mark(struct render_gl *r, uint32_t first, uint32_t n)
 		r->grid_marks_cap = words;
 	}
 	memset(r->grid_marks, 0, words * sizeof(*r->grid_marks));
-	uint32_t tiles_x = (r->base.geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
+	uint32_t tiles_x = volume_tiles_across(r->base.geom.width);
 	for (uint32_t b = 0; b < n; b++)
 		for (uint32_t i = 0; i < r->grid_draw_count; i++) {
 			double dir[3], up[3];

@@ -517,7 +517,7 @@ static int ensure_stage(struct render_cpu *r)
 	if (r->stage)
 		return 0;
 	const struct geometry *g = &r->base.geom;
-	uint32_t tiles = ((g->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((g->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t tiles = volume_geometry_tiles(g);
 	unsigned n = pool_workers(r->pool);
 	r->stage = calloc(n, sizeof(*r->stage));
 	if (!r->stage)
@@ -576,8 +576,8 @@ static int32_t next_lift(const struct scene *scene, int32_t after)
 static int render_lifted(struct render_cpu *r, const struct scene *scene, struct scene *rest)
 {
 	const struct geometry *g = &r->base.geom;
-	uint32_t tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
-	uint32_t tiles = tiles_x * ((g->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t tiles_x = volume_tiles_across(g->width);
+	uint32_t tiles = tiles_x * volume_tiles_across(g->height);
 	if (grow_lifted(r, scene->draw_count) < 0 || ensure_stage(r) < 0)
 		return -ENOMEM;
 	uint32_t m = 0;
@@ -643,8 +643,8 @@ static int cpu_render(struct renderer *base, const struct scene *scene, struct v
 static int cpu_render_canvas(struct renderer *base, const struct scene *scene, struct rle_volume *out)
 {
 	struct render_cpu *r = (struct render_cpu *)base;
-	uint32_t tiles_x = (base->geom.width + VOLUME_TILE - 1) / VOLUME_TILE;
-	uint32_t tiles = tiles_x * ((base->geom.height + VOLUME_TILE - 1) / VOLUME_TILE);
+	uint32_t tiles_x = volume_tiles_across(base->geom.width);
+	uint32_t tiles = tiles_x * volume_tiles_across(base->geom.height);
 	if (out->tile_bytes != CANVAS_TILE_BYTES || out->image_count != r->bins.images || out->tiles_per_image != tiles)
 		return -EINVAL;
 	if (ensure_stage(r) < 0)

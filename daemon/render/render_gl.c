@@ -709,8 +709,7 @@ struct renderer *render_gl_create(const struct geometry *geom, const struct rend
 	if (err == 0)
 		err = brightness_map_init(&r->bright, geom);
 	r->bright_on = err == 0 && brightness_active(&r->bright);
-	r->tiles_per_image =
-		((geom->width + VOLUME_TILE - 1) / VOLUME_TILE) * ((geom->height + VOLUME_TILE - 1) / VOLUME_TILE);
+	r->tiles_per_image = volume_geometry_tiles(geom);
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	unsigned threads = opts->threads ? opts->threads : cores > 0 ? (unsigned)cores : 1;
 	r->pool = err == 0 ? pool_create(threads) : NULL;

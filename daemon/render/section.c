@@ -12,8 +12,8 @@
 int section_canvas_init(struct section_canvas *c, const struct geometry *g)
 {
 	*c = (struct section_canvas){ .geom = *g }; /* bright NULL: exact until set */
-	c->tiles_x = (g->width + VOLUME_TILE - 1) / VOLUME_TILE;
-	c->tiles_y = (g->height + VOLUME_TILE - 1) / VOLUME_TILE;
+	c->tiles_x = volume_tiles_across(g->width);
+	c->tiles_y = volume_tiles_across(g->height);
 	size_t tiles = (size_t)c->tiles_x * c->tiles_y;
 	c->rgb = calloc(tiles, HALFTONE_TILE_BYTES);
 	c->rows = calloc(tiles, sizeof(*c->rows));
