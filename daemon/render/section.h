@@ -17,13 +17,13 @@
 #include "halftone.h"
 #include "volume.h"
 
+#define SECTION_LIT_TILE (3 * VOLUME_TILE) /* uint32_t words of a tile's lit bits */
+
 /* An 8-bit RGB accumulation buffer for one image, stored tile by tile in
  * the canvas tile layout of halftone.h (planes R, G, B of 32 rows of 32
  * bytes, pixel x at byte x ^ 7), so that halftoning and clearing a tile
  * touch one contiguous block. rows[t] has bit y set when row y of tile t
  * may hold non-zero bytes; all other rows are zero. */
-#define SECTION_LIT_TILE (3 * VOLUME_TILE) /* uint32_t words of a tile's lit bits */
-
 struct section_canvas {
 	struct geometry geom;
 	uint32_t tiles_x, tiles_y;
