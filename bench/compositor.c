@@ -3,7 +3,8 @@
  * around the CPU renderer), at perspecta, against full renders of the
  * same scenes in the same run. See bench/README.md.
  *
- *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] DRAGON.ply */
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|s4]
+ *                                   [--bunny BUNNY.ply] DRAGON.ply */
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -64,7 +65,7 @@ static void bscene_free(struct bscene *b)
 struct opts {
 	unsigned volumes;
 	double seconds;
-	const char *profile, *dragon;
+	const char *profile, *dragon, *bunny;
 	const char *only; /* NULL, "dragon" or "s4": the rows to run */
 };
 
@@ -217,7 +218,8 @@ static void animate_bob(struct bscene *b, uint64_t frame, void *arg)
 
 static const uint8_t orange[3] = { 255, 128, 0 };
 
-static struct scene_draw icosahedron(const struct vbuf *v, const uint8_t rgb[3])
+/* A draw of v's triangles in one colour, identity transform. */
+static struct scene_draw object_draw(const struct vbuf *v, const uint8_t rgb[3])
 {
 	struct scene_draw d = { .prim = SCENE_TRIANGLES, .count = v->count, .xyz = v->xyz };
 	for (int i = 0; i < 16; i++)
@@ -268,38 +270,86 @@ static void reset_scene(struct bench *be)
 	memset(&be->b, 0, sizeof(be->b));
 }
 
-/* An animated icosahedron alone, beside the static dragon, and the dragon
- * turning one image a volume. */
-static void bench_dragon(struct bench *be)
+/* An object moving on the first orbit, alone and then beside the static
+ * dragon, each rendered whole and through the cache; the rate beside the
+ * dragon as a share of its own. */
+static void beside_dragon(struct bench *be, const char *what, const struct scene_draw *d,
+			  const struct scene_draw *dragon)
 {
 	struct result solo, solo_cached, res;
-	struct scene_draw d = icosahedron(&be->ico, orange);
-	bscene_add(&be->b, &d);
+	char scene[96], note[160];
+	bscene_add(&be->b, d);
 	be->orb->first = 0;
 	be->orb->fraction = 1;
+	snprintf(scene, sizeof(scene), "%s alone", what);
 	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &solo);
-	row("icosahedron alone", "full render", &solo, "");
+	row(scene, "full render", &solo, "");
 	measure_cached(be, animate_orbits, be->orb, &solo_cached);
-	row("icosahedron alone", "cache", &solo_cached, "the daemon's path");
+	row(scene, "cache", &solo_cached, "the daemon's path");
 	reset_scene(be);
-	char err[256], note[128];
+	bscene_add(&be->b, dragon);
+	bscene_add(&be->b, d);
+	be->orb->first = 1;
+	struct bench_orbit was = be->orb->o[1]; /* the same path as alone */
+	be->orb->o[1] = be->orb->o[0];
+	snprintf(scene, sizeof(scene), "dragon (static) + %s", what);
+	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &res);
+	row(scene, "full render", &res, "");
+	measure_cached(be, animate_orbits, be->orb, &res);
+	snprintf(note, sizeof(note), "%.0f%% of the %s's solo rate through the cache, %.0f%% of its full render",
+		 100 * res.vol_s / solo_cached.vol_s, what, 100 * res.vol_s / solo.vol_s);
+	row(scene, "cache", &res, note);
+	be->orb->o[1] = was;
+	reset_scene(be);
+}
+
+/* The bunny (tests/data/bunny.ply, 69,451 triangles) as a small object of
+ * radius about r: its fit to the volume and r baked into its vertices, so
+ * that an orbit's pose moves it as it moves the icosahedron. 0 or -1. */
+static int small_bunny(struct bench *be, double r, struct vbuf *out)
+{
+	char err[256];
+	struct bench_scene bunny = { 0 };
+	struct bench_files files = { .bunny = be->o.bunny };
+	if (!be->o.bunny || bench_scene_build("S3-bunny", &be->g, &files, &bunny, err, sizeof(err)) < 0) {
+		printf("\n(no bunny: %s)\n", be->o.bunny ? err : "give --bunny bunny.ply");
+		return -1;
+	}
+	const struct scene_draw *d = &bunny.draws[0];
+	const float *m = d->transform;
+	for (uint32_t i = 0; i < d->count; i++) {
+		const float *v = d->xyz + 3 * (size_t)i;
+		double p[3];
+		for (int a = 0; a < 3; a++)
+			p[a] = r *
+			       ((double)m[a] * v[0] + (double)m[4 + a] * v[1] + (double)m[8 + a] * v[2] + m[12 + a]);
+		vbuf_add(out, p[0], p[1], p[2]);
+	}
+	bench_scene_free(&bunny);
+	return out->oom ? -1 : 0;
+}
+
+/* An animated icosahedron and a small animated bunny, each alone and
+ * beside the static dragon; the dragon turning one image a volume, and
+ * moving a row a volume along the axis. */
+static void bench_dragon(struct bench *be)
+{
+	struct result res;
+	char err[256];
+	struct scene_draw ico = object_draw(&be->ico, orange);
 	struct bench_scene dragon = { 0 };
 	struct bench_files files = { .dragon = be->o.dragon };
 	if (!be->o.dragon || bench_scene_build("S3-dragon", &be->g, &files, &dragon, err, sizeof(err)) < 0) {
 		printf("\n(no dragon: %s)\n", be->o.dragon ? err : "give dragon_vrip.ply");
 		return;
 	}
-	bscene_add(&be->b, &dragon.draws[0]);
-	bscene_add(&be->b, &d);
-	be->orb->first = 1;
-	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &res);
-	row("dragon (static) + icosahedron", "full render", &res, "");
-	measure_cached(be, animate_orbits, be->orb, &res);
-	snprintf(note, sizeof(note),
-		 "%.0f%% of the icosahedron's solo rate through the cache, %.0f%% of its full render",
-		 100 * res.vol_s / solo_cached.vol_s, 100 * res.vol_s / solo.vol_s);
-	row("dragon (static) + icosahedron", "cache", &res, note);
-	reset_scene(be);
+	beside_dragon(be, "icosahedron", &ico, &dragon.draws[0]);
+	struct vbuf bunny = { 0 };
+	if (small_bunny(be, 0.15, &bunny) == 0) {
+		struct scene_draw d = object_draw(&bunny, orange);
+		beside_dragon(be, "bunny", &d, &dragon.draws[0]);
+	}
+	vbuf_free(&bunny);
 	bscene_add(&be->b, &dragon.draws[0]); /* turning one image step per volume */
 	measure(be->r, NULL, &be->b, animate_turntable, &be->g, &be->o, &res);
 	row("dragon turning one image a volume", "full render", &res, "");
@@ -322,7 +372,7 @@ static void bench_s4(struct bench *be)
 					   { 255, 255, 0 }, { 255, 0, 255 }, { 0, 255, 255 } };
 	struct result all, res;
 	for (uint32_t i = 0; i < 1000; i++) {
-		struct scene_draw di = icosahedron(&be->ico, six[i % 6]);
+		struct scene_draw di = object_draw(&be->ico, six[i % 6]);
 		bscene_add(&be->b, &di);
 		pose(&be->b, be->orb, i, 0);
 	}
@@ -353,6 +403,8 @@ static int parse(int argc, char **argv, struct opts *o)
 			o->seconds = atof(argv[++i]);
 		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
 			o->profile = argv[++i];
+		else if (!strcmp(argv[i], "--bunny") && i + 1 < argc)
+			o->bunny = argv[++i];
 		else if (!strcmp(argv[i], "--only") && i + 1 < argc &&
 			 (!strcmp(argv[i + 1], "dragon") || !strcmp(argv[i + 1], "s4")))
 			o->only = argv[++i];
@@ -360,7 +412,8 @@ static int parse(int argc, char **argv, struct opts *o)
 			o->dragon = argv[i];
 		else {
 			fprintf(stderr,
-				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] [DRAGON.ply]\n",
+				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] [--bunny PLY] "
+				"[DRAGON.ply]\n",
 				argv[0]);
 			return 2;
 		}
