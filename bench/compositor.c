@@ -84,72 +84,110 @@ static int cmp_double(const void *a, const void *b)
 
 typedef void (*animate_fn)(struct bscene *b, uint64_t frame, void *arg);
 
-/* Renders volumes of b (animated by fn before each) with the cache (or
- * whole, cache NULL): 3 warm-up volumes, then until opts' count or time. */
-static void measure(struct renderer *r, struct cache *cache, struct bscene *b, animate_fn fn, void *arg,
-		    const struct opts *o, struct result *res)
+/* One scene's volumes: rendered with its cache (or whole, cache NULL),
+ * animated by fn before each; per measured volume its ms and the cache's
+ * split. */
+struct series {
+	struct cache *cache;
+	struct bscene *b;
+	animate_fn fn;
+	void *arg;
+	struct volume *out; /* its own: the cache knows its last composition in it */
+	double *ms, *rms, *cms, sum_ms;
+};
+
+/* Volume number frame of s into out; recorded as the nth when warm. */
+static void one_volume(struct renderer *r, struct series *s, uint64_t frame, unsigned n, bool warm)
 {
-	struct volume *out = volume_create(&r->geom);
-	double *ms = calloc(o->volumes, sizeof(double)), *rms = calloc(o->volumes, sizeof(double)),
-	       *cms = calloc(o->volumes, sizeof(double));
-	if (!out || !ms || !rms || !cms)
-		abort();
-	uint64_t frame = 0;
+	int64_t t0 = now_ns();
+	if (s->fn)
+		s->fn(s->b, frame, s->arg);
+	int err;
+	if (s->cache) {
+		if (cache_plan(s->cache, &s->b->snap) < 0)
+			abort();
+		err = cache_render(s->cache, r, &s->b->snap.scene, s->out);
+		cache_done(s->cache, err);
+	} else {
+		err = render_volume(r, &s->b->snap.scene, s->out);
+	}
+	if (err < 0) {
+		fprintf(stderr, "render failed: %s\n", strerror(-err));
+		exit(1);
+	}
+	if (!warm)
+		return;
+	s->ms[n] = (double)(now_ns() - t0) / 1e6;
+	s->sum_ms += s->ms[n];
+	if (s->cache) {
+		struct cache_stats st;
+		cache_get_stats(s->cache, &st);
+		s->rms[n] = st.last_render_us / 1e3;
+		s->cms[n] = st.last_compose_us / 1e3;
+	}
+}
+
+/* The medians of s's n volumes; vol/s from the time they took. */
+static void summarise(struct series *s, unsigned n, struct result *res)
+{
+	qsort(s->ms, n, sizeof(double), cmp_double);
+	qsort(s->rms, n, sizeof(double), cmp_double);
+	qsort(s->cms, n, sizeof(double), cmp_double);
+	*res = (struct result){
+		.n = n,
+		.median_ms = s->ms[n / 2],
+		.p99_ms = s->ms[(unsigned)ceil(0.99 * n) - 1],
+		.vol_s = n / (s->sum_ms / 1e3),
+		.render_ms = s->rms[n / 2],
+		.compose_ms = s->cms[n / 2],
+	};
+	if (s->cache)
+		cache_get_stats(s->cache, &res->st);
+}
+
+/* The count series measured a volume each in turn, so that the drift of
+ * a shared machine falls on each alike: 3 warm-up volumes each, then until
+ * opts' count or time; res[i] is series i's. */
+static void measure_series(struct renderer *r, struct series *s, unsigned count, const struct opts *o,
+			   struct result *res)
+{
+	for (unsigned i = 0; i < count; i++) {
+		s[i].out = volume_create(&r->geom);
+		s[i].ms = calloc(o->volumes, sizeof(double));
+		s[i].rms = calloc(o->volumes, sizeof(double));
+		s[i].cms = calloc(o->volumes, sizeof(double));
+		s[i].sum_ms = 0;
+		if (!s[i].out || !s[i].ms || !s[i].rms || !s[i].cms)
+			abort();
+	}
 	unsigned n = 0;
 	int64_t start = 0;
-	for (;;) {
+	for (uint64_t frame = 0;; frame++) {
 		bool warm = frame >= 3;
 		if (warm && !start)
 			start = now_ns();
 		if (warm && (n == o->volumes || (double)(now_ns() - start) / 1e9 > o->seconds))
 			break;
-		int64_t t0 = now_ns();
-		if (fn)
-			fn(b, frame, arg);
-		int err;
-		if (cache) {
-			if (cache_plan(cache, &b->snap) < 0)
-				abort();
-			err = cache_render(cache, r, &b->snap.scene, out);
-			cache_done(cache, err);
-		} else {
-			err = render_volume(r, &b->snap.scene, out);
-		}
-		if (err < 0) {
-			fprintf(stderr, "render failed: %s\n", strerror(-err));
-			exit(1);
-		}
-		double t = (double)(now_ns() - t0) / 1e6;
-		frame++;
-		if (!warm)
-			continue;
-		ms[n] = t;
-		if (cache) {
-			struct cache_stats st;
-			cache_get_stats(cache, &st);
-			rms[n] = st.last_render_us / 1e3;
-			cms[n] = st.last_compose_us / 1e3;
-		}
-		n++;
+		for (unsigned i = 0; i < count; i++)
+			one_volume(r, &s[i], frame, n, warm);
+		n += warm;
 	}
-	double total = (double)(now_ns() - start) / 1e9;
-	qsort(ms, n, sizeof(double), cmp_double);
-	qsort(rms, n, sizeof(double), cmp_double);
-	qsort(cms, n, sizeof(double), cmp_double);
-	*res = (struct result){
-		.n = n,
-		.median_ms = ms[n / 2],
-		.p99_ms = ms[(unsigned)ceil(0.99 * n) - 1],
-		.vol_s = n / total,
-		.render_ms = rms[n / 2],
-		.compose_ms = cms[n / 2],
-	};
-	if (cache)
-		cache_get_stats(cache, &res->st);
-	free(ms);
-	free(rms);
-	free(cms);
-	volume_destroy(out);
+	for (unsigned i = 0; i < count; i++) {
+		summarise(&s[i], n, &res[i]);
+		free(s[i].ms);
+		free(s[i].rms);
+		free(s[i].cms);
+		volume_destroy(s[i].out);
+	}
+}
+
+/* Volumes of b (animated by fn before each) with the cache (or whole,
+ * cache NULL), alone. */
+static void measure(struct renderer *r, struct cache *cache, struct bscene *b, animate_fn fn, void *arg,
+		    const struct opts *o, struct result *res)
+{
+	struct series s = { .cache = cache, .b = b, .fn = fn, .arg = arg };
+	measure_series(r, &s, 1, o, res);
 }
 
 static void row(const char *scene, const char *how, const struct result *r, const char *note)
@@ -184,6 +222,12 @@ static void animate_orbits(struct bscene *b, uint64_t frame, void *arg)
 	for (uint32_t i = orb->first; i < b->n; i++)
 		if (orb->fraction >= 1 || rng_unit(&orb->rng) < orb->fraction)
 			pose(b, orb, i, frame);
+}
+
+/* Object 0 alone moved, on the first orbit (the others stay). */
+static void animate_first(struct bscene *b, uint64_t frame, void *arg)
+{
+	pose(b, arg, 0, frame);
 }
 
 /* The dragon turned about the axis by one image step per volume, as the
@@ -270,36 +314,48 @@ static void reset_scene(struct bench *be)
 	memset(&be->b, 0, sizeof(be->b));
 }
 
-/* An object moving on the first orbit, alone and then beside the static
- * dragon, each rendered whole and through the cache; the rate beside the
- * dragon as a share of its own. */
+/* An object moving on the first orbit, alone and beside the static dragon
+ * (the scene's object 0, the dragon its object 1), each rendered whole
+ * and then through a cache of its own, the two cached ones a volume each
+ * in turn; the rate beside the dragon as a share of its own. */
 static void beside_dragon(struct bench *be, const char *what, const struct scene_draw *d,
 			  const struct scene_draw *dragon)
 {
-	struct result solo, solo_cached, res;
-	char scene[96], note[160];
+	struct result whole[2], cached[2];
+	char alone[96], beside[96], note[160];
+	struct bscene *with = calloc(1, sizeof(*with));
+	if (!with)
+		abort();
 	bscene_add(&be->b, d);
-	be->orb->first = 0;
-	be->orb->fraction = 1;
-	snprintf(scene, sizeof(scene), "%s alone", what);
-	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &solo);
-	row(scene, "full render", &solo, "");
-	measure_cached(be, animate_orbits, be->orb, &solo_cached);
-	row(scene, "cache", &solo_cached, "the daemon's path");
-	reset_scene(be);
-	bscene_add(&be->b, dragon);
-	bscene_add(&be->b, d);
-	be->orb->first = 1;
-	struct bench_orbit was = be->orb->o[1]; /* the same path as alone */
-	be->orb->o[1] = be->orb->o[0];
-	snprintf(scene, sizeof(scene), "dragon (static) + %s", what);
-	measure(be->r, NULL, &be->b, animate_orbits, be->orb, &be->o, &res);
-	row(scene, "full render", &res, "");
-	measure_cached(be, animate_orbits, be->orb, &res);
+	bscene_add(with, d);
+	bscene_add(with, dragon);
+	snprintf(alone, sizeof(alone), "%s alone", what);
+	snprintf(beside, sizeof(beside), "dragon (static) + %s", what);
+	measure(be->r, NULL, &be->b, animate_first, be->orb, &be->o, &whole[0]);
+	row(alone, "full render", &whole[0], "");
+	measure(be->r, NULL, with, animate_first, be->orb, &be->o, &whole[1]);
+	row(beside, "full render", &whole[1], "");
+	struct series s[2] = {
+		{ .cache = cache_create(&be->g, 256ull << 20, be->pool, true),
+		  .b = &be->b,
+		  .fn = animate_first,
+		  .arg = be->orb },
+		{ .cache = cache_create(&be->g, 256ull << 20, be->pool, true),
+		  .b = with,
+		  .fn = animate_first,
+		  .arg = be->orb },
+	};
+	if (!s[0].cache || !s[1].cache)
+		abort();
+	measure_series(be->r, s, 2, &be->o, cached);
+	row(alone, "cache", &cached[0], "the daemon's path; a volume each in turn with the next row");
 	snprintf(note, sizeof(note), "%.0f%% of the %s's solo rate through the cache, %.0f%% of its full render",
-		 100 * res.vol_s / solo_cached.vol_s, what, 100 * res.vol_s / solo.vol_s);
-	row(scene, "cache", &res, note);
-	be->orb->o[1] = was;
+		 100 * cached[1].vol_s / cached[0].vol_s, what, 100 * cached[1].vol_s / whole[0].vol_s);
+	row(beside, "cache", &cached[1], note);
+	cache_destroy(s[0].cache);
+	cache_destroy(s[1].cache);
+	bscene_free(with);
+	free(with);
 	reset_scene(be);
 }
 
