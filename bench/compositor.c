@@ -3,7 +3,7 @@
  * around the CPU renderer), at perspecta, against full renders of the
  * same scenes in the same run. See bench/README.md.
  *
- *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|s4]
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|beside|s4]
  *                                   [--bunny BUNNY.ply] DRAGON.ply */
 #include <errno.h>
 #include <math.h>
@@ -66,7 +66,7 @@ struct opts {
 	unsigned volumes;
 	double seconds;
 	const char *profile, *dragon, *bunny;
-	const char *only; /* NULL, "dragon" or "s4": the rows to run */
+	const char *only; /* NULL, "dragon", "beside" (its objects beside it) or "s4": the rows to run */
 };
 
 struct result {
@@ -406,6 +406,10 @@ static void bench_dragon(struct bench *be)
 		beside_dragon(be, "bunny", &d, &dragon.draws[0]);
 	}
 	vbuf_free(&bunny);
+	if (be->o.only && !strcmp(be->o.only, "beside")) {
+		bench_scene_free(&dragon);
+		return;
+	}
 	bscene_add(&be->b, &dragon.draws[0]); /* turning one image step per volume */
 	measure(be->r, NULL, &be->b, animate_turntable, &be->g, &be->o, &res);
 	row("dragon turning one image a volume", "full render", &res, "");
@@ -462,13 +466,15 @@ static int parse(int argc, char **argv, struct opts *o)
 		else if (!strcmp(argv[i], "--bunny") && i + 1 < argc)
 			o->bunny = argv[++i];
 		else if (!strcmp(argv[i], "--only") && i + 1 < argc &&
-			 (!strcmp(argv[i + 1], "dragon") || !strcmp(argv[i + 1], "s4")))
+			 (!strcmp(argv[i + 1], "dragon") || !strcmp(argv[i + 1], "beside") ||
+			  !strcmp(argv[i + 1], "s4")))
 			o->only = argv[++i];
 		else if (argv[i][0] != '-')
 			o->dragon = argv[i];
 		else {
 			fprintf(stderr,
-				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|s4] [--bunny PLY] "
+				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|beside|s4] "
+				"[--bunny PLY] "
 				"[DRAGON.ply]\n",
 				argv[0]);
 			return 2;
@@ -513,7 +519,7 @@ int main(int argc, char **argv)
 	be.orb->rng = rng_seed(0x5350494e444c4534u);
 	for (uint32_t i = 0; i < MAX_OBJECTS; i++)
 		bench_orbit_random(&be.orb->o[i], &be.orb->rng, be.g.half_height);
-	if (!be.o.only || !strcmp(be.o.only, "dragon"))
+	if (!be.o.only || strcmp(be.o.only, "s4"))
 		bench_dragon(&be);
 	if (!be.o.only || !strcmp(be.o.only, "s4"))
 		bench_s4(&be);

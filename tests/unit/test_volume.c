@@ -216,6 +216,24 @@ static void check_update(const struct geometry *g)
 	volume_destroy(to);
 }
 
+/* volume_stored_index() against a bit-by-bit count, for every tile of
+ * random masks up to perspecta's 576 tiles (its word loop and the bytes
+ * after it). */
+static void check_stored_index(void)
+{
+	uint8_t mask[80];
+	uint32_t seed = 11;
+	for (int round = 0; round < 50; round++) {
+		for (size_t b = 0; b < sizeof(mask); b++)
+			mask[b] = round % 7 == 0 ? 0xff : (uint8_t)lcg(&seed);
+		uint32_t want = 0;
+		for (uint32_t t = 0; t <= 8 * sizeof(mask); t++) {
+			CHECK_EQ(volume_stored_index(mask, t), want);
+			want += t < 8 * sizeof(mask) && (mask[t / 8] >> (t % 8)) & 1;
+		}
+	}
+}
+
 int main(void)
 {
 	struct geometry small;
@@ -223,6 +241,7 @@ int main(void)
 	check_create();
 	check_append();
 	check_set();
+	check_stored_index();
 	check_pixels_and_dense(&odd);
 	check_pixels_and_dense(&small);
 	check_update(&odd);
