@@ -128,7 +128,7 @@ int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_
 	uint8_t *dst = volume_image_next(vol, k);
 	if (!dst)
 		return -ENOMEM;
-	memcpy(dst, data, VOLUME_TILE_BYTES);
+	volume_tile_copy(dst, data);
 	return volume_image_push(vol, k, t);
 }
 
@@ -290,7 +290,7 @@ int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src
 				continue; /* copied with the run */
 			size_t at = (size_t)(base + volume_mask_bits(s->mask[b] & ((1u << bitno) - 1))) *
 				    VOLUME_TILE_BYTES;
-			memcpy(d->tiles + at, s->tiles + at, VOLUME_TILE_BYTES);
+			volume_tile_copy(d->tiles + at, s->tiles + at);
 		}
 	dst->origin = 0;
 	return 0;

@@ -51,6 +51,23 @@ void volume_destroy(struct volume *vol);
 /* Empties every image; keeps storage. */
 void volume_clear(struct volume *vol);
 
+/* A packed tile copied, or zeroed, in 16-byte moves: a fixed-size memcpy
+ * or memset of it compiles to rep movs / rep stos, whose start costs more
+ * than the tile. */
+typedef uint8_t volume_chunk __attribute__((vector_size(16), aligned(1)));
+
+static inline void volume_tile_copy(uint8_t *restrict dst, const uint8_t *restrict src)
+{
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(volume_chunk))
+		*(volume_chunk *)(dst + i) = *(const volume_chunk *)(src + i);
+}
+
+static inline void volume_tile_zero(uint8_t *dst)
+{
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(volume_chunk))
+		*(volume_chunk *)(dst + i) = (volume_chunk){ 0 };
+}
+
 /* Tiles across n pixels: ceil(n / VOLUME_TILE). */
 static inline uint32_t volume_tiles_across(uint32_t n)
 {

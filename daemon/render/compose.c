@@ -153,7 +153,7 @@ static int emit_image(struct compose *c, struct compose_worker *w, uint32_t k, u
 		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 		if (err == 0)
 			err = volume_image_append(c->out, k, t, tile);
-		memset(tile, 0, VOLUME_TILE_BYTES);
+		volume_tile_zero(tile);
 		w->touched[t] = 0;
 	}
 	return err;
@@ -291,8 +291,8 @@ static void write_touched(const struct compose *c, struct compose_worker *w, str
 				continue;
 			uint32_t i = base + volume_mask_bits(old->mask[b] & ((1u << bitno) - 1));
 			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-			memcpy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile, VOLUME_TILE_BYTES);
-			memset(tile, 0, VOLUME_TILE_BYTES);
+			volume_tile_copy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile);
+			volume_tile_zero(tile);
 			w->touched[t] = 0;
 		}
 }
@@ -330,12 +330,12 @@ static void lay_run(const struct compose *c, struct compose_worker *w, const str
 			has = w->touched[t];
 			if (has) {
 				uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-				memcpy(to, tile, VOLUME_TILE_BYTES);
-				memset(tile, 0, VOLUME_TILE_BYTES);
+				volume_tile_copy(to, tile);
+				volume_tile_zero(tile);
 				w->touched[t] = 0;
 			}
 		} else if (had) {
-			memcpy(to, old->tiles + (size_t)i * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
+			volume_tile_copy(to, old->tiles + (size_t)i * VOLUME_TILE_BYTES);
 		}
 		i += had;
 		n += has;
@@ -364,15 +364,28 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
 	return 0;
 }
 
+/* Whether any of n bytes is not zero, eight at a time (every image is
+ * asked, most have none). */
+static bool any_set(const uint8_t *bytes, size_t n)
+{
+	size_t i = 0;
+	uint64_t any = 0;
+	for (; i + 8 <= n; i += 8) {
+		uint64_t w;
+		memcpy(&w, bytes + i, sizeof(w));
+		any |= w;
+	}
+	for (; i < n; i++)
+		any |= bytes[i];
+	return any != 0;
+}
+
 /* Image k of c->out anew: its dirty tiles composed from the sources
  * (gathered into w's dense image first), then patched in place. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
-	bool any = false;
-	for (uint32_t b = 0; b < c->mask_bytes && !any; b++)
-		any = dirty[b] != 0;
-	if (!any)
+	if (!any_set(dirty, c->mask_bytes))
 		return 0;
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
@@ -382,7 +395,7 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	if (err < 0) { /* leave the dense image zero for the next */
 		for (uint32_t t = 0; t < c->tiles_per_image; t++)
 			if (w->touched[t]) {
-				memset(w->tiles + (size_t)t * VOLUME_TILE_BYTES, 0, VOLUME_TILE_BYTES);
+				volume_tile_zero(w->tiles + (size_t)t * VOLUME_TILE_BYTES);
 				w->touched[t] = 0;
 			}
 	}

@@ -100,12 +100,13 @@ uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t)
 
 void section_canvas_pack_lit(const struct section_canvas *c, uint32_t t, uint8_t *out, bool fresh)
 {
-	typedef uint8_t chunk __attribute__((vector_size(16), aligned(1))); /* 16-byte moves, not a rep movs */
 	const uint8_t *bits = (const uint8_t *)(c->lit_bits + (size_t)t * SECTION_LIT_TILE);
-	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(chunk)) {
-		chunk v = *(const chunk *)(bits + i);
-		*(chunk *)(out + i) = fresh ? v : v | *(const chunk *)(out + i);
+	if (fresh) {
+		volume_tile_copy(out, bits);
+		return;
 	}
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(volume_chunk))
+		*(volume_chunk *)(out + i) |= *(const volume_chunk *)(bits + i);
 }
 
 bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out)
