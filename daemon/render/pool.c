@@ -2,8 +2,16 @@
 
 #include <errno.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
+#include <time.h>
+
+/* How long a worker looks for the next job, and the caller for the
+ * workers' end, before sleeping: a volume's steps come microseconds
+ * apart, and a futex wake-up on this kind of machine costs tens of
+ * microseconds, about a small object's whole render. */
+#define POOL_SPIN_NS 30000
 
 struct pool_thread {
 	struct pool *pool;
@@ -11,39 +19,83 @@ struct pool_thread {
 	pthread_t thread;
 };
 
+/* generation and running are read by spinning threads without the lock;
+ * job and arg are written before generation is bumped (release) and read
+ * after it is seen (acquire). sleepers and caller_waiting, under the
+ * lock, say who must be woken. */
 struct pool {
 	unsigned workers;            /* threads + 1 (the caller) */
 	struct pool_thread *threads; /* workers - 1 */
 	pthread_mutex_t lock;
 	pthread_cond_t wake, done;
-	unsigned long generation; /* bumped per job */
-	unsigned running;         /* threads still in the current job */
-	bool quit;
+	atomic_ulong generation; /* bumped per job */
+	atomic_uint running;     /* threads still in the current job */
+	atomic_bool quit;
+	unsigned sleepers;   /* threads waiting on wake */
+	bool caller_waiting; /* the caller waits on done */
 	pool_job job;
 	void *arg;
 };
+
+static int64_t now_ns(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
+}
+
+static inline void relax(void)
+{
+#if defined(__x86_64__) || defined(__i386__)
+	__builtin_ia32_pause();
+#endif
+}
+
+/* Spins until *word differs from value (or, for a worker, the pool
+ * quits) or POOL_SPIN_NS pass; whether it did. */
+static bool spin_until_not(atomic_ulong *word, unsigned long value, const atomic_bool *quit)
+{
+	int64_t end = 0;
+	for (unsigned i = 0;; i++) {
+		if (atomic_load_explicit(word, memory_order_acquire) != value ||
+		    (quit && atomic_load_explicit(quit, memory_order_relaxed)))
+			return true;
+		if (i % 64 == 63) { /* the clock now and then, not each turn */
+			int64_t now = now_ns();
+			if (!end)
+				end = now + POOL_SPIN_NS;
+			else if (now > end)
+				return false;
+		}
+		relax();
+	}
+}
 
 static void *thread_main(void *data)
 {
 	struct pool_thread *t = data;
 	struct pool *p = t->pool;
 	unsigned long seen = 0;
-	pthread_mutex_lock(&p->lock);
 	for (;;) {
-		while (p->generation == seen && !p->quit)
-			pthread_cond_wait(&p->wake, &p->lock);
-		if (p->quit)
+		if (!spin_until_not(&p->generation, seen, &p->quit)) {
+			pthread_mutex_lock(&p->lock);
+			p->sleepers++;
+			while (atomic_load(&p->generation) == seen && !atomic_load(&p->quit))
+				pthread_cond_wait(&p->wake, &p->lock);
+			p->sleepers--;
+			pthread_mutex_unlock(&p->lock);
+		}
+		if (atomic_load(&p->quit))
 			break;
-		seen = p->generation;
-		pool_job job = p->job;
-		void *arg = p->arg;
-		pthread_mutex_unlock(&p->lock);
-		job(arg, t->index);
-		pthread_mutex_lock(&p->lock);
-		if (--p->running == 0)
-			pthread_cond_signal(&p->done);
+		seen = atomic_load_explicit(&p->generation, memory_order_acquire);
+		p->job(p->arg, t->index);
+		if (atomic_fetch_sub_explicit(&p->running, 1, memory_order_acq_rel) == 1) {
+			pthread_mutex_lock(&p->lock);
+			if (p->caller_waiting)
+				pthread_cond_signal(&p->done);
+			pthread_mutex_unlock(&p->lock);
+		}
 	}
-	pthread_mutex_unlock(&p->lock);
 	return NULL;
 }
 
@@ -62,6 +114,9 @@ struct pool *pool_create(unsigned n)
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->wake, NULL);
 	pthread_cond_init(&p->done, NULL);
+	atomic_init(&p->generation, 0);
+	atomic_init(&p->running, 0);
+	atomic_init(&p->quit, false);
 	p->workers = 1;
 	for (unsigned i = 1; i < n; i++) {
 		struct pool_thread *t = &p->threads[i - 1];
@@ -79,7 +134,7 @@ void pool_destroy(struct pool *p)
 	if (!p)
 		return;
 	pthread_mutex_lock(&p->lock);
-	p->quit = true;
+	atomic_store(&p->quit, true);
 	pthread_cond_broadcast(&p->wake);
 	pthread_mutex_unlock(&p->lock);
 	for (unsigned i = 0; i + 1 < p->workers; i++)
@@ -96,22 +151,43 @@ unsigned pool_workers(const struct pool *p)
 	return p->workers;
 }
 
+/* Spins on running like spin_until_not() on a generation. */
+static bool spin_until_done(atomic_uint *running)
+{
+	int64_t end = 0;
+	for (unsigned i = 0;; i++) {
+		if (atomic_load_explicit(running, memory_order_acquire) == 0)
+			return true;
+		if (i % 64 == 63) {
+			int64_t now = now_ns();
+			if (!end)
+				end = now + POOL_SPIN_NS;
+			else if (now > end)
+				return false;
+		}
+		relax();
+	}
+}
+
 void pool_run(struct pool *p, pool_job job, void *arg)
 {
 	if (p->workers > 1) {
-		pthread_mutex_lock(&p->lock);
 		p->job = job;
 		p->arg = arg;
-		p->running = p->workers - 1;
-		p->generation++;
-		pthread_cond_broadcast(&p->wake);
+		atomic_store_explicit(&p->running, p->workers - 1, memory_order_relaxed);
+		atomic_fetch_add_explicit(&p->generation, 1, memory_order_release);
+		pthread_mutex_lock(&p->lock); /* a thread that saw the old generation under it sleeps */
+		if (p->sleepers)
+			pthread_cond_broadcast(&p->wake);
 		pthread_mutex_unlock(&p->lock);
 	}
 	job(arg, 0);
-	if (p->workers > 1) {
+	if (p->workers > 1 && !spin_until_done(&p->running)) {
 		pthread_mutex_lock(&p->lock);
-		while (p->running)
+		p->caller_waiting = true;
+		while (atomic_load(&p->running))
 			pthread_cond_wait(&p->done, &p->lock);
+		p->caller_waiting = false;
 		pthread_mutex_unlock(&p->lock);
 	}
 }
