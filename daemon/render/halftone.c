@@ -62,7 +62,7 @@ static inline void put_row(uint8_t *out, uint32_t word)
 	attrs static int name(const uint8_t *canvas, uint32_t rows, const struct halftone_table *t, uint8_t *out)    \
 	{                                                                                                            \
 		uint32_t any = 0;                                                                                    \
-		memset(out, 0, VOLUME_TILE_BYTES);                                                                   \
+		volume_tile_zero(out);                                                                               \
 		for (; rows; rows &= rows - 1) {                                                                     \
 			uint32_t y = (uint32_t)__builtin_ctz(rows);                                                  \
 			for (int c = 0; c < 3; c++) {                                                                \
@@ -120,7 +120,7 @@ __attribute__((target("avx512f,avx512bw"))) static int halftone_avx512(const uin
 	uint32_t pairs = 0;
 	for (uint32_t p = 0; p < 16; p++)
 		pairs |= ((rows >> (2 * p)) & 3u ? 1u : 0u) << p;
-	memset(out, 0, VOLUME_TILE_BYTES);
+	volume_tile_zero(out);
 	for (; pairs; pairs &= pairs - 1) {
 		uint32_t y = 2 * (uint32_t)__builtin_ctz(pairs);
 		__m512i th = _mm512_loadu_si512((const void *)t->thr[y & 15]);

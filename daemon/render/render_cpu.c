@@ -125,7 +125,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		if (dst && c->lit_rows[t]) /* lit_rows only flags rows with a bit set */
 			section_canvas_pack_lit(c, t, dst, !c->rows[t]);
 		else if (dst && !c->rows[t])
-			memset(dst, 0, VOLUME_TILE_BYTES);
+			volume_tile_zero(dst);
 		lit |= dst && c->lit_rows[t];
 		if (dst && c->plain_rows[t])
 			lit |= section_canvas_pack_plain(
