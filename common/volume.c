@@ -102,7 +102,7 @@ int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n)
 	return 0;
 }
 
-static int all_zero(const uint8_t *p, size_t n)
+bool volume_all_zero(const uint8_t *p, size_t n)
 {
 	uint64_t any = 0;
 	size_t i = 0;
@@ -123,7 +123,7 @@ int volume_image_append(struct volume *vol, uint32_t k, uint32_t t, const uint8_
 	struct volume_image *img = &vol->images[k];
 	if (t < img->next_tile)
 		return -EINVAL; /* out of order */
-	if (all_zero(data, VOLUME_TILE_BYTES))
+	if (volume_all_zero(data, VOLUME_TILE_BYTES))
 		return 0;
 	uint8_t *dst = volume_image_next(vol, k);
 	if (!dst)
@@ -194,22 +194,13 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
 	return 0;
 }
 
-/* Set bits of a 64-bit word, without the library call (volume_mask_bits()). */
-static inline uint32_t word_bits(uint64_t x)
-{
-	x = x - ((x >> 1) & 0x5555555555555555ull);
-	x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
-	x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
-	return (uint32_t)((x * 0x0101010101010101ull) >> 56);
-}
-
 uint32_t volume_stored_index(const uint8_t *mask, uint32_t t)
 {
 	uint32_t i = 0, b = 0;
 	for (; b + 8 <= t / 8; b += 8) { /* eight mask bytes at a time */
 		uint64_t w;
 		memcpy(&w, mask + b, sizeof(w));
-		i += word_bits(w);
+		i += volume_word_bits(w);
 	}
 	for (; b < t / 8; b++)
 		i += volume_mask_bits(mask[b]);

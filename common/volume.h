@@ -11,6 +11,7 @@
 #ifndef SPINDLE_VOLUME_H
 #define SPINDLE_VOLUME_H
 
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -93,6 +94,18 @@ static inline uint32_t volume_mask_bits(uint32_t byte)
 	byte = (byte & 0x33) + ((byte >> 2) & 0x33);
 	return (byte + (byte >> 4)) & 0x0f;
 }
+
+/* Set bits of a 64-bit word, the same way. */
+static inline uint32_t volume_word_bits(uint64_t x)
+{
+	x = x - ((x >> 1) & 0x5555555555555555ull);
+	x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+	x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
+	return (uint32_t)((x * 0x0101010101010101ull) >> 56);
+}
+
+/* Whether n bytes are all zero (eight at a time). */
+bool volume_all_zero(const uint8_t *p, size_t n);
 
 static inline int volume_tile_present(const struct volume_image *img, uint32_t t)
 {

@@ -364,28 +364,12 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
 	return 0;
 }
 
-/* Whether any of n bytes is not zero, eight at a time (every image is
- * asked, most have none). */
-static bool any_set(const uint8_t *bytes, size_t n)
-{
-	size_t i = 0;
-	uint64_t any = 0;
-	for (; i + 8 <= n; i += 8) {
-		uint64_t w;
-		memcpy(&w, bytes + i, sizeof(w));
-		any |= w;
-	}
-	for (; i < n; i++)
-		any |= bytes[i];
-	return any != 0;
-}
-
 /* Image k of c->out anew: its dirty tiles composed from the sources
  * (gathered into w's dense image first), then patched in place. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
-	if (!any_set(dirty, c->mask_bytes))
+	if (volume_all_zero(dirty, c->mask_bytes)) /* most images, eight bytes at a time */
 		return 0;
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
@@ -466,8 +450,7 @@ static bool few_dirty(const uint8_t *dirty, size_t bytes)
 	for (; i + 8 <= bytes; i += 8) {
 		uint64_t word;
 		memcpy(&word, dirty + i, sizeof(word));
-		for (; word; word >>= 8)
-			n += volume_mask_bits(word & 0xff);
+		n += volume_word_bits(word);
 		if (n > COMPOSE_FEW_TILES)
 			return false;
 	}

@@ -29,7 +29,7 @@ struct pool {
 	pthread_mutex_t lock;
 	pthread_cond_t wake, done;
 	atomic_ulong generation; /* bumped per job */
-	atomic_uint running;     /* threads still in the current job */
+	atomic_ulong running;    /* threads still in the current job */
 	atomic_bool quit;
 	unsigned sleepers;   /* threads waiting on wake */
 	bool caller_waiting; /* the caller waits on done */
@@ -51,13 +51,13 @@ static inline void relax(void)
 #endif
 }
 
-/* Spins until *word differs from value (or, for a worker, the pool
- * quits) or POOL_SPIN_NS pass; whether it did. */
-static bool spin_until_not(atomic_ulong *word, unsigned long value, const atomic_bool *quit)
+/* Spins until *word == value is what is wanted (equal) or, for a worker,
+ * the pool quits, or POOL_SPIN_NS pass; whether it got there. */
+static bool spin_for(atomic_ulong *word, unsigned long value, bool equal, const atomic_bool *quit)
 {
 	int64_t end = 0;
 	for (unsigned i = 0;; i++) {
-		if (atomic_load_explicit(word, memory_order_acquire) != value ||
+		if ((atomic_load_explicit(word, memory_order_acquire) == value) == equal ||
 		    (quit && atomic_load_explicit(quit, memory_order_relaxed)))
 			return true;
 		if (i % 64 == 63) { /* the clock now and then, not each turn */
@@ -77,7 +77,7 @@ static void *thread_main(void *data)
 	struct pool *p = t->pool;
 	unsigned long seen = 0;
 	for (;;) {
-		if (!spin_until_not(&p->generation, seen, &p->quit)) {
+		if (!spin_for(&p->generation, seen, false, &p->quit)) {
 			pthread_mutex_lock(&p->lock);
 			p->sleepers++;
 			while (atomic_load(&p->generation) == seen && !atomic_load(&p->quit))
@@ -151,24 +151,6 @@ unsigned pool_workers(const struct pool *p)
 	return p->workers;
 }
 
-/* Spins on running like spin_until_not() on a generation. */
-static bool spin_until_done(atomic_uint *running)
-{
-	int64_t end = 0;
-	for (unsigned i = 0;; i++) {
-		if (atomic_load_explicit(running, memory_order_acquire) == 0)
-			return true;
-		if (i % 64 == 63) {
-			int64_t now = now_ns();
-			if (!end)
-				end = now + POOL_SPIN_NS;
-			else if (now > end)
-				return false;
-		}
-		relax();
-	}
-}
-
 void pool_run(struct pool *p, pool_job job, void *arg)
 {
 	if (p->workers > 1) {
@@ -182,7 +164,7 @@ void pool_run(struct pool *p, pool_job job, void *arg)
 		pthread_mutex_unlock(&p->lock);
 	}
 	job(arg, 0);
-	if (p->workers > 1 && !spin_until_done(&p->running)) {
+	if (p->workers > 1 && !spin_for(&p->running, 0, true, NULL)) {
 		pthread_mutex_lock(&p->lock);
 		p->caller_waiting = true;
 		while (atomic_load(&p->running))
