@@ -489,7 +489,8 @@ static void header(const struct bench *be)
 {
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
 	       "warm-up volumes, then up to %u volumes or %.0f s; ms per volume (plan + render + compose, animation "
-	       "included), median and p99; render / compose: the cache's split, medians; hits / misses: objects, "
+	       "included), median and p99; vol/s: the volumes over the time they took; render / compose: the cache's "
+	       "split, medians; hits / misses: objects, "
 	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
 	       be->o.profile, be->g.width, be->g.height, be->g.images_per_rev, be->g.mirrored ? ", mirrored" : "",
 	       be->r->stats.threads, be->o.volumes, be->o.seconds);
