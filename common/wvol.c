@@ -85,14 +85,14 @@ static int decode_image(struct volume *vol, uint32_t k, const uint8_t **pp, cons
 	return 0;
 }
 
-struct volume *wvol_decode(const uint8_t *buf, size_t size)
+/* The geometry a watch volume's header gives, where the header is one
+ * this version reads and the geometry valid. */
+static bool header_geometry(const uint8_t *buf, size_t size, struct geometry *g)
 {
 	if (!wvol_is(buf, size) || buf[4] != WVOL_VERSION || buf[5] || buf[6] != WVOL_HEADER_SIZE || buf[7] ||
-	    buf[24] != 3) {
-		errno = EINVAL;
-		return NULL;
-	}
-	struct geometry g = {
+	    buf[24] != 3)
+		return false;
+	*g = (struct geometry){
 		.width = le_get32(buf + 8),
 		.height = le_get32(buf + 12),
 		.images_per_rev = le_get32(buf + 20),
@@ -100,8 +100,14 @@ struct volume *wvol_decode(const uint8_t *buf, size_t size)
 		.rpm = 60.0f, /* not stored */
 	};
 	uint32_t hh = le_get32(buf + 28);
-	memcpy(&g.half_height, &hh, 4);
-	if (geometry_validate(&g) < 0 || le_get32(buf + 16) != geometry_images_per_volume(&g)) {
+	memcpy(&g->half_height, &hh, 4);
+	return geometry_validate(g) == 0 && le_get32(buf + 16) == geometry_images_per_volume(g);
+}
+
+struct volume *wvol_decode(const uint8_t *buf, size_t size)
+{
+	struct geometry g;
+	if (!header_geometry(buf, size, &g)) {
 		errno = EINVAL;
 		return NULL;
 	}
