@@ -95,56 +95,72 @@ static void print_calibration(const struct spindle_calibration *c)
 	       (double)c->vertical_offset);
 }
 
+/* What status reports: the daemon's status, and its watchers' and
+ * calibration where its protocol has them. */
+struct status_all {
+	struct spindle_status st;
+	struct spindle_watch_stats ws;
+	struct spindle_calibration cal;
+	bool watch_known, cal_known;
+};
+
+static int fetch_status(struct spindle *sp, struct status_all *s)
+{
+	int ret = spindle_get_status(sp, &s->st);
+	if (ret == 0 && spindle_get_version(sp) >= 5) { /* protocol 5 */
+		ret = spindle_get_watch_stats(sp, &s->ws);
+		s->watch_known = ret == 0;
+	}
+	if (ret == 0 && spindle_get_version(sp) >= 6) { /* protocol 6 */
+		ret = spindle_get_calibration(sp, &s->cal);
+		s->cal_known = ret == 0;
+	}
+	return ret;
+}
+
+static void print_watchers(const struct spindle_watch_stats *ws)
+{
+	printf("watchers: %u of %u (at most %u/s each), %llu volumes sent (%llu bytes), %llu skipped, %llu refused, "
+	       "%llu denied\n",
+	       ws->watchers, ws->max_watchers, ws->max_rate_hz, (unsigned long long)ws->volumes_sent,
+	       (unsigned long long)ws->bytes_sent, (unsigned long long)ws->volumes_skipped,
+	       (unsigned long long)ws->refused, (unsigned long long)ws->denied);
+}
+
 int cmd_status(const struct ctl_args *a)
 {
-	struct spindle_status st;
 	struct spindle *sp = ctl_connect(a);
 	if (!sp)
 		return CTL_CONNECT;
-	int ret = spindle_get_status(sp, &st);
-	struct spindle_watch_stats ws;
-	bool watch_known = false;
-	if (ret == 0 && spindle_get_version(sp) >= 5) { /* protocol 5 */
-		ret = spindle_get_watch_stats(sp, &ws);
-		watch_known = ret == 0;
-	}
-	struct spindle_calibration cal;
-	bool cal_known = false;
-	if (ret == 0 && spindle_get_version(sp) >= 6) { /* protocol 6 */
-		ret = spindle_get_calibration(sp, &cal);
-		cal_known = ret == 0;
-	}
+	struct status_all s = { .watch_known = false };
+	int ret = fetch_status(sp, &s);
 	if (ret < 0) {
 		ctl_report_failure(sp, "status", ret);
 		spindle_disconnect(sp);
 		return CTL_FAILED;
 	}
 	if (a->json) {
-		status_print_json(stdout, ctl_socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp), &st,
-				  watch_known ? &ws : NULL, cal_known ? &cal : NULL);
+		status_print_json(stdout, ctl_socket_path(a), spindle_get_version(sp), spindle_get_device_info(sp),
+				  &s.st, s.watch_known ? &s.ws : NULL, s.cal_known ? &s.cal : NULL);
 		spindle_disconnect(sp);
 		return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
 	}
 	printf("socket: %s\n", ctl_socket_path(a));
 	printf("protocol version: %u\n", spindle_get_version(sp));
 	print_device(spindle_get_device_info(sp));
-	print_status(&st);
-	if (st.limits_known) /* protocol 3 */
-		print_limits(&st.limits);
-	if (st.composition_known) { /* protocol 4 */
-		print_service(&st.service);
-		print_composition(&st.composition);
+	print_status(&s.st);
+	if (s.st.limits_known) /* protocol 3 */
+		print_limits(&s.st.limits);
+	if (s.st.composition_known) { /* protocol 4 */
+		print_service(&s.st.service);
+		print_composition(&s.st.composition);
 	}
-	if (watch_known)
-		printf("watchers: %u of %u (at most %u/s each), %llu volumes sent (%llu bytes), %llu skipped, %llu "
-		       "refused, %llu denied\n",
-		       ws.watchers, ws.max_watchers, ws.max_rate_hz, (unsigned long long)ws.volumes_sent,
-		       (unsigned long long)ws.bytes_sent, (unsigned long long)ws.volumes_skipped,
-		       (unsigned long long)ws.refused, (unsigned long long)ws.denied);
-	if (cal_known)
-		print_calibration(&cal);
+	if (s.watch_known)
+		print_watchers(&s.ws);
+	if (s.cal_known)
+		print_calibration(&s.cal);
 	spindle_disconnect(sp);
-	return fflush(stdout) == 0 ? 0 : 1;
+	return fflush(stdout) == 0 ? CTL_OK : CTL_FAILED;
 }
 
 /* ---- calibrate ---- */
