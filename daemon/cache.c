@@ -325,30 +325,37 @@ static int add_rest(struct cache *c, const struct scene_draw *draws, uint32_t n)
 	return 0;
 }
 
+/* The role of object e, which changed, this volume: its cached result
+ * dropped, the back-off moved by whether it paid, the counters restarted.
+ * room: the budget has room for new entries. */
+static enum role invalidate(struct cache *c, struct entry *e, bool room)
+{
+	bool paid = false;
+	if (e->vol || e->canvas) {
+		drop_volume(c, e);
+		drop_canvas(e);
+		paid = e->hits >= PAYOFF_HITS;
+		if (!paid)
+			e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
+		else if (e->backoff)
+			e->backoff--;
+		c->stats.invalidations++;
+	}
+	e->reuse = 0;
+	e->hits = 0;
+	/* An object whose cached volume paid and that does not back off is
+	 * cached again at once, in its new state: it changes now and then,
+	 * and rendering it with the rest now and alone next time would
+	 * render it twice. */
+	return paid && !e->backoff && room ? ROLE_CREATE : ROLE_REST;
+}
+
 /* The role of object e this volume, and its state moved on. room: the
  * budget has room for new entries. */
 static enum role decide(struct cache *c, struct entry *e, enum change change, bool room)
 {
-	if (change == CHANGED || (change == TURNED && !c->turns)) {
-		bool paid = false;
-		if (e->vol || e->canvas) {
-			drop_volume(c, e);
-			drop_canvas(e);
-			paid = e->hits >= PAYOFF_HITS;
-			if (!paid)
-				e->backoff = sat_inc(e->backoff, MAX_BACKOFF);
-			else if (e->backoff)
-				e->backoff--;
-			c->stats.invalidations++;
-		}
-		e->reuse = 0;
-		e->hits = 0;
-		/* An object whose cached volume paid and that does not back
-		 * off is cached again at once, in its new state: it changes
-		 * now and then, and rendering it with the rest now and alone
-		 * next time would render it twice. */
-		return paid && !e->backoff && room ? ROLE_CREATE : ROLE_REST;
-	}
+	if (change == CHANGED || (change == TURNED && !c->turns))
+		return invalidate(c, e, room);
 	/* Unchanged, or only turned: reusable. */
 	e->reuse = sat_inc(e->reuse, UINT8_MAX);
 	uint32_t wait = (uint32_t)CREATE_AFTER << e->backoff;
