@@ -492,15 +492,10 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 	return 0;
 }
 
-struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct renderer *renderer,
-				 const struct pipeline_listener *listener, void *data)
+/* p's fields for cfg, renderer and listener: nothing made yet. */
+static void pipeline_init(struct pipeline *p, const struct pipeline_config *cfg, struct renderer *renderer,
+			  const struct pipeline_listener *listener, void *data)
 {
-	int r;
-	struct pipeline *p = calloc(1, sizeof(*p));
-	if (!p) {
-		render_destroy(renderer);
-		return NULL;
-	}
 	p->cfg = *cfg;
 	p->calibration = cfg->calibration;
 	p->listener = listener;
@@ -516,22 +511,37 @@ struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct rende
 	p->done_fd = -1;
 	pthread_mutex_init(&p->lock, NULL);
 	pthread_cond_init(&p->cond, NULL);
-	r = create_volumes(p, &renderer->geom);
-	if (r < 0 || (cfg->cache && (r = create_cache(p, &renderer->geom)) < 0))
-		goto err;
+}
+
+/* p's volumes, cache, done eventfd and its source, and render thread.
+ * 0 or -errno (what was made is freed by pipeline_destroy()). */
+static int pipeline_start(struct pipeline *p)
+{
+	const struct geometry *g = &p->renderer->geom;
+	int r = create_volumes(p, g);
+	if (r < 0 || (p->cfg.cache && (r = create_cache(p, g)) < 0))
+		return r;
 	p->done_fd = eventfd(0, EFD_CLOEXEC | EFD_NONBLOCK);
-	if (p->done_fd < 0) {
-		r = -errno;
-		goto err;
+	if (p->done_fd < 0)
+		return -errno;
+	r = sd_event_add_io(p->cfg.event, &p->done_source, p->done_fd, EPOLLIN, render_done, p);
+	if (r < 0)
+		return r;
+	return -pthread_create(&p->thread, NULL, render_thread, p);
+}
+
+struct pipeline *pipeline_create(const struct pipeline_config *cfg, struct renderer *renderer,
+				 const struct pipeline_listener *listener, void *data)
+{
+	struct pipeline *p = calloc(1, sizeof(*p));
+	if (!p) {
+		render_destroy(renderer);
+		return NULL;
 	}
-	r = sd_event_add_io(cfg->event, &p->done_source, p->done_fd, EPOLLIN, render_done, p);
-	if (r < 0)
-		goto err;
-	r = -pthread_create(&p->thread, NULL, render_thread, p);
-	if (r < 0)
-		goto err;
-	return p;
-err:
+	pipeline_init(p, cfg, renderer, listener, data);
+	int r = pipeline_start(p);
+	if (r == 0)
+		return p;
 	sd_event_source_disable_unref(p->done_source);
 	p->done_source = NULL;
 	pipeline_destroy(p);
