@@ -5,7 +5,8 @@
 #include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
-#include <time.h>
+
+#include "log.h" /* now_ns() */
 
 /* How long a worker looks for the next job, and the caller for the
  * workers' end, before sleeping: a volume's steps come microseconds
@@ -36,13 +37,6 @@ struct pool {
 	pool_job job;
 	void *arg;
 };
-
-static int64_t now_ns(void)
-{
-	struct timespec ts;
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (int64_t)ts.tv_sec * 1000000000 + ts.tv_nsec;
-}
 
 static inline void relax(void)
 {

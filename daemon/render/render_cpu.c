@@ -100,11 +100,33 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 	return rle_volume_set_image(r->canvas_out, k, st->mask, st->tiles, n, &st->rle);
 }
 
+/* Tile t of w's canvas (image k) packed into dst: its bytes halftoned,
+ * its lit bits copied or ORed in, its plain bits through the plain
+ * colour's pattern. Whether any bit is set. */
+static bool pack_tile(struct render_cpu *r, struct cpu_worker *w, uint32_t k, uint32_t t, uint8_t *dst)
+{
+	struct section_canvas *c = &w->canvas;
+	const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
+	bool lit = false;
+	if (c->rows[t])
+		lit = r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst);
+	if (c->lit_rows[t]) { /* flags only rows with a bit set */
+		section_canvas_pack_lit(c, t, dst, !c->rows[t]);
+		lit = true;
+	} else if (!c->rows[t]) {
+		volume_tile_zero(dst);
+	}
+	if (c->plain_rows[t])
+		lit |= section_canvas_pack_plain(
+			c, t, halftone_pattern(&w->plain, c->plain_rgb, thr, r->halftone)->bits, dst);
+	return lit;
+}
+
 /* Halftones and packs the touched tiles of image k in increasing order
- * straight into the volume's storage, and leaves the canvas all zero
- * again, whether or not packing succeeded. The image's storage grows when
- * full (it is kept from volume to volume, so seldom); its mask is made in
- * the worker's own (w->mask) and set once at the end
+ * straight into the volume's storage (pack_tile()), and leaves the canvas
+ * all zero again, whether or not packing succeeded. The image's storage
+ * grows when full (it is kept from volume to volume, so seldom); its mask
+ * is made in the worker's own (w->mask) and set once at the end
  * (volume_image_set()). */
 static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 {
@@ -117,20 +139,7 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 		w->canvas_tiles++;
 		if (err == 0 && count == img->tile_cap)
 			err = volume_image_reserve(r->out, k, count + 1);
-		uint8_t *dst = err == 0 ? img->tiles + (size_t)count * VOLUME_TILE_BYTES : NULL;
-		const struct halftone_table *thr = brightness_table(&r->thr, k, t % c->tiles_x);
-		bool lit = false;
-		if (dst && c->rows[t])
-			lit = r->halftone(c->rgb + (size_t)t * HALFTONE_TILE_BYTES, c->rows[t], thr, dst);
-		if (dst && c->lit_rows[t]) /* lit_rows only flags rows with a bit set */
-			section_canvas_pack_lit(c, t, dst, !c->rows[t]);
-		else if (dst && !c->rows[t])
-			volume_tile_zero(dst);
-		lit |= dst && c->lit_rows[t];
-		if (dst && c->plain_rows[t])
-			lit |= section_canvas_pack_plain(
-				c, t, halftone_pattern(&w->plain, c->plain_rgb, thr, r->halftone)->bits, dst);
-		if (lit) {
+		if (err == 0 && pack_tile(r, w, k, t, img->tiles + (size_t)count * VOLUME_TILE_BYTES)) {
 			w->mask[t / 8] |= (uint8_t)(1u << (t % 8));
 			count++;
 		}
@@ -150,15 +159,8 @@ static void light_point(struct section_canvas *c, const struct bin_point *p, con
 		section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(thr, k, p->u / VOLUME_TILE));
 		return;
 	}
-	if (p->size == 1) { /* the common case: section_pixel() without branches */
-		uint32_t u = p->u, v = p->v, t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE;
-		uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES +
-			      halftone_pos(u % VOLUME_TILE);
-		for (int i = 0; i < 3; i++) {
-			uint8_t was = px[i * HALFTONE_PLANE_BYTES], rgb = p->rgb[i];
-			px[i * HALFTONE_PLANE_BYTES] = was > rgb ? was : rgb;
-		}
-		c->rows[t] |= 1u << (v % VOLUME_TILE);
+	if (p->size == 1) { /* the common case */
+		section_pixel(c, p->u, p->v, p->rgb);
 		return;
 	}
 	uint32_t u0, u1, v0, v1;

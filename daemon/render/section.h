@@ -125,15 +125,17 @@ static inline void section_canvas_fold_tile(struct section_canvas *c, uint32_t t
 		section_canvas_fold(c, t);
 }
 
-/* Lights pixel (u, v) by per-channel MAX with rgb. */
+/* Lights pixel (u, v) by per-channel MAX with rgb, without branches (a
+ * compare-and-store mispredicts on points of random colours). */
 static inline void section_pixel(struct section_canvas *c, uint32_t u, uint32_t v, const uint8_t rgb[3])
 {
 	uint32_t t = (v / VOLUME_TILE) * c->tiles_x + u / VOLUME_TILE;
 	uint8_t *px = c->rgb + (size_t)t * HALFTONE_TILE_BYTES + (v % VOLUME_TILE) * HALFTONE_ROW_BYTES +
 		      halftone_pos(u % VOLUME_TILE);
-	for (int i = 0; i < 3; i++)
-		if (px[i * HALFTONE_PLANE_BYTES] < rgb[i])
-			px[i * HALFTONE_PLANE_BYTES] = rgb[i];
+	for (int i = 0; i < 3; i++) {
+		uint8_t was = px[i * HALFTONE_PLANE_BYTES];
+		px[i * HALFTONE_PLANE_BYTES] = was > rgb[i] ? was : rgb[i];
+	}
 	c->rows[t] |= 1u << (v % VOLUME_TILE);
 }
 
