@@ -43,13 +43,12 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
-	if (c->prev) {
-		c->dirty = calloc(c->prev->image_count, c->prev->mask_bytes);
-		c->changed = calloc(CHANGED_HISTORY, (size_t)c->prev->image_count * c->prev->mask_bytes);
+	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, c->prev->mask_bytes) == 0;
+	for (unsigned g = 0; marks && g < CHANGED_HISTORY; g++)
+		marks = tile_set_init(&c->changed[g], c->prev->image_count, c->prev->mask_bytes) == 0;
+	if (c->prev)
 		c->changed_mask = calloc(1, c->prev->mask_bytes);
-	}
-	if (!c->compose || !c->prev || !c->dirty || !c->changed || !c->changed_mask || !c->rest_vol || !c->tmp ||
-	    !c->turned_vol) {
+	if (!c->compose || !c->prev || !marks || !c->changed_mask || !c->rest_vol || !c->tmp || !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -59,7 +58,7 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 
 void cache_add_footprint(struct cache *c, const struct compose_source *src)
 {
-	compose_add_footprint(c->dirty, c->prev->image_count, c->prev->mask_bytes, src);
+	compose_add_footprint(&c->dirty, src);
 }
 
 /* An entry whose volume is in the last composition leaves it: its tiles
@@ -132,8 +131,9 @@ void cache_destroy(struct cache *c)
 	free(c->rest);
 	free(c->sources);
 	volume_destroy(c->prev);
-	free(c->dirty);
-	free(c->changed);
+	tile_set_finish(&c->dirty);
+	for (unsigned g = 0; g < CHANGED_HISTORY; g++)
+		tile_set_finish(&c->changed[g]);
 	free(c->changed_mask);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
@@ -522,7 +522,7 @@ void cache_done(struct cache *c, int result)
 	c->planned = false;
 	for (uint32_t i = 0; i < c->count; i++)
 		c->entries[i]->in_prev = false;
-	memset(c->dirty, 0, (size_t)c->prev->image_count * c->prev->mask_bytes);
+	tile_set_clear(&c->dirty);
 	c->prev_valid = result == 0 && c->composed;
 	/* A failed render: nothing of it is trusted, the next composition
 	 * is made whole. */

@@ -9,6 +9,7 @@
 #include <stdint.h>
 
 #include "cache_stats.h"
+#include "compose.h"
 #include "renderer.h"
 #include "scene.h"
 
@@ -19,8 +20,6 @@
 #define HANDED_VOLUMES 8
 
 struct batch;
-struct compose;
-struct compose_source;
 struct pool;
 struct rle_volume;
 struct turned_source;
@@ -75,7 +74,7 @@ struct cache {
 	 * where objects left it, where the rest was, where new ones come. */
 	struct volume *prev;
 	bool prev_valid, composed, rest_rendered;
-	uint8_t *dirty; /* image_count * mask_bytes */
+	struct tile_set dirty;
 	/* The plan, made by cache_plan() for cache_render(). */
 	bool planned;
 	uint64_t plan_seq;
@@ -106,11 +105,11 @@ struct cache {
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */
 	/* Handing out: compositions made (gen), the tiles each of the last
-	 * CHANGED_HISTORY changed (image_count masks at changed[gen %
-	 * CHANGED_HISTORY]), and the last volumes handed out, known by the
-	 * origin mark (volume.h) each got and the composition it holds. */
+	 * CHANGED_HISTORY changed (changed[gen % CHANGED_HISTORY]), and the
+	 * last volumes handed out, known by the origin mark (volume.h) each
+	 * got and the composition it holds. */
 	uint64_t gen;
-	uint8_t *changed;
+	struct tile_set changed[CHANGED_HISTORY];
 	uint8_t *changed_mask; /* one image's, work space */
 	struct handed {
 		uint64_t origin, gen;

@@ -172,27 +172,28 @@ static int render_parts(struct cache *c, struct renderer *r, const struct scene 
  * masks): the dirty ones, or all when it is made whole. */
 static void note_changes(struct cache *c)
 {
-	size_t bytes = (size_t)c->prev->image_count * c->prev->mask_bytes;
-	uint8_t *changed = c->changed + (size_t)(++c->gen % CHANGED_HISTORY) * bytes;
-	memset(changed, c->prev_valid ? 0 : 0xff, bytes);
+	struct tile_set *changed = &c->changed[++c->gen % CHANGED_HISTORY];
 	if (c->prev_valid)
-		memcpy(changed, c->dirty, bytes);
+		tile_set_copy(changed, &c->dirty);
+	else
+		tile_set_fill(changed);
 }
 
 /* The tiles of image k changed in the compositions after had (up to
  * c->gen, at most CHANGED_HISTORY back), into mask; whether any. */
 static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8_t *mask)
 {
-	uint32_t mb = c->prev->mask_bytes;
-	size_t bytes = (size_t)c->prev->image_count * mb;
-	uint8_t any = 0;
-	memset(mask, 0, mb);
+	bool any = false, cleared = false;
 	for (uint64_t g = had + 1; g <= c->gen; g++) {
-		const uint8_t *m = c->changed + (size_t)(g % CHANGED_HISTORY) * bytes + (size_t)k * mb;
-		for (uint32_t b = 0; b < mb; b++)
-			any |= mask[b] |= m[b];
+		const struct tile_set *changed = &c->changed[g % CHANGED_HISTORY];
+		if (!changed->images[k])
+			continue;
+		if (!cleared)
+			memset(mask, 0, c->prev->mask_bytes);
+		cleared = true;
+		any |= tile_set_or_image(changed, k, mask);
 	}
-	return any != 0;
+	return any;
 }
 
 /* The composition copied into out: only the images changed since the one
@@ -251,7 +252,7 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	 * (or composed whole when there is none), then handed out. */
 	note_changes(c);
 	if (c->prev_valid)
-		err = compose_patch(c->compose, c->prev, c->dirty, c->sources, p.n);
+		err = compose_patch(c->compose, c->prev, &c->dirty, c->sources, p.n);
 	else
 		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
 	if (err == 0)

@@ -35,7 +35,7 @@ struct compose {
 	struct geometry geom;
 	halftone_fn halftone;
 	struct brightness_tables thr; /* per volume image, made once */
-	uint8_t *all_dirty;           /* every tile of every image: compose_volumes() */
+	struct tile_set all_dirty;    /* every tile of every image: compose_volumes() */
 	const struct turned_source *turned;
 	/* Patching: the sources with tiles in image k are img_src[img_first[k]
 	 * .. img_first[k + 1]), each with the mask bytes it lies in there. */
@@ -46,7 +46,7 @@ struct compose {
 	} * img_src;
 	size_t img_src_cap;
 	/* Per call: */
-	const uint8_t *dirty;
+	const struct tile_set *dirty;
 	struct volume *out;
 	const struct compose_source *src;
 	unsigned n;
@@ -95,11 +95,9 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	brightness_map_finish(&bright);
 	if (err < 0)
 		goto fail;
-	if (!(c->all_dirty = calloc(c->image_count, c->mask_bytes)))
+	if (tile_set_init(&c->all_dirty, c->image_count, c->mask_bytes) < 0)
 		goto fail;
-	for (uint32_t k = 0; k < c->image_count; k++)
-		for (uint32_t t = 0; t < c->tiles_per_image; t++)
-			c->all_dirty[(size_t)k * c->mask_bytes + t / 8] |= (uint8_t)(1u << (t % 8));
+	tile_set_fill(&c->all_dirty);
 	if (workers_create(c) < 0)
 		goto fail;
 	return c;
@@ -121,7 +119,7 @@ void compose_destroy(struct compose *c)
 	}
 	free(c->w);
 	brightness_tables_finish(&c->thr);
-	free(c->all_dirty);
+	tile_set_finish(&c->all_dirty);
 	free(c->img_first);
 	free(c->img_src);
 	free(c);
@@ -201,10 +199,11 @@ static int run_images(struct compose *c, struct volume *out, image_fn fn, bool a
 	return err;
 }
 
-static int check_sources(const struct compose *c, const struct volume *out, const struct compose_source *src,
-			 unsigned n)
+static int check_sources(const struct compose *c, const struct volume *out, const struct tile_set *dirty,
+			 const struct compose_source *src, unsigned n)
 {
-	if (out->image_count != c->image_count || volume_tiles_per_image(out) != c->tiles_per_image)
+	if (out->image_count != c->image_count || volume_tiles_per_image(out) != c->tiles_per_image ||
+	    dirty->image_count != c->image_count || dirty->mask_bytes != c->mask_bytes)
 		return -EINVAL;
 	for (unsigned s = 0; s < n; s++) {
 		if (src[s].vol == out || (!src[s].vol && !src[s].rle))
@@ -368,8 +367,8 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
  * (gathered into w's dense image first), then patched in place. */
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
-	const uint8_t *dirty = c->dirty + (size_t)k * c->mask_bytes;
-	if (volume_all_zero(dirty, c->mask_bytes)) /* most images, eight bytes at a time */
+	const uint8_t *dirty = c->dirty->mask + (size_t)k * c->mask_bytes;
+	if (!c->dirty->images[k] || volume_all_zero(dirty, c->mask_bytes)) /* most images */
 		return 0;
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
@@ -441,28 +440,36 @@ static int index_sources(struct compose *c)
 	return 0;
 }
 
+/* The bits of n bytes at p (n a multiple of 8 or not). */
+static uint32_t count_bits(const uint8_t *p, size_t n)
+{
+	uint32_t bits = 0;
+	size_t i = 0;
+	for (; i + 8 <= n; i += 8) {
+		uint64_t word;
+		memcpy(&word, p + i, sizeof(word));
+		bits += volume_word_bits(word);
+	}
+	for (; i < n; i++)
+		bits += volume_mask_bits(p[i]);
+	return bits;
+}
+
 /* Whether so few tiles are dirty (a small object moving) that waking the
  * pool's workers would cost more than patching them on this thread. */
-static bool few_dirty(const uint8_t *dirty, size_t bytes)
+static bool few_dirty(const struct tile_set *dirty)
 {
 	uint32_t n = 0;
-	size_t i = 0;
-	for (; i + 8 <= bytes; i += 8) {
-		uint64_t word;
-		memcpy(&word, dirty + i, sizeof(word));
-		n += volume_word_bits(word);
-		if (n > COMPOSE_FEW_TILES)
-			return false;
-	}
-	for (; i < bytes; i++)
-		n += volume_mask_bits(dirty[i]);
+	for (uint32_t k = 0; k < dirty->image_count && n <= COMPOSE_FEW_TILES; k++)
+		if (dirty->images[k])
+			n += count_bits(dirty->mask + (size_t)k * dirty->mask_bytes, dirty->mask_bytes);
 	return n <= COMPOSE_FEW_TILES;
 }
 
-int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
-		  unsigned n)
+int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty,
+		  const struct compose_source *src, unsigned n)
 {
-	int err = check_sources(c, vol, src, n);
+	int err = check_sources(c, vol, dirty, src, n);
 	if (err < 0)
 		return err;
 	c->src = src;
@@ -470,7 +477,7 @@ int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, c
 	c->dirty = dirty;
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return run_images(c, vol, patch_image, few_dirty(dirty, (size_t)c->image_count * c->mask_bytes));
+	return run_images(c, vol, patch_image, few_dirty(dirty));
 }
 
 /* A composition from nothing is a patch of an empty volume where every
@@ -480,26 +487,98 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 	if (out->image_count != c->image_count)
 		return -EINVAL;
 	volume_clear(out);
-	return compose_patch(c, out, c->all_dirty, src, n);
+	return compose_patch(c, out, &c->all_dirty, src, n);
 }
 
-void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src)
+/* Image k of dirty |= mask over bytes first..last. */
+static void mark_image(struct tile_set *dirty, uint32_t k, const uint8_t *mask, uint32_t first, uint32_t last)
+{
+	uint8_t *d = dirty->mask + (size_t)k * dirty->mask_bytes;
+	for (uint32_t b = first; b <= last; b++)
+		d[b] |= mask[b];
+	dirty->images[k] = 1;
+}
+
+void compose_add_footprint(struct tile_set *dirty, const struct compose_source *src)
 {
 	const struct rle_volume *r = src->rle;
-	for (uint32_t i = 0; r && r->lit && i < r->lit_count; i++) {
-		const uint8_t *mask = r->images[r->lit[i]].data;
-		uint8_t *d = dirty + (size_t)r->lit[i] * mask_bytes;
-		for (uint32_t b = r->lit_span[i].first; b <= r->lit_span[i].last; b++)
-			d[b] |= mask[b];
-	}
+	for (uint32_t i = 0; r && r->lit && i < r->lit_count; i++)
+		mark_image(dirty, r->lit[i], r->images[r->lit[i]].data, r->lit_span[i].first, r->lit_span[i].last);
 	if (r && r->lit)
 		return;
-	for (uint32_t k = 0; k < image_count; k++) {
+	for (uint32_t k = 0; k < dirty->image_count; k++) {
 		const uint8_t *mask = source_mask(src, k);
-		uint8_t *d = dirty + (size_t)k * mask_bytes;
-		for (uint32_t b = 0; mask && b < mask_bytes; b++)
-			d[b] |= mask[b];
+		if (mask)
+			mark_image(dirty, k, mask, 0, dirty->mask_bytes - 1);
 	}
+}
+
+/* ---- tile sets ---- */
+
+int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t mask_bytes)
+{
+	*s = (struct tile_set){ .image_count = image_count, .mask_bytes = mask_bytes };
+	s->mask = calloc(image_count, mask_bytes);
+	s->images = calloc(image_count, 1);
+	if (s->mask && s->images)
+		return 0;
+	tile_set_finish(s);
+	return -ENOMEM;
+}
+
+void tile_set_finish(struct tile_set *s)
+{
+	free(s->mask);
+	free(s->images);
+	*s = (struct tile_set){ 0 };
+}
+
+void tile_set_fill(struct tile_set *s)
+{
+	memset(s->mask, 0xff, (size_t)s->image_count * s->mask_bytes);
+	memset(s->images, 1, s->image_count);
+}
+
+void tile_set_clear(struct tile_set *s)
+{
+	for (uint32_t k = 0; k < s->image_count; k++)
+		if (s->images[k]) {
+			memset(s->mask + (size_t)k * s->mask_bytes, 0, s->mask_bytes);
+			s->images[k] = 0;
+		}
+}
+
+void tile_set_copy(struct tile_set *dst, const struct tile_set *src)
+{
+	tile_set_clear(dst);
+	for (uint32_t k = 0; k < src->image_count; k++)
+		if (src->images[k]) {
+			size_t at = (size_t)k * src->mask_bytes;
+			memcpy(dst->mask + at, src->mask + at, src->mask_bytes);
+			dst->images[k] = 1;
+		}
+}
+
+bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask)
+{
+	if (!s->images[k])
+		return false;
+	const uint8_t *m = s->mask + (size_t)k * s->mask_bytes;
+	uint64_t any = 0;
+	uint32_t b = 0;
+	for (; b + 8 <= s->mask_bytes; b += 8) {
+		uint64_t x, y;
+		memcpy(&x, mask + b, sizeof(x));
+		memcpy(&y, m + b, sizeof(y));
+		any |= y;
+		x |= y;
+		memcpy(mask + b, &x, sizeof(x));
+	}
+	for (; b < s->mask_bytes; b++) {
+		any |= m[b];
+		mask[b] |= m[b];
+	}
+	return any != 0;
 }
 
 /* ---- turned canvases ---- */

@@ -22,6 +22,30 @@
 
 struct pool;
 
+/* Tiles marked in a volume's tiling: a mask per image (image_count *
+ * mask_bytes, bit t of image k's for its tile t) and, per image, whether
+ * its mask may have a bit (a zero flag means a zero mask). What walks
+ * the marks pays for the images flagged, not for all: a small object
+ * marks a few. */
+struct tile_set {
+	uint32_t image_count, mask_bytes;
+	uint8_t *mask;
+	uint8_t *images;
+};
+
+/* Empty; 0 or -ENOMEM. */
+int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t mask_bytes);
+/* Accepts a zeroed one. */
+void tile_set_finish(struct tile_set *s);
+/* Every tile marked. */
+void tile_set_fill(struct tile_set *s);
+/* Nothing marked (the flagged images' masks zeroed). */
+void tile_set_clear(struct tile_set *s);
+/* dst (of the same tiling) becomes src. */
+void tile_set_copy(struct tile_set *dst, const struct tile_set *src);
+/* mask |= image k's marks (mask_bytes); whether it has any. */
+bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask);
+
 /* Expands r into out (same geometry; cleared first). 0 or -ENOMEM/-EINVAL. */
 int rle_volume_decode(const struct rle_volume *r, struct volume *out);
 /* One input of a composition: a packed volume or a compressed one. */
@@ -42,13 +66,13 @@ void compose_destroy(struct compose *c);
  * cleared first and must not be one of them). 0 or -ENOMEM/-EINVAL. */
 int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n);
 
-/* Patches the composition vol: in each image k, the tiles whose bit is set
- * in dirty + k * vol->mask_bytes become the OR of the n sources' tiles
- * there; the others stay. Images with no dirty tile are not touched, so
- * the cost is that of the dirty images. vol must not be a source. 0 or
- * -ENOMEM/-EINVAL (vol is then unusable). */
-int compose_patch(struct compose *c, struct volume *vol, const uint8_t *dirty, const struct compose_source *src,
-		  unsigned n);
+/* Patches the composition vol: the tiles marked in dirty (of vol's
+ * tiling) become the OR of the n sources' tiles there; the others stay.
+ * Images with no dirty tile are not touched, so the cost is that of the
+ * dirty images. vol must not be a source. 0 or -ENOMEM/-EINVAL (vol is
+ * then unusable). */
+int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty,
+		  const struct compose_source *src, unsigned n);
 
 /* A canvas volume (an object rendered unturned, before the halftone)
  * shown turned about the axis by turn images, as scene.h defines a draw's
@@ -79,6 +103,6 @@ unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_
 			  uint8_t out[2][CANVAS_TILE_BYTES], uint32_t out_ty[2]);
 
 /* dirty |= the footprint of src (its masks), image by image. */
-void compose_add_footprint(uint8_t *dirty, uint32_t image_count, uint32_t mask_bytes, const struct compose_source *src);
+void compose_add_footprint(struct tile_set *dirty, const struct compose_source *src);
 
 #endif
