@@ -65,9 +65,11 @@ struct pipeline {
 	struct cache *cache;
 	struct pool *pool;
 	/* The calibration (calibration.h): its transform goes into each
-	 * scene built; a render is moved by the job's offset (job_u, job_v,
-	 * the render thread's copy) through unshifted, which then holds the
-	 * render as it came. A scene is the last one rendered only under the
+	 * scene built; a render to be moved by the job's offset (job_u,
+	 * job_v, the render thread's copy) is made in unshifted and moved
+	 * into work, so unshifted keeps the render as it came (the object
+	 * cache then finds its last composition there, and hands out only
+	 * what changed). A scene is the last one rendered only under the
 	 * same calibration: building_cal is the one of building, last_cal of
 	 * last. */
 	struct calibration calibration, building_cal, last_cal;
@@ -75,17 +77,16 @@ struct pipeline {
 	struct volume *unshifted;
 };
 
-/* The render moved by the calibration's axis offset: p->work becomes the
- * shifted volume and p->unshifted the render. On the render thread. */
-static int shift_render(struct pipeline *p, int32_t du, int32_t dv)
+/* The scene rendered into p->work, moved by the calibration's axis
+ * offset (du, dv) when there is one (rendered into p->unshifted first).
+ * On the render thread. */
+static int render_job(struct pipeline *p, const struct scene *scene, int32_t du, int32_t dv)
 {
-	int r = volume_shift(p->unshifted, p->work, du, dv);
-	if (r < 0)
-		return r;
-	struct volume *shifted = p->unshifted;
-	p->unshifted = p->work;
-	p->work = shifted;
-	return 0;
+	struct volume *to = du || dv ? p->unshifted : p->work;
+	int r = p->cache ? cache_render(p->cache, p->renderer, scene, to) : render_volume(p->renderer, scene, to);
+	if (r == 0 && to != p->work)
+		r = volume_shift(p->work, to, du, dv);
+	return r;
 }
 
 static void *render_thread(void *data)
@@ -100,10 +101,7 @@ static void *render_thread(void *data)
 		const struct scene *scene = p->job_scene;
 		int32_t du = p->job_u, dv = p->job_v;
 		pthread_mutex_unlock(&p->lock);
-		int r = p->cache ? cache_render(p->cache, p->renderer, scene, p->work)
-				 : render_volume(p->renderer, scene, p->work);
-		if (r == 0 && (du || dv))
-			r = shift_render(p, du, dv);
+		int r = render_job(p, scene, du, dv);
 		pthread_mutex_lock(&p->lock);
 		p->result = r;
 		p->job = false;
