@@ -466,8 +466,8 @@ static bool few_dirty(const struct tile_set *dirty)
 	return n <= COMPOSE_FEW_TILES;
 }
 
-int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty,
-		  const struct compose_source *src, unsigned n)
+int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty, const struct compose_source *src,
+		  unsigned n)
 {
 	int err = check_sources(c, vol, dirty, src, n);
 	if (err < 0)

@@ -71,8 +71,8 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
  * Images with no dirty tile are not touched, so the cost is that of the
  * dirty images. vol must not be a source. 0 or -ENOMEM/-EINVAL (vol is
  * then unusable). */
-int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty,
-		  const struct compose_source *src, unsigned n);
+int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty, const struct compose_source *src,
+		  unsigned n);
 
 /* A canvas volume (an object rendered unturned, before the halftone)
  * shown turned about the axis by turn images, as scene.h defines a draw's
