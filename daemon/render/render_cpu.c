@@ -87,6 +87,8 @@ static int canvas_image(struct render_cpu *r, struct cpu_worker *w, struct canva
 {
 	struct section_canvas *c = &w->canvas;
 	uint32_t tiles = c->tiles_x * c->tiles_y, n = 0;
+	if (c->lit_tables) /* its points would be lost (section_canvas_lit()) */
+		return -EINVAL;
 	memset(st->mask, 0, r->canvas_out->mask_bytes);
 	for (uint32_t t = section_canvas_next(c, 0); t < tiles; t = section_canvas_next(c, t + 1)) {
 		uint8_t *dst = st->tiles + (size_t)n++ * CANVAS_TILE_BYTES;
@@ -149,18 +151,13 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 	return err < 0 ? err : volume_image_set(r->out, k, w->mask, count);
 }
 
-/* Lights a binned point's square (bin.h), clipped to the image; a
- * one-pixel point as lit bits under image k's tables where thr is given
- * (section_lit_pixel(): a canvas packed as it stands). */
-static void light_point(struct section_canvas *c, const struct bin_point *p, const struct brightness_tables *thr,
-			uint32_t k)
+/* Lights a binned point of image k's square (bin.h), clipped to the
+ * image; a one-pixel point as the canvas takes it (section_canvas_point():
+ * lit bits where it is packed as it stands). */
+static void light_point(struct section_canvas *c, const struct bin_point *p, uint32_t k)
 {
-	if (p->size == 1 && thr) {
-		section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(thr, k, p->u / VOLUME_TILE));
-		return;
-	}
 	if (p->size == 1) { /* the common case */
-		section_pixel(c, p->u, p->v, p->rgb);
+		section_canvas_point(c, k, p->u, p->v, p->rgb);
 		return;
 	}
 	uint32_t u0, u1, v0, v1;
@@ -246,11 +243,8 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
-	/* Points straight to bits where the image is packed now; kept as
-	 * bytes (canvas_out), they stay bytes. */
-	const struct brightness_tables *thr = r->plain && !r->canvas_out ? &r->thr : NULL;
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
-		light_point(c, &b->points[i], thr, k);
+		light_point(c, &b->points[i], k);
 	uint64_t sectioned = section_image(r, c, k, runs, n);
 	w->prim_images += sectioned;
 	drawn += sectioned;
@@ -483,6 +477,9 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
 		section_canvas_plain(&c, plain);
+		/* Points straight to bits where images are packed now; kept
+		 * as bytes (canvas), they stay bytes. */
+		section_canvas_lit(&c, r->plain && !canvas ? &r->thr : NULL);
 		r->workers[i] = (struct cpu_worker){ .canvas = c, .mask = r->workers[i].mask };
 	}
 	r->out = out;

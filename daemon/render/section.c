@@ -133,6 +133,11 @@ void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb)
 		memcpy(c->plain_rgb, rgb, 3);
 }
 
+void section_canvas_lit(struct section_canvas *c, const struct brightness_tables *tables)
+{
+	c->lit_tables = tables;
+}
+
 void section_wedge_init(struct section_wedge *w, const struct geometry *g, uint32_t k)
 {
 	double n = g->images_per_rev;

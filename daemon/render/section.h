@@ -60,10 +60,12 @@ struct section_canvas {
 	 * pack takes them as they are or ORs them in
 	 * (section_canvas_pack_lit()): exact, as the halftone of a MAX
 	 * under one table is the OR of the halftones. Only for a canvas
-	 * packed as it stands, never one kept as bytes. All zero outside the
-	 * flagged rows. */
+	 * packed as it stands, never one kept as bytes: lit_tables (the
+	 * volume's, section_canvas_lit()) says which it is, NULL for bytes.
+	 * All zero outside the flagged rows. */
 	uint32_t *lit_bits; /* tiles_x * tiles_y * SECTION_LIT_TILE */
 	uint32_t *lit_rows; /* tiles_x * tiles_y */
+	const struct brightness_tables *lit_tables;
 	/* Tests: none of section.c's shortcuts, which light the same voxels
 	 * (lobes the clip cannot reach, planes every vertex is inside, rows
 	 * by a product, spans by half rows): both lobes, both planes,
@@ -96,6 +98,11 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
  * The canvas must hold no plain bits (every tile folded). Not with
  * c->general, whose byte loops the tests compare. */
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
+
+/* From now on one-pixel points are lit as bits under tables (a canvas
+ * packed as it stands: section_canvas_point()), or, tables NULL, as
+ * bytes (a canvas read as bytes). The canvas must hold no lit bits. */
+void section_canvas_lit(struct section_canvas *c, const struct brightness_tables *tables);
 
 /* The first tile from t on that something touched (bytes, plain or lit
  * bits), or the tile count. */
@@ -154,6 +161,18 @@ static inline void section_lit_pixel(struct section_canvas *c, uint32_t u, uint3
 	row[VOLUME_TILE] |= g;
 	row[2 * VOLUME_TILE] |= b;
 	c->lit_rows[t] |= (uint32_t)((r | g | b) != 0) << y;
+}
+
+/* A one-pixel point of colour rgb at (u, v) of image k: as lit bits under
+ * the canvas's lit_tables where it has them (section_canvas_lit()), else
+ * as bytes (section_pixel()). */
+static inline void section_canvas_point(struct section_canvas *c, uint32_t k, uint32_t u, uint32_t v,
+					const uint8_t rgb[3])
+{
+	if (c->lit_tables)
+		section_lit_pixel(c, u, v, rgb, brightness_table(c->lit_tables, k, u / VOLUME_TILE));
+	else
+		section_pixel(c, u, v, rgb);
 }
 
 /* A segment or triangle for section_lanes(): its vertices (x, y, z each,
