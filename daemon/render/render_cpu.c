@@ -152,12 +152,17 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 }
 
 /* Lights a binned point of image k's square (bin.h), clipped to the
- * image; a one-pixel point as the canvas takes it (section_canvas_point():
- * lit bits where it is packed as it stands). */
-static void light_point(struct section_canvas *c, const struct bin_point *p, uint32_t k)
+ * image; a one-pixel point as lit bits under lit, the canvas's
+ * lit_tables, where it has them (section_canvas_lit()). */
+static void light_point(struct section_canvas *c, const struct bin_point *p, const struct brightness_tables *lit,
+			uint32_t k)
 {
+	if (p->size == 1 && lit) {
+		section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(lit, k, p->u / VOLUME_TILE));
+		return;
+	}
 	if (p->size == 1) { /* the common case */
-		section_canvas_point(c, k, p->u, p->v, p->rgb);
+		section_pixel(c, p->u, p->v, p->rgb);
 		return;
 	}
 	uint32_t u0, u1, v0, v1;
@@ -243,8 +248,9 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	const struct bin_set *b = &r->bins;
 	struct section_canvas *c = &w->canvas;
 	uint64_t drawn = b->point_start[k + 1] - b->point_start[k];
+	const struct brightness_tables *lit = c->lit_tables; /* once: the stores may alias it */
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
-		light_point(c, &b->points[i], k);
+		light_point(c, &b->points[i], lit, k);
 	uint64_t sectioned = section_image(r, c, k, runs, n);
 	w->prim_images += sectioned;
 	drawn += sectioned;

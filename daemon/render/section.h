@@ -100,8 +100,9 @@ void section_canvas_clear_tile(struct section_canvas *c, uint32_t t);
 void section_canvas_plain(struct section_canvas *c, const uint8_t *rgb);
 
 /* From now on one-pixel points are lit as bits under tables (a canvas
- * packed as it stands: section_canvas_point()), or, tables NULL, as
- * bytes (a canvas read as bytes). The canvas must hold no lit bits. */
+ * packed as it stands: section_lit_pixel() under image k's table for the
+ * point's tile column), or, tables NULL, as bytes (a canvas read as
+ * bytes: section_pixel()). The canvas must hold no lit bits. */
 void section_canvas_lit(struct section_canvas *c, const struct brightness_tables *tables);
 
 /* The first tile from t on that something touched (bytes, plain or lit
@@ -161,18 +162,6 @@ static inline void section_lit_pixel(struct section_canvas *c, uint32_t u, uint3
 	row[VOLUME_TILE] |= g;
 	row[2 * VOLUME_TILE] |= b;
 	c->lit_rows[t] |= (uint32_t)((r | g | b) != 0) << y;
-}
-
-/* A one-pixel point of colour rgb at (u, v) of image k: as lit bits under
- * the canvas's lit_tables where it has them (section_canvas_lit()), else
- * as bytes (section_pixel()). */
-static inline void section_canvas_point(struct section_canvas *c, uint32_t k, uint32_t u, uint32_t v,
-					const uint8_t rgb[3])
-{
-	if (c->lit_tables)
-		section_lit_pixel(c, u, v, rgb, brightness_table(c->lit_tables, k, u / VOLUME_TILE));
-	else
-		section_pixel(c, u, v, rgb);
 }
 
 /* A segment or triangle for section_lanes(): its vertices (x, y, z each,
