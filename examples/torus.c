@@ -76,18 +76,44 @@ static void torus(struct vertex *v, uint32_t *idx, int rings, int sides)
 		}
 }
 
+/* The torus written into two memfds, vertices and indices, and sealed. */
+static int torus_shared(struct shared *vs, struct shared *is, int rings, int sides)
+{
+	uint32_t nv = (uint32_t)(rings * sides), ni = 6 * nv;
+	int r = shared_create(vs, "torus-vertices", nv * sizeof(struct vertex));
+	if (r == 0)
+		r = shared_create(is, "torus-indices", ni * sizeof(uint32_t));
+	if (r < 0)
+		return r;
+	torus(vs->map, is->map, rings, sides);
+	if ((r = shared_seal(vs)) < 0)
+		return r;
+	return shared_seal(is);
+}
+
+/* Commits and waits until shown; a refused exclusive layer is shown beside
+ * the others instead. 0 or -errno. */
+static int commit_shown(struct spindle *sp, struct spindle_layer *layer, uint32_t ni, struct spindle_frame *f)
+{
+	int r = spindle_commit_and_wait(sp, f);
+	if (r == -EACCES || r == -EBUSY) {
+		fprintf(stderr, "torus: exclusive layer refused (%s); showing it beside the others\n",
+			r == -EACCES ? "not allowed" : "another client has one");
+		spindle_layer_set_exclusive(layer, false);
+		r = spindle_commit_and_wait(sp, f);
+	}
+	if (r == -EDQUOT)
+		fprintf(stderr, "torus: %u triangles are over this client's quota: try fewer --rings\n", ni / 3);
+	return r;
+}
+
 static int show(struct spindle *sp, int rings, bool exclusive)
 {
 	int sides = rings / 2 > 3 ? rings / 2 : 3;
 	uint32_t nv = (uint32_t)(rings * sides), ni = 6 * nv;
 	struct shared vs, is;
-	int r = shared_create(&vs, "torus-vertices", nv * sizeof(struct vertex));
-	if (r == 0)
-		r = shared_create(&is, "torus-indices", ni * sizeof(uint32_t));
+	int r = torus_shared(&vs, &is, rings, sides);
 	if (r < 0)
-		return r;
-	torus(vs.map, is.map, rings, sides);
-	if ((r = shared_seal(&vs)) < 0 || (r = shared_seal(&is)) < 0)
 		return r;
 	struct spindle_buffer *vb = spindle_buffer_create_from_fd(sp, vs.fd, vs.size);
 	struct spindle_buffer *ib = spindle_buffer_create_from_fd(sp, is.fd, is.size);
@@ -105,16 +131,7 @@ static int show(struct spindle *sp, int rings, bool exclusive)
 		spindle_layer_set_exclusive(layer, true);
 	}
 	struct spindle_frame f;
-	r = spindle_commit_and_wait(sp, &f);
-	if (r == -EACCES || r == -EBUSY) {
-		fprintf(stderr, "torus: exclusive layer refused (%s); showing it beside the others\n",
-			r == -EACCES ? "not allowed" : "another client has one");
-		spindle_layer_set_exclusive(layer, false);
-		r = spindle_commit_and_wait(sp, &f);
-	}
-	if (r == -EDQUOT)
-		fprintf(stderr, "torus: %u triangles are over this client's quota: try fewer --rings\n", ni / 3);
-	if (r < 0)
+	if ((r = commit_shown(sp, layer, ni, &f)) < 0)
 		return r;
 	struct spindle_status st;
 	if ((r = spindle_get_status(sp, &st)) < 0)

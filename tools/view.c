@@ -245,9 +245,9 @@ struct offscreen {
 	GLuint fbo, rb;
 };
 
-static int offscreen_open(struct offscreen *o, int size)
+/* The EGL display: surfaceless (Mesa) if it can be, else the default. */
+static int offscreen_display(struct offscreen *o)
 {
-	*o = (struct offscreen){ .dpy = EGL_NO_DISPLAY, .ctx = EGL_NO_CONTEXT, .surf = EGL_NO_SURFACE };
 	const char *client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
 	PFNEGLGETPLATFORMDISPLAYEXTPROC get =
 		(PFNEGLGETPLATFORMDISPLAYEXTPROC)eglGetProcAddress("eglGetPlatformDisplayEXT");
@@ -266,6 +266,13 @@ static int offscreen_open(struct offscreen *o, int size)
 		fprintf(stderr, "spindle-view: no EGL display (error 0x%x)\n", eglGetError());
 		return -1;
 	}
+	return 0;
+}
+
+/* An OpenGL ES 3 context on the display, made current: without a surface
+ * if it can be, else on a 1x1 pbuffer. */
+static int offscreen_context(struct offscreen *o)
+{
 	bool surfaceless = has_word(eglQueryString(o->dpy, EGL_EXTENSIONS), "EGL_KHR_surfaceless_context");
 	const EGLint want[] = { EGL_RENDERABLE_TYPE, EGL_OPENGL_ES3_BIT_KHR, EGL_SURFACE_TYPE,
 				surfaceless ? 0 : EGL_PBUFFER_BIT, EGL_NONE };
@@ -289,6 +296,12 @@ static int offscreen_open(struct offscreen *o, int size)
 		fprintf(stderr, "spindle-view: eglMakeCurrent failed (0x%x)\n", eglGetError());
 		return -1;
 	}
+	return 0;
+}
+
+/* The framebuffer drawn into: one size x size RGBA renderbuffer. */
+static int offscreen_framebuffer(struct offscreen *o, int size)
+{
 	glGenFramebuffers(1, &o->fbo);
 	glGenRenderbuffers(1, &o->rb);
 	glBindRenderbuffer(GL_RENDERBUFFER, o->rb);
@@ -300,6 +313,14 @@ static int offscreen_open(struct offscreen *o, int size)
 		return -1;
 	}
 	return 0;
+}
+
+static int offscreen_open(struct offscreen *o, int size)
+{
+	*o = (struct offscreen){ .dpy = EGL_NO_DISPLAY, .ctx = EGL_NO_CONTEXT, .surf = EGL_NO_SURFACE };
+	if (offscreen_display(o) < 0 || offscreen_context(o) < 0)
+		return -1;
+	return offscreen_framebuffer(o, size);
 }
 
 static void offscreen_close(struct offscreen *o)
@@ -320,18 +341,24 @@ static void offscreen_close(struct offscreen *o)
 	eglReleaseThread();
 }
 
+/* The points of the --input file. VIEW_OK or the exit status of a
+ * failure. */
+static int input_points(const struct view_args *a, struct view_points *pts)
+{
+	struct volume *vol = read_input(a->input);
+	if (!vol)
+		return VIEW_INPUT;
+	int r = view_points_from_volume(pts, vol, a->max_points);
+	volume_destroy(vol);
+	return r < 0 ? VIEW_FAILED : VIEW_OK;
+}
+
 /* The points of the volume to turn: from the file, or the next volume the
  * daemon shows. */
 static int turntable_points(const struct view_args *a, struct view_points *pts)
 {
-	if (a->input) {
-		struct volume *vol = read_input(a->input);
-		if (!vol)
-			return VIEW_INPUT;
-		int r = view_points_from_volume(pts, vol, a->max_points);
-		volume_destroy(vol);
-		return r < 0 ? VIEW_FAILED : VIEW_OK;
-	}
+	if (a->input)
+		return input_points(a, pts);
 	struct live l;
 	int status = live_open(&l, a);
 	while (status == VIEW_OK && !l.fresh)
@@ -342,6 +369,25 @@ static int turntable_points(const struct view_args *a, struct view_points *pts)
 	}
 	live_close(&l, false);
 	return status;
+}
+
+/* Draws the turntable's frames, each into its place on the sheet (cols
+ * frames a row, sw pixels wide). */
+static void draw_turntable(struct view_gl *gl, const struct view_args *a, uint8_t *sheet, uint8_t *frame, uint32_t cols,
+			   uint32_t sw)
+{
+	int size = (int)a->size;
+	struct view_camera cam;
+	view_camera_default(&cam);
+	for (uint32_t i = 0; i < a->frames; i++) {
+		cam.yaw = (float)(2 * M_PI * i / a->frames);
+		view_gl_draw(gl, &cam, size, size, a->slices);
+		view_gl_read_rgb(size, size, frame);
+		uint32_t x0 = (i % cols) * a->size, y0 = (i / cols) * a->size;
+		for (int y = 0; y < size; y++)
+			memcpy(sheet + ((size_t)(y0 + y) * sw + x0) * 3, frame + (size_t)y * size * 3,
+			       (size_t)size * 3);
+	}
 }
 
 static int run_turntable(const struct view_args *a)
@@ -355,23 +401,13 @@ static int run_turntable(const struct view_args *a)
 	uint32_t rows = (a->frames + cols - 1) / cols;
 	uint32_t sw = cols * a->size, sh = rows * a->size;
 	uint8_t *sheet = calloc((size_t)sw * sh, 3), *frame = malloc((size_t)size * size * 3);
-	struct offscreen o;
+	struct offscreen o = { .dpy = EGL_NO_DISPLAY }; /* closed as it is when the allocations fail */
 	struct view_gl *gl = NULL;
 	status = VIEW_FAILED;
 	if (!sheet || !frame || offscreen_open(&o, size) < 0 || !(gl = view_gl_create()))
 		goto out;
 	view_gl_upload(gl, &pts);
-	struct view_camera cam;
-	view_camera_default(&cam);
-	for (uint32_t i = 0; i < a->frames; i++) {
-		cam.yaw = (float)(2 * M_PI * i / a->frames);
-		view_gl_draw(gl, &cam, size, size, a->slices);
-		view_gl_read_rgb(size, size, frame);
-		uint32_t x0 = (i % cols) * a->size, y0 = (i / cols) * a->size;
-		for (int y = 0; y < size; y++)
-			memcpy(sheet + ((size_t)(y0 + y) * sw + x0) * 3, frame + (size_t)y * size * 3,
-			       (size_t)size * 3);
-	}
+	draw_turntable(gl, a, sheet, frame, cols, sw);
 	if (glGetError() != GL_NO_ERROR) {
 		fprintf(stderr, "spindle-view: GL error while rendering\n");
 		goto out;
@@ -448,6 +484,41 @@ static void window_close(struct window *w)
 	 * process ends next anyway. */
 }
 
+/* A key: q or Escape quits, s toggles the slice plane, r resets the view. */
+static void window_key(struct window *w, SDL_Keycode sym)
+{
+	switch (sym) {
+	case SDLK_q:
+	case SDLK_ESCAPE:
+		w->quit = true;
+		break;
+	case SDLK_s:
+		w->slices = !w->slices;
+		w->dirty = true;
+		break;
+	case SDLK_r:
+		view_camera_default(&w->cam);
+		w->dirty = true;
+		break;
+	}
+}
+
+/* The mouse moved: a left drag orbits, another pans. */
+static void window_motion(struct window *w, const SDL_MouseMotionEvent *m)
+{
+	if (w->orbiting) {
+		w->cam.yaw -= (float)m->xrel * 0.01f;
+		w->cam.pitch += (float)m->yrel * 0.01f;
+		w->cam.pitch = fmaxf(-1.5f, fminf(1.5f, w->cam.pitch));
+		w->dirty = true;
+	} else if (w->panning) {
+		float k = w->cam.distance * 0.0015f;
+		w->cam.pan_x -= (float)m->xrel * k * cosf(w->cam.yaw);
+		w->cam.pan_y += (float)m->yrel * k;
+		w->dirty = true;
+	}
+}
+
 static void window_event(struct window *w, const SDL_Event *e)
 {
 	switch (e->type) {
@@ -458,20 +529,7 @@ static void window_event(struct window *w, const SDL_Event *e)
 		w->dirty = true;
 		break;
 	case SDL_KEYDOWN:
-		switch (e->key.keysym.sym) {
-		case SDLK_q:
-		case SDLK_ESCAPE:
-			w->quit = true;
-			break;
-		case SDLK_s:
-			w->slices = !w->slices;
-			w->dirty = true;
-			break;
-		case SDLK_r:
-			view_camera_default(&w->cam);
-			w->dirty = true;
-			break;
-		}
+		window_key(w, e->key.keysym.sym);
 		break;
 	case SDL_MOUSEBUTTONDOWN:
 	case SDL_MOUSEBUTTONUP: {
@@ -483,17 +541,7 @@ static void window_event(struct window *w, const SDL_Event *e)
 		break;
 	}
 	case SDL_MOUSEMOTION:
-		if (w->orbiting) {
-			w->cam.yaw -= (float)e->motion.xrel * 0.01f;
-			w->cam.pitch += (float)e->motion.yrel * 0.01f;
-			w->cam.pitch = fmaxf(-1.5f, fminf(1.5f, w->cam.pitch));
-			w->dirty = true;
-		} else if (w->panning) {
-			float k = w->cam.distance * 0.0015f;
-			w->cam.pan_x -= (float)e->motion.xrel * k * cosf(w->cam.yaw);
-			w->cam.pan_y += (float)e->motion.yrel * k;
-			w->dirty = true;
-		}
+		window_motion(w, &e->motion);
 		break;
 	case SDL_MOUSEWHEEL:
 		w->cam.distance *= e->wheel.y > 0 ? 0.9f : 1.1f;
@@ -551,22 +599,40 @@ static bool draw_frame(struct window *w, struct live *l, const struct view_args 
 	return last;
 }
 
+/* Shows the volumes until the window is closed, --exit-after is reached
+ * or something fails. VIEW_OK or the exit status of the failure. */
+static int window_loop(struct window *w, struct live *l, const struct view_args *a)
+{
+	int status = VIEW_OK;
+	while (!w->quit && status == VIEW_OK) {
+		SDL_Event e;
+		while (SDL_PollEvent(&e))
+			window_event(w, &e);
+		if (l->sp && (status = live_pump(l, w->dirty ? 0 : 8)) != VIEW_OK)
+			break;
+		if (l->fresh) {
+			view_gl_upload(w->gl, &l->pts);
+			l->fresh = false;
+			w->dirty = true;
+		}
+		if (!w->dirty) {
+			if (!l->sp)
+				SDL_WaitEventTimeout(NULL, 50);
+			continue;
+		}
+		if (draw_frame(w, l, a, &status))
+			break;
+	}
+	return status;
+}
+
 static int run_window(const struct view_args *a)
 {
 	struct live l = { 0 };
 	struct view_points file_pts = { 0 };
-	int status = VIEW_OK;
-	if (a->input) {
-		struct volume *vol = read_input(a->input);
-		if (!vol)
-			return VIEW_INPUT;
-		int r = view_points_from_volume(&file_pts, vol, a->max_points);
-		volume_destroy(vol);
-		if (r < 0)
-			return VIEW_FAILED;
-	} else if ((status = live_open(&l, a)) != VIEW_OK) {
+	int status = a->input ? input_points(a, &file_pts) : live_open(&l, a);
+	if (status != VIEW_OK)
 		return status;
-	}
 	struct window w;
 	if (window_open(&w, a) < 0) {
 		window_close(&w);
@@ -578,37 +644,53 @@ static int run_window(const struct view_args *a)
 		view_gl_upload(w.gl, &file_pts);
 		l.received = 1;
 	}
-	while (!w.quit && status == VIEW_OK) {
-		SDL_Event e;
-		while (SDL_PollEvent(&e))
-			window_event(&w, &e);
-		if (l.sp && (status = live_pump(&l, w.dirty ? 0 : 8)) != VIEW_OK)
-			break;
-		if (l.fresh) {
-			view_gl_upload(w.gl, &l.pts);
-			l.fresh = false;
-			w.dirty = true;
-		}
-		if (!w.dirty) {
-			if (!l.sp)
-				SDL_WaitEventTimeout(NULL, 50);
-			continue;
-		}
-		if (draw_frame(&w, &l, a, &status))
-			break;
-	}
+	status = window_loop(&w, &l, a);
 	window_close(&w);
 	live_close(&l, a->stats && !a->input);
 	view_points_free(&file_pts);
 	return status;
 }
 
-/* The command line into *a-> Returns -1 to go on, else the exit status. */
+/* One option of the turntable (--frames, --size) into a. Returns -1 to go
+ * on, else the exit status (bad usage). */
+static int parse_turntable_option(int c, struct view_args *a)
+{
+	if (c == 'n' && !parse_u32(optarg, 1, 360, &a->frames))
+		return usage_error("--frames takes 1 to 360");
+	if (c == 'z' && !parse_u32(optarg, 16, 4096, &a->size))
+		return usage_error("--size takes 16 to 4096");
+	return -1;
+}
+
+/* One option of the window or the drawing (--exit-after, --geometry,
+ * --max-points) into a. Returns -1 to go on, else the exit status (bad
+ * usage). */
+static int parse_window_option(int c, struct view_args *a)
+{
+	uint32_t mp;
+	switch (c) {
+	case 'x':
+		if (!parse_u32(optarg, 1, UINT32_MAX, &a->exit_after))
+			return usage_error("--exit-after takes a count of volumes");
+		return -1;
+	case 'g':
+		if (sscanf(optarg, "%ux%u", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
+		    a->width > 8192 || a->height > 8192)
+			return usage_error("--geometry takes WxH");
+		return -1;
+	default: /* 'm' */
+		if (!parse_u32(optarg, 1000, UINT32_MAX, &mp))
+			return usage_error("--max-points takes 1000 or more");
+		a->max_points = mp;
+		a->adapt = false;
+		return -1;
+	}
+}
+
 /* One option of the command line into a. Returns -1 to go on, else the
  * exit status (help, bad usage). */
 static int parse_option(int c, struct view_args *a)
 {
-	uint32_t mp;
 	switch (c) {
 	case 's':
 		a->socket = optarg;
@@ -624,31 +706,15 @@ static int parse_option(int c, struct view_args *a)
 		a->turntable = optarg;
 		return -1;
 	case 'n':
-		if (!parse_u32(optarg, 1, 360, &a->frames))
-			return usage_error("--frames takes 1 to 360");
-		return -1;
 	case 'z':
-		if (!parse_u32(optarg, 16, 4096, &a->size))
-			return usage_error("--size takes 16 to 4096");
-		return -1;
+		return parse_turntable_option(c, a);
 	case 'o':
 		a->snapshot = optarg;
 		return -1;
 	case 'x':
-		if (!parse_u32(optarg, 1, UINT32_MAX, &a->exit_after))
-			return usage_error("--exit-after takes a count of volumes");
-		return -1;
 	case 'g':
-		if (sscanf(optarg, "%ux%u", &a->width, &a->height) != 2 || a->width < 16 || a->height < 16 ||
-		    a->width > 8192 || a->height > 8192)
-			return usage_error("--geometry takes WxH");
-		return -1;
 	case 'm':
-		if (!parse_u32(optarg, 1000, UINT32_MAX, &mp))
-			return usage_error("--max-points takes 1000 or more");
-		a->max_points = mp;
-		a->adapt = false;
-		return -1;
+		return parse_window_option(c, a);
 	case 'S':
 		a->slices = true;
 		return -1;
@@ -663,6 +729,7 @@ static int parse_option(int c, struct view_args *a)
 	}
 }
 
+/* The command line into *a. Returns -1 to go on, else the exit status. */
 static int parse_args(int argc, char **argv, struct view_args *a)
 {
 	*a = (struct view_args){ .frames = 12,
