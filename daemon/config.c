@@ -140,6 +140,7 @@ static int set_u16_hex(uint16_t *dst, const char *value)
 
 static int config_set_hw(struct config *cfg, const char *key, const char *value);
 static int config_set_limits(struct config *cfg, const char *key, const char *value);
+static int config_set_scene_limits(struct config *cfg, const char *key, const char *value);
 
 int config_set(struct config *cfg, const char *key, const char *value)
 {
@@ -202,6 +203,7 @@ static int config_set_hw(struct config *cfg, const char *key, const char *value)
 	return config_set_limits(cfg, key, value);
 }
 
+/* The user to run as, and the limits on clients. */
 static int config_set_limits(struct config *cfg, const char *key, const char *value)
 {
 	if (!strcmp(key, "max-clients"))
@@ -226,6 +228,12 @@ static int config_set_limits(struct config *cfg, const char *key, const char *va
 		return set_u32(&cfg->max_watchers, value, 0, 1024);
 	if (!strcmp(key, "max-watch-rate"))
 		return set_u32(&cfg->max_watch_rate, value, 1, 1000);
+	return config_set_scene_limits(cfg, key, value);
+}
+
+/* The limits on scenes, the cache, and who may have exclusive layers. */
+static int config_set_scene_limits(struct config *cfg, const char *key, const char *value)
+{
 	if (!strcmp(key, "max-objects"))
 		return set_u32(&cfg->max_objects, value, 1, 1u << 24);
 	if (!strcmp(key, "max-buffer-bytes"))

@@ -76,6 +76,29 @@ static int apply(struct config *cfg, int opt, char *arg)
 	return -EINVAL;
 }
 
+/* First pass: where the config file is (into *config_path), help and
+ * version. Returns -1 to go on, else the exit status. */
+static int first_pass(int argc, char **argv, const char *shortopts, const struct option *options,
+		      const char **config_path)
+{
+	int opt;
+	while ((opt = getopt_long(argc, argv, shortopts, options, NULL)) != -1) {
+		if (opt == 'c')
+			*config_path = optarg;
+		else if (opt == 'h')
+			return usage(stdout), 0;
+		else if (opt == 'V')
+			return puts("spindled " SPINDLE_VERSION), 0;
+		else if (opt == '?')
+			return usage(stderr), 2;
+	}
+	if (optind < argc) {
+		fprintf(stderr, "spindled: unexpected argument '%s'\n", argv[optind]);
+		return 2;
+	}
+	return -1;
+}
+
 int main(int argc, char **argv)
 {
 	static const struct option options[] = {
@@ -94,22 +117,9 @@ int main(int argc, char **argv)
 	};
 	const char *shortopts = "c:d:p:r:s:o:vh";
 	const char *config_path = NULL;
-	int opt;
-	/* First pass: where the config file is, help and version. */
-	while ((opt = getopt_long(argc, argv, shortopts, options, NULL)) != -1) {
-		if (opt == 'c')
-			config_path = optarg;
-		else if (opt == 'h')
-			return usage(stdout), 0;
-		else if (opt == 'V')
-			return puts("spindled " SPINDLE_VERSION), 0;
-		else if (opt == '?')
-			return usage(stderr), 2;
-	}
-	if (optind < argc) {
-		fprintf(stderr, "spindled: unexpected argument '%s'\n", argv[optind]);
-		return 2;
-	}
+	int opt, status = first_pass(argc, argv, shortopts, options, &config_path);
+	if (status >= 0)
+		return status;
 	struct config cfg;
 	config_defaults(&cfg);
 	if (config_load(&cfg, config_path ? config_path : CONFIG_DEFAULT_PATH, config_path != NULL) < 0)

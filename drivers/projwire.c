@@ -114,12 +114,10 @@ static int ctrl_shape(const struct projwire_setup *s, size_t len)
 	return s->length == want && len == want ? 0 : -EINVAL;
 }
 
-int projwire_ctrl_decode(const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t *data, size_t len,
-			 struct projwire_ctrl *out)
+/* Whether request is one of the protocol's requests. */
+static bool ctrl_known(uint8_t request)
 {
-	struct projwire_setup s;
-	projwire_setup_decode(setup, &s);
-	switch (s.request) {
+	switch (request) {
 	case PROJWIRE_REQ_GET_INFO:
 	case PROJWIRE_REQ_GET_STATUS:
 	case PROJWIRE_REQ_SET_BLANK:
@@ -127,10 +125,19 @@ int projwire_ctrl_decode(const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t
 	case PROJWIRE_REQ_SWAP:
 	case PROJWIRE_REQ_RESET_STREAM:
 	case PROJWIRE_REQ_SWAP_HALF:
-		break;
+		return true;
 	default:
-		return -EOPNOTSUPP;
+		return false;
 	}
+}
+
+int projwire_ctrl_decode(const uint8_t setup[PROJWIRE_SETUP_SIZE], const uint8_t *data, size_t len,
+			 struct projwire_ctrl *out)
+{
+	struct projwire_setup s;
+	projwire_setup_decode(setup, &s);
+	if (!ctrl_known(s.request))
+		return -EOPNOTSUPP;
 	if (ctrl_shape(&s, len) < 0)
 		return -EINVAL;
 	memset(out, 0, sizeof(*out));

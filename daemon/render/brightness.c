@@ -160,6 +160,33 @@ uint8_t brightness_threshold(const struct brightness_map *m, uint32_t k, uint32_
 	return (uint8_t)(255u * x / m->images);
 }
 
+/* brightness_weight_of()'s cross2 of triangle v, whose side v0 v1 is t,
+ * into *cross2. false: it has no area, and t is now its longest side, to
+ * weigh as a segment. */
+static inline bool triangle_cross2(const double (*v)[3], double t[3], double dx, double dz, double *cross2)
+{
+	double a[3] = { v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2] };
+	double nx = t[1] * a[2] - t[2] * a[1], ny = t[2] * a[0] - t[0] * a[2], nz = t[0] * a[1] - t[1] * a[0];
+	double n2 = nx * nx + ny * ny + nz * nz;
+	double l01 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], l02 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
+	/* |n|^2 = l01 l02 sin^2 of the angle at v0: no area when that
+	 * is tiny against the sides' lengths. */
+	if (n2 > 1e-12 * l01 * l02) {
+		/* |n x e|^2 / |n|^2: the normal's part in the plane. */
+		double ne = -dz * nx + dx * nz;
+		*cross2 = (n2 - ne * ne) / n2;
+		return true;
+	}
+	/* No area: its longest side. */
+	double b[3] = { v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2] };
+	double l12 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
+	if (l02 >= l01 && l02 >= l12)
+		memcpy(t, a, sizeof(a));
+	else if (l12 >= l01)
+		memcpy(t, b, sizeof(b));
+	return false;
+}
+
 void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], int n, double dx, double dz,
 			  struct brightness_weight *out)
 {
@@ -167,27 +194,8 @@ void brightness_weight_of(const struct brightness_map *m, const double (*v)[3], 
 	double cross2 = 0.0;
 	double t[3] = { v[1][0] - v[0][0], v[1][1] - v[0][1], v[1][2] - v[0][2] };
 	bool segment = n == 2;
-	if (n == 3) {
-		double a[3] = { v[2][0] - v[0][0], v[2][1] - v[0][1], v[2][2] - v[0][2] };
-		double nx = t[1] * a[2] - t[2] * a[1], ny = t[2] * a[0] - t[0] * a[2], nz = t[0] * a[1] - t[1] * a[0];
-		double n2 = nx * nx + ny * ny + nz * nz;
-		double l01 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], l02 = a[0] * a[0] + a[1] * a[1] + a[2] * a[2];
-		/* |n|^2 = l01 l02 sin^2 of the angle at v0: no area when that
-		 * is tiny against the sides' lengths. */
-		if (n2 > 1e-12 * l01 * l02) {
-			/* |n x e|^2 / |n|^2: the normal's part in the plane. */
-			double ne = -dz * nx + dx * nz;
-			cross2 = (n2 - ne * ne) / n2;
-		} else { /* no area: its longest side */
-			double b[3] = { v[2][0] - v[1][0], v[2][1] - v[1][1], v[2][2] - v[1][2] };
-			double l12 = b[0] * b[0] + b[1] * b[1] + b[2] * b[2];
-			segment = true;
-			if (l02 >= l01 && l02 >= l12)
-				memcpy(t, a, sizeof(t));
-			else if (l12 >= l01)
-				memcpy(t, b, sizeof(t));
-		}
-	}
+	if (n == 3)
+		segment = !triangle_cross2(v, t, dx, dz, &cross2);
 	if (segment) {
 		double len2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2], te = -dz * t[0] + dx * t[2];
 		if (!(len2 > 0.0)) {

@@ -134,8 +134,6 @@ static void drop_textures(struct render_gl *r, uint64_t now, uint64_t room)
 	}
 }
 
-/* Makes and uploads the texture of d's grid as entry r->grid_tex_count.
- * 0, -EFBIG (GL_OUT_OF_MEMORY), -ENOMEM or -EIO. */
 /* The bound 3-D texture's storage and g's samples in it; GL's error. */
 static GLenum fill_texture(const struct gl_api *gl, const struct scene_grid *g, const struct grid_format *f)
 {
@@ -159,6 +157,8 @@ static GLenum fill_texture(const struct gl_api *gl, const struct scene_grid *g, 
 	return gl->GetError();
 }
 
+/* Makes and uploads the texture of d's grid as entry r->grid_tex_count.
+ * 0, -EFBIG (GL_OUT_OF_MEMORY), -ENOMEM or -EIO. */
 static int make_texture(struct render_gl *r, const struct scene_draw *d)
 {
 	const struct gl_api *gl = r->gl;
@@ -293,11 +293,10 @@ static bool textures_needed(struct render_gl *r, uint64_t now, uint64_t *need, u
 	return fit;
 }
 
-int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
+/* Adds the scene's grid draws that light something to the prepared
+ * draws, their lookup tables' entries counted in *luts. */
+static int add_draws(struct render_gl *r, const struct scene *scene, uint32_t *luts)
 {
-	uint64_t now = ++r->grid_renders;
-	r->grid_draw_count = 0;
-	uint32_t luts = 0;
 	for (uint32_t i = 0; scene && i < scene->draw_count; i++) {
 		const struct scene_draw *d = &scene->draws[i];
 		struct grid_job job;
@@ -308,10 +307,38 @@ int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
 		    (d->transfer.lut && !d->transfer.lut_count && d->grid->type != SCENE_GRID_RGBA8) ||
 		    !grid_prepare(&job, d))
 			continue;
-		int e = add_draw(r, d, &job, &luts);
+		int e = add_draw(r, d, &job, luts);
 		if (e < 0)
 			return e;
 	}
+	return 0;
+}
+
+/* Points each prepared draw at its grid's texture, making those not
+ * kept. */
+static int assign_textures(struct render_gl *r)
+{
+	for (uint32_t i = 0; i < r->grid_draw_count; i++) {
+		struct gl_grid_draw *gd = &r->grid_draws[i];
+		gd->tex = find_texture(r, gd->draw);
+		if (gd->tex == UINT32_MAX) {
+			int e = make_texture(r, gd->draw);
+			if (e < 0)
+				return e;
+			gd->tex = r->grid_tex_count - 1;
+		}
+	}
+	return 0;
+}
+
+int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
+{
+	uint64_t now = ++r->grid_renders;
+	r->grid_draw_count = 0;
+	uint32_t luts = 0;
+	int e = add_draws(r, scene, &luts);
+	if (e < 0)
+		return e;
 	/* What this volume needs: the textures kept that it draws, and new
 	 * ones (fresh). */
 	uint64_t need, fresh;
@@ -329,16 +356,9 @@ int gl_grid_prepare(struct render_gl *r, const struct scene *scene)
 	/* Room for the new ones; then the indices again, as dropping moves
 	 * the textures kept. */
 	drop_textures(r, now, budget - fresh);
-	for (uint32_t i = 0; i < r->grid_draw_count; i++) {
-		struct gl_grid_draw *gd = &r->grid_draws[i];
-		gd->tex = find_texture(r, gd->draw);
-		if (gd->tex == UINT32_MAX) {
-			int e = make_texture(r, gd->draw);
-			if (e < 0)
-				return e;
-			gd->tex = r->grid_tex_count - 1;
-		}
-	}
+	e = assign_textures(r);
+	if (e < 0)
+		return e;
 	return luts ? upload_luts(r, luts) : 0;
 }
 
@@ -455,14 +475,43 @@ int gl_grid_mark(struct render_gl *r, uint32_t first, uint32_t n)
 	return 0;
 }
 
+/* Draws the quad of grid draw gd in image k, where it may light
+ * something: its texture and uniforms, then the quad. */
+static void draw_quad(const struct render_gl *r, const struct gl_grid_draw *gd, uint32_t k)
+{
+	const struct gl_api *gl = r->gl;
+	const struct geometry *g = &r->base.geom;
+	const GLint *uni = r->grid_uni;
+	double h = g->half_height, w = g->width, hh = g->height;
+	const struct scene_draw *d = gd->draw;
+	const struct scene_grid *gr = d->grid;
+	const struct scene_transfer *tf = &d->transfer;
+	double dir[3], up[3];
+	uint32_t px[4];
+	if (!draw_rect(r, gd, k, dir, up, px))
+		return;
+	bool lut = tf->lut && gr->type != SCENE_GRID_RGBA8;
+	gl->BindTexture(GL_TEXTURE_3D, r->grid_tex[gd->tex].tex);
+	/* Row v is window row v of the slot's viewport, whose bottom is
+	 * NDC -1. */
+	gl->Uniform4f(uni[GRID_UNI_RECT], (float)(px[0] * 2 / w - 1), (float)(px[1] * 2 / hh - 1),
+		      (float)((px[2] + 1) * 2 / w - 1), (float)((px[3] + 1) * 2 / hh - 1));
+	gl->Uniform4f(uni[GRID_UNI_OFF], (float)gd->off[0], (float)gd->off[1], (float)gd->off[2],
+		      (float)(2.0 / g->width));
+	gl->Uniform4f(uni[GRID_UNI_DIR], (float)dir[0], (float)dir[1], (float)dir[2], (float)(2.0 * h / g->height));
+	gl->Uniform4f(uni[GRID_UNI_UP], (float)up[0], (float)up[1], (float)up[2], (float)h);
+	gl->Uniform4ui(uni[GRID_UNI_N], gr->n[0], gr->n[1], gr->n[2], gr->type);
+	gl->Uniform4f(uni[GRID_UNI_TF], tf->threshold, tf->lo, tf->hi, tf->sampling == SCENE_TRILINEAR ? 1.0f : 0.0f);
+	gl->Uniform4ui(uni[GRID_UNI_COL], d->rgb[0], d->rgb[1], d->rgb[2], lut ? tf->lut_count : 0);
+	gl->Uniform1ui(uni[GRID_UNI_LUT], gd->lut);
+	gl->DrawArrays(GL_TRIANGLE_STRIP, 0, 4);
+}
+
 void gl_grid_draw(struct render_gl *r, uint32_t k, uint32_t slot, const uint32_t tile[4])
 {
 	if (!r->grid_draw_count)
 		return;
 	const struct gl_api *gl = r->gl;
-	const struct geometry *g = &r->base.geom;
-	const GLint *uni = r->grid_uni;
-	double h = g->half_height, w = g->width, hh = g->height;
 	gl->UseProgram(r->grid.id);
 	gl->BindVertexArray(r->grid_vao);
 	gl->Uniform4ui(r->grid.uni[UNI_TILE], tile[0], tile[1], tile[2], tile[3]);
@@ -471,33 +520,8 @@ void gl_grid_draw(struct render_gl *r, uint32_t k, uint32_t slot, const uint32_t
 		gl->BindTexture(GL_TEXTURE_2D, r->lut_tex);
 	}
 	gl->ActiveTexture(GL_TEXTURE0 + GL_GRID_UNIT);
-	for (uint32_t i = 0; i < r->grid_draw_count; i++) {
-		const struct gl_grid_draw *gd = &r->grid_draws[i];
-		const struct scene_draw *d = gd->draw;
-		const struct scene_grid *gr = d->grid;
-		const struct scene_transfer *tf = &d->transfer;
-		double dir[3], up[3];
-		uint32_t px[4];
-		if (!draw_rect(r, gd, k, dir, up, px))
-			continue;
-		bool lut = tf->lut && gr->type != SCENE_GRID_RGBA8;
-		gl->BindTexture(GL_TEXTURE_3D, r->grid_tex[gd->tex].tex);
-		/* Row v is window row v of the slot's viewport, whose bottom is
-		 * NDC -1. */
-		gl->Uniform4f(uni[GRID_UNI_RECT], (float)(px[0] * 2 / w - 1), (float)(px[1] * 2 / hh - 1),
-			      (float)((px[2] + 1) * 2 / w - 1), (float)((px[3] + 1) * 2 / hh - 1));
-		gl->Uniform4f(uni[GRID_UNI_OFF], (float)gd->off[0], (float)gd->off[1], (float)gd->off[2],
-			      (float)(2.0 / g->width));
-		gl->Uniform4f(uni[GRID_UNI_DIR], (float)dir[0], (float)dir[1], (float)dir[2],
-			      (float)(2.0 * h / g->height));
-		gl->Uniform4f(uni[GRID_UNI_UP], (float)up[0], (float)up[1], (float)up[2], (float)h);
-		gl->Uniform4ui(uni[GRID_UNI_N], gr->n[0], gr->n[1], gr->n[2], gr->type);
-		gl->Uniform4f(uni[GRID_UNI_TF], tf->threshold, tf->lo, tf->hi,
-			      tf->sampling == SCENE_TRILINEAR ? 1.0f : 0.0f);
-		gl->Uniform4ui(uni[GRID_UNI_COL], d->rgb[0], d->rgb[1], d->rgb[2], lut ? tf->lut_count : 0);
-		gl->Uniform1ui(uni[GRID_UNI_LUT], gd->lut);
-		gl->DrawArrays(GL_TRIANGLE_STRIP, 0, 4);
-	}
+	for (uint32_t i = 0; i < r->grid_draw_count; i++)
+		draw_quad(r, &r->grid_draws[i], k);
 	gl->ActiveTexture(GL_TEXTURE0);
 	gl->BindVertexArray(r->vao);
 }

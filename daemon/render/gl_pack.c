@@ -111,6 +111,28 @@ static int map_slots(struct render_gl *r, const struct gl_batch *out)
 	return err < 0 ? err : (int)count;
 }
 
+/* Appends the tiles of a packed batch, mapped at data (their slots in
+ * r->slot_of), to the volume in tile order. 0, or the first error. */
+static int append_tiles(struct render_gl *r, const struct gl_batch *out, const uint8_t *data)
+{
+	int err = 0;
+	for (uint32_t i = 0; err == 0 && i < out->n; i++) {
+		const int32_t *slot = r->slot_of + (size_t)i * r->tiles_per_image;
+		for (uint32_t t = 0; err == 0 && t < r->tiles_per_image; t++) {
+			if (slot[t] < 0)
+				continue;
+			uint8_t *dst = volume_image_next(r->vol, out->first + i);
+			if (!dst) {
+				err = -ENOMEM;
+				break;
+			}
+			memcpy(dst, data + (size_t)slot[t] * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
+			err = volume_image_push(r->vol, out->first + i, t);
+		}
+	}
+	return err;
+}
+
 /* Waits for a packed batch and appends its tiles, in tile order, to the
  * volume. */
 int gl_pack_collect(struct render_gl *r, struct gl_batch *out)
@@ -132,26 +154,12 @@ int gl_pack_collect(struct render_gl *r, struct gl_batch *out)
 	int count = map_slots(r, out);
 	if (count <= 0)
 		return count;
-	int err = 0;
 	gl->BindBuffer(GL_COPY_READ_BUFFER, out->tiles);
 	const uint8_t *data = gl->MapBufferRange(GL_COPY_READ_BUFFER, 0,
 						 (GLsizeiptr)((size_t)count * VOLUME_TILE_BYTES), GL_MAP_READ_BIT);
 	if (!data)
 		return -EIO;
-	for (uint32_t i = 0; err == 0 && i < out->n; i++) {
-		const int32_t *slot = r->slot_of + (size_t)i * r->tiles_per_image;
-		for (uint32_t t = 0; err == 0 && t < r->tiles_per_image; t++) {
-			if (slot[t] < 0)
-				continue;
-			uint8_t *dst = volume_image_next(r->vol, out->first + i);
-			if (!dst) {
-				err = -ENOMEM;
-				break;
-			}
-			memcpy(dst, data + (size_t)slot[t] * VOLUME_TILE_BYTES, VOLUME_TILE_BYTES);
-			err = volume_image_push(r->vol, out->first + i, t);
-		}
-	}
+	int err = append_tiles(r, out, data);
 	gl->UnmapBuffer(GL_COPY_READ_BUFFER);
 	r->base.stats.tiles += (uint64_t)count;
 	r->copy_ns += (uint64_t)now_ns() - t1;
