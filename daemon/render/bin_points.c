@@ -146,6 +146,12 @@ static inline void turn_word(const struct bin_set *b, uint32_t turn, uint64_t *w
 	*k = j;
 }
 
+/* A record word's colour and size (x86: little-endian; u and v below). */
+static inline uint64_t record_high(const uint8_t rgb[3], uint64_t size)
+{
+	return (uint64_t)rgb[0] << 32 | (uint64_t)rgb[1] << 40 | (uint64_t)rgb[2] << 48 | size << 56;
+}
+
 /* The vector paths' lanes past the fast path: the records of points j ..
  * j + n - 1 from their images ka (front), kb (back, unmirrored), columns
  * and row uva (u | v << 16) and back columns ub, the colour and size word
@@ -163,11 +169,7 @@ static inline void stage_lanes(const struct bin_set *b, const struct scene_draw 
 			stage_exact(b, d, jj, turn, recs, keys, i, hist);
 			continue;
 		}
-		uint64_t w = hi;
-		if (d->prim_rgb) {
-			const uint8_t *c = d->prim_rgb + 3 * jj;
-			w = (uint64_t)c[0] << 32 | (uint64_t)c[1] << 40 | (uint64_t)c[2] << 48 | size << 56;
-		}
+		uint64_t w = d->prim_rgb ? record_high(d->prim_rgb + 3 * jj, size) : hi;
 		uint64_t w0 = w | uva[l];
 		uint32_t k = ka[l];
 		if (turn)
@@ -205,6 +207,162 @@ static inline bool stage_fast(const struct bin_set *b, const struct scene_draw *
 	return b->geom.mirrored && !bin_draw_turn(b, d) && !d->prim_rgb;
 }
 
+/* The fast path's lanes (ex) that the scalar rule decides, staged over
+ * the vector's: recs and keys point at point j's entries. */
+static inline void fast_exact_lanes(const struct bin_set *b, const struct scene_draw *d, uint64_t j, int n, unsigned ex,
+				    struct bin_point *recs, uint16_t *keys, uint32_t *hist)
+{
+	for (int l = 0; ex && l < n; l++)
+		if (ex & (1u << l))
+			stage_fast_exact(b, d, j + (uint64_t)l, recs, keys, (uint64_t)l, hist);
+}
+
+/* ---- four points at a time (AVX2) ---- */
+
+#define AVX2_INLINE __attribute__((target("avx2"))) static inline __attribute__((always_inline))
+
+/* What stage_avx2()'s loop keeps in registers: the transform's rows (X =
+ * ((m[0][0] x + m[0][1] y) + m[0][2] z) + m[0][3], as the scalar code
+ * groups it), the image's size and the slope table's shape. */
+struct lanes4 {
+	__m256d m[3][4];
+	__m256d absmask, fltmax, one, halfv, width, height, h, h2, zero;
+	__m128i wmax, hmax, rowlen, lo16, vM, vN, half;
+	__m128 fabsmask, nbuckets, eps, neps;
+	const float *table;
+	const double *dir;
+};
+
+AVX2_INLINE void lanes4_init(struct lanes4 *c, const struct bin_set *b, const struct scene_draw *d)
+{
+	const struct geometry *g = &b->geom;
+	for (int r = 0; r < 3; r++)
+		for (int i = 0; i < 4; i++)
+			c->m[r][i] = _mm256_set1_pd(d->transform[4 * i + r]);
+	c->absmask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
+	c->fltmax = _mm256_set1_pd(FLT_MAX);
+	c->one = _mm256_set1_pd(1.0);
+	c->halfv = _mm256_set1_pd(0.5); /* (S + 1) / 2 == (S + 1) * 0.5 exactly: both round the same real */
+	c->width = _mm256_set1_pd((double)g->width);
+	c->height = _mm256_set1_pd((double)g->height);
+	c->h = _mm256_set1_pd(g->half_height);
+	c->h2 = _mm256_set1_pd(2.0 * g->half_height);
+	c->zero = _mm256_setzero_pd();
+	c->wmax = _mm_set1_epi32((int)g->width - 1);
+	c->hmax = _mm_set1_epi32((int)g->height - 1);
+	c->rowlen = _mm_set1_epi32((int)b->slots.buckets + 1);
+	c->lo16 = _mm_set1_epi32(0xFFFF);
+	c->vM = _mm_set1_epi32((int)b->images);
+	c->vN = _mm_set1_epi32((int)g->images_per_rev);
+	c->half = _mm_set1_epi32((int)(g->images_per_rev / 2));
+	c->fabsmask = _mm_castsi128_ps(_mm_set1_epi32(INT32_MAX));
+	c->nbuckets = _mm_set1_ps((float)b->slots.buckets);
+	c->eps = _mm_set1_ps(1e-5f);
+	c->neps = _mm_set1_ps(-1e-5f);
+	c->table = (const float *)b->slots.b;
+	c->dir = b->dir;
+}
+
+/* x, y and z of the four points at p, widened. */
+AVX2_INLINE void load4(const float *p, __m256d *x, __m256d *y, __m256d *z)
+{
+	*x = _mm256_cvtps_pd(_mm_setr_ps(p[0], p[3], p[6], p[9]));
+	*y = _mm256_cvtps_pd(_mm_setr_ps(p[1], p[4], p[7], p[10]));
+	*z = _mm256_cvtps_pd(_mm_setr_ps(p[2], p[5], p[8], p[11]));
+}
+
+/* Row r of the transform on four points; and whether it is finite there. */
+AVX2_INLINE __m256d transform4(const struct lanes4 *c, int r, __m256d x, __m256d y, __m256d z, __m256d *fin)
+{
+	const __m256d *m = c->m[r];
+	__m256d v = _mm256_add_pd(
+		_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m[0], x), _mm256_mul_pd(m[1], y)), _mm256_mul_pd(m[2], z)),
+		m[3]);
+	*fin = _mm256_and_pd(*fin, _mm256_cmp_pd(_mm256_and_pd(v, c->absmask), c->fltmax, _CMP_LE_OQ));
+	return v;
+}
+
+/* slot_of()'s bucket of (fx, fz) on four lanes, times 3 (its index in
+ * floats), and the slope *s; *exact gets the lanes slot_of() would not
+ * see (not finite) or that have no slot there (on the axis, or a float
+ * overflow), whose slope is zeroed so that the gathers stay inside the
+ * table. */
+AVX2_INLINE __m128i bucket4(const struct lanes4 *c, __m128 fx, __m128 fz, __m128 *s, __m128 *exact)
+{
+	const __m128 fzero = _mm_setzero_ps();
+	__m128 ax = _mm_and_ps(fx, c->fabsmask), az = _mm_and_ps(fz, c->fabsmask);
+	__m128 xneg = _mm_cmplt_ps(fx, fzero), zneg = _mm_cmplt_ps(fz, fzero);
+	__m128 odd = _mm_xor_ps(xneg, zneg); /* quadrants 1 and 3 */
+	__m128 perp = _mm_blendv_ps(az, ax, odd), radial = _mm_blendv_ps(ax, az, odd);
+	__m128 gt = _mm_cmpgt_ps(perp, radial);
+	__m128 mn = _mm_min_ps(perp, radial), mx = _mm_max_ps(perp, radial);
+	__m128 ex = _mm_or_ps(_mm_cmpeq_ps(mx, fzero), _mm_cmpeq_ps(mx, _mm_set1_ps(INFINITY)));
+	ex = _mm_or_ps(ex, _mm_cmpunord_ps(fx, fz));
+	__m128 slope = _mm_div_ps(mn, mx);
+	slope = _mm_andnot_ps(_mm_or_ps(ex, _mm_cmpunord_ps(slope, slope)), slope);
+	__m128i q = _mm_sub_epi32(_mm_setzero_si128(),
+				  _mm_add_epi32(_mm_add_epi32(_mm_castps_si128(zneg), _mm_castps_si128(zneg)),
+						_mm_castps_si128(odd))); /* 2 zneg + odd */
+	__m128i octant = _mm_sub_epi32(_mm_add_epi32(q, q), _mm_castps_si128(gt));
+	__m128i idx =
+		_mm_add_epi32(_mm_mullo_epi32(octant, c->rowlen), _mm_cvttps_epi32(_mm_mul_ps(slope, c->nbuckets)));
+	*s = slope;
+	*exact = ex;
+	return _mm_add_epi32(_mm_add_epi32(idx, idx), idx);
+}
+
+/* slot_of((float)X, (float)Z) on four lanes: the front image of each;
+ * *exact gets the lanes point_exact() decides (bucket4(), and those near
+ * a slot boundary). */
+AVX2_INLINE __m128i slot4(const struct lanes4 *c, __m256d X, __m256d Z, __m128 *exact)
+{
+	__m128 s;
+	__m128i idx3 = bucket4(c, _mm256_cvtpd_ps(X), _mm256_cvtpd_ps(Z), &s, exact);
+	/* edge | below << 32 | above << 48, and near */
+	__m256i eb = _mm256_i32gather_epi64((const long long *)c->table, idx3, 4);
+	__m128 nearv = _mm_i32gather_ps(c->table + 2, idx3, 4);
+	__m256i ebs = _mm256_permutevar8x32_epi32(eb, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
+	__m128 edge = _mm_castsi128_ps(_mm256_castsi256_si128(ebs));
+	__m128i ba = _mm256_extracti128_si256(ebs, 1);
+	__m128 dd = _mm_sub_ps(s, nearv);
+	*exact = _mm_or_ps(*exact, _mm_and_ps(_mm_cmplt_ps(dd, c->eps), _mm_cmpgt_ps(dd, c->neps)));
+	return _mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(_mm_and_si128(ba, c->lo16)),
+					      _mm_castsi128_ps(_mm_srli_epi32(ba, 16)), _mm_cmpge_ps(s, edge)));
+}
+
+/* The volume image of the front lobe of image front, front % M, and the
+ * back lobe's image, (front + N/2) % N, in *back, on four lanes. */
+AVX2_INLINE __m128i lobes4(const struct lanes4 *c, __m128i front, __m128i *back)
+{
+	__m128i k = _mm_add_epi32(front, c->half);
+	*back = _mm_sub_epi32(k, _mm_andnot_si128(_mm_cmpgt_epi32(c->vN, k), c->vN));
+	return _mm_sub_epi32(front, _mm_andnot_si128(_mm_cmpgt_epi32(c->vM, front), c->vM));
+}
+
+/* f truncated to an index below limit (max where f >= limit, 0 where f
+ * is negative or NaN), on four lanes. */
+AVX2_INLINE __m128i index4(const struct lanes4 *c, __m256d f, __m256d limit, __m128i max)
+{
+	__m128i i = _mm256_cvttpd_epi32(_mm256_and_pd(f, _mm256_cmp_pd(f, c->zero, _CMP_GE_OQ)));
+	return _mm_blendv_epi8(i, max, _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(f, limit, _CMP_GE_OQ))));
+}
+
+/* geometry_column() of X cos + Z sin of image k, on four lanes. */
+AVX2_INLINE __m128i column4(const struct lanes4 *c, __m256d X, __m256d Z, __m128i k)
+{
+	__m128i k2 = _mm_add_epi32(k, k);
+	__m256d S = _mm256_add_pd(_mm256_mul_pd(X, _mm256_i32gather_pd(c->dir, k2, 8)),
+				  _mm256_mul_pd(Z, _mm256_i32gather_pd(c->dir + 1, k2, 8)));
+	return index4(c, _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(S, c->one), c->halfv), c->width), c->width, c->wmax);
+}
+
+/* geometry_row() of Y, on four lanes. */
+AVX2_INLINE __m128i row4(const struct lanes4 *c, __m256d Y)
+{
+	__m256d fv = _mm256_mul_pd(_mm256_div_pd(_mm256_sub_pd(c->h, Y), c->h2), c->height);
+	return index4(c, fv, c->height, c->hmax);
+}
+
 /* Points j0 .. j1 - 1 four at a time, with exactly point_exact()'s
  * operations (no fused multiply-adds: each product and sum rounded as the
  * scalar code rounds it); a point the slope table flags as near a slot
@@ -213,258 +371,224 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 							   uint64_t j0, uint64_t j1, struct bin_point *recs,
 							   uint16_t *keys, uint32_t *hist)
 {
-	const struct geometry *g = &b->geom;
-	const struct slot_table *t = &b->slots;
-	const float *m = d->transform;
-	const uint32_t N = g->images_per_rev, M = b->images, turn = bin_draw_turn(b, d);
-	const bool mirrored = g->mirrored;
-	const __m256d m0 = _mm256_set1_pd(m[0]), m1 = _mm256_set1_pd(m[1]), m2 = _mm256_set1_pd(m[2]);
-	const __m256d m4 = _mm256_set1_pd(m[4]), m5 = _mm256_set1_pd(m[5]), m6 = _mm256_set1_pd(m[6]);
-	const __m256d m8 = _mm256_set1_pd(m[8]), m9 = _mm256_set1_pd(m[9]), m10 = _mm256_set1_pd(m[10]);
-	const __m256d m12 = _mm256_set1_pd(m[12]), m13 = _mm256_set1_pd(m[13]), m14 = _mm256_set1_pd(m[14]);
-	const __m256d absmask = _mm256_castsi256_pd(_mm256_set1_epi64x(INT64_MAX));
-	const __m256d fltmax = _mm256_set1_pd(FLT_MAX), one = _mm256_set1_pd(1.0);
-	/* (S + 1) / 2 == (S + 1) * 0.5 exactly: both round the same real */
-	const __m256d halfv = _mm256_set1_pd(0.5);
-	const __m256d width = _mm256_set1_pd((double)g->width), height = _mm256_set1_pd((double)g->height);
-	const double hh = g->half_height;
-	const __m256d h = _mm256_set1_pd(hh), h2 = _mm256_set1_pd(2.0 * hh), zero = _mm256_setzero_pd();
-	const __m128i wmax = _mm_set1_epi32((int)g->width - 1), hmax = _mm_set1_epi32((int)g->height - 1);
-	const __m128 fzero = _mm_setzero_ps(), fabsmask = _mm_castsi128_ps(_mm_set1_epi32(INT32_MAX));
-	const __m128 nbuckets = _mm_set1_ps((float)t->buckets), eps = _mm_set1_ps(1e-5f), neps = _mm_set1_ps(-1e-5f);
-	const __m128i rowlen = _mm_set1_epi32((int)t->buckets + 1), lo16 = _mm_set1_epi32(0xFFFF);
-	const __m128i vM = _mm_set1_epi32((int)M), vN = _mm_set1_epi32((int)N), half = _mm_set1_epi32((int)(N / 2));
-	const float *table = (const float *)t->b;
-	const double *dir = b->dir;
-	const uint64_t size = point_size(d);
-	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
-			    size << 56;
-	const __m256i hi4 = _mm256_set1_epi64x((long long)hi);
-	const bool fast = stage_fast(b, d);
+	struct lanes4 c;
+	lanes4_init(&c, b, d);
+	const bool mirrored = b->geom.mirrored, fast = stage_fast(b, d);
+	const uint32_t turn = bin_draw_turn(b, d), slots = mirrored ? 1 : 2;
+	const uint64_t hi = record_high(d->rgb, point_size(d));
 	uint64_t j = j0;
 	for (; j + 4 <= j1; j += 4) {
-		const float *p = d->xyz + 3 * j;
-		__m256d x = _mm256_cvtps_pd(_mm_setr_ps(p[0], p[3], p[6], p[9]));
-		__m256d y = _mm256_cvtps_pd(_mm_setr_ps(p[1], p[4], p[7], p[10]));
-		__m256d z = _mm256_cvtps_pd(_mm_setr_ps(p[2], p[5], p[8], p[11]));
-		/* ((m0 x + m4 y) + m8 z) + m12, as the scalar code groups it */
-		__m256d X = _mm256_add_pd(
-			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m0, x), _mm256_mul_pd(m4, y)), _mm256_mul_pd(m8, z)),
-			m12);
-		__m256d Y = _mm256_add_pd(
-			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m1, x), _mm256_mul_pd(m5, y)), _mm256_mul_pd(m9, z)),
-			m13);
-		__m256d Z = _mm256_add_pd(
-			_mm256_add_pd(_mm256_add_pd(_mm256_mul_pd(m2, x), _mm256_mul_pd(m6, y)), _mm256_mul_pd(m10, z)),
-			m14);
-		__m256d fin = _mm256_and_pd(_mm256_and_pd(_mm256_cmp_pd(_mm256_and_pd(X, absmask), fltmax, _CMP_LE_OQ),
-							  _mm256_cmp_pd(_mm256_and_pd(Y, absmask), fltmax, _CMP_LE_OQ)),
-					    _mm256_cmp_pd(_mm256_and_pd(Z, absmask), fltmax, _CMP_LE_OQ));
-		/* slot_of((float)X, (float)Z); lanes it would not see (not
-		 * finite) or that have no slot there (on the axis, or a float
-		 * overflow) go to point_exact(), their slope zeroed so that the
-		 * gathers stay inside the table */
-		__m128 fx = _mm256_cvtpd_ps(X), fz = _mm256_cvtpd_ps(Z);
-		__m128 ax = _mm_and_ps(fx, fabsmask), az = _mm_and_ps(fz, fabsmask);
-		__m128 xneg = _mm_cmplt_ps(fx, fzero), zneg = _mm_cmplt_ps(fz, fzero);
-		__m128 odd = _mm_xor_ps(xneg, zneg); /* quadrants 1 and 3 */
-		__m128 perp = _mm_blendv_ps(az, ax, odd), radial = _mm_blendv_ps(ax, az, odd);
-		__m128 gt = _mm_cmpgt_ps(perp, radial);
-		__m128 mn = _mm_min_ps(perp, radial), mx = _mm_max_ps(perp, radial);
-		__m128 exact = _mm_or_ps(_mm_cmpeq_ps(mx, fzero), _mm_cmpeq_ps(mx, _mm_set1_ps(INFINITY)));
-		exact = _mm_or_ps(exact, _mm_cmpunord_ps(fx, fz));
-		__m128 s = _mm_div_ps(mn, mx);
-		s = _mm_andnot_ps(_mm_or_ps(exact, _mm_cmpunord_ps(s, s)), s);
-		__m128i q = _mm_sub_epi32(_mm_setzero_si128(),
-					  _mm_add_epi32(_mm_add_epi32(_mm_castps_si128(zneg), _mm_castps_si128(zneg)),
-							_mm_castps_si128(odd))); /* 2 zneg + odd */
-		__m128i octant = _mm_sub_epi32(_mm_add_epi32(q, q), _mm_castps_si128(gt));
-		__m128i idx = _mm_add_epi32(_mm_mullo_epi32(octant, rowlen), _mm_cvttps_epi32(_mm_mul_ps(s, nbuckets)));
-		__m128i idx3 = _mm_add_epi32(_mm_add_epi32(idx, idx), idx);
-		/* edge | below << 32 | above << 48, and near */
-		__m256i eb = _mm256_i32gather_epi64((const long long *)table, idx3, 4);
-		__m128 nearv = _mm_i32gather_ps(table + 2, idx3, 4);
-		__m256i ebs = _mm256_permutevar8x32_epi32(eb, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
-		__m128 edge = _mm_castsi128_ps(_mm256_castsi256_si128(ebs));
-		__m128i ba = _mm256_extracti128_si256(ebs, 1);
-		__m128 dd = _mm_sub_ps(s, nearv);
-		exact = _mm_or_ps(exact, _mm_and_ps(_mm_cmplt_ps(dd, eps), _mm_cmpgt_ps(dd, neps)));
-		__m128i front = _mm_castps_si128(
-			_mm_blendv_ps(_mm_castsi128_ps(_mm_and_si128(ba, lo16)),
-				      _mm_castsi128_ps(_mm_srli_epi32(ba, 16)), _mm_cmpge_ps(s, edge)));
-		/* the volume image of each lobe: front % M, (front + N/2) % N % M */
-		__m128i k0 = _mm_sub_epi32(front, _mm_andnot_si128(_mm_cmpgt_epi32(vM, front), vM));
-		__m128i back = _mm_add_epi32(front, half);
-		back = _mm_sub_epi32(back, _mm_andnot_si128(_mm_cmpgt_epi32(vN, back), vN));
-		/* column of X cos + Z sin, row of Y */
-		__m256d S = _mm256_add_pd(_mm256_mul_pd(X, _mm256_i32gather_pd(dir, _mm_add_epi32(k0, k0), 8)),
-					  _mm256_mul_pd(Z, _mm256_i32gather_pd(dir + 1, _mm_add_epi32(k0, k0), 8)));
-		__m256d fu = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(S, one), halfv), width);
-		__m256d fv = _mm256_mul_pd(_mm256_div_pd(_mm256_sub_pd(h, Y), h2), height);
-		__m128i u0 = _mm256_cvttpd_epi32(_mm256_and_pd(fu, _mm256_cmp_pd(fu, zero, _CMP_GE_OQ)));
-		u0 = _mm_blendv_epi8(u0, wmax, _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(fu, width, _CMP_GE_OQ))));
-		__m128i v0 = _mm256_cvttpd_epi32(_mm256_and_pd(fv, _mm256_cmp_pd(fv, zero, _CMP_GE_OQ)));
-		v0 = _mm_blendv_epi8(v0, hmax,
-				     _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(fv, height, _CMP_GE_OQ))));
-		__m128i u1 = _mm_setzero_si128();
-		if (!mirrored) {
-			__m256d S1 = _mm256_add_pd(
-				_mm256_mul_pd(X, _mm256_i32gather_pd(dir, _mm_add_epi32(back, back), 8)),
-				_mm256_mul_pd(Z, _mm256_i32gather_pd(dir + 1, _mm_add_epi32(back, back), 8)));
-			__m256d f1 = _mm256_mul_pd(_mm256_mul_pd(_mm256_add_pd(S1, one), halfv), width);
-			u1 = _mm256_cvttpd_epi32(_mm256_and_pd(f1, _mm256_cmp_pd(f1, zero, _CMP_GE_OQ)));
-			u1 = _mm_blendv_epi8(u1, wmax,
-					     _mm_castps_si128(_mm256_cvtpd_ps(_mm256_cmp_pd(f1, width, _CMP_GE_OQ))));
-		}
-		int ex = _mm_movemask_ps(exact) | (~_mm256_movemask_pd(fin) & 0xF);
+		__m256d x, y, z;
+		load4(d->xyz + 3 * j, &x, &y, &z);
+		__m256d fin = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
+		__m256d X = transform4(&c, 0, x, y, z, &fin), Y = transform4(&c, 1, x, y, z, &fin);
+		__m256d Z = transform4(&c, 2, x, y, z, &fin);
+		__m128 exact;
+		__m128i front = slot4(&c, X, Z, &exact);
+		__m128i back, k0 = lobes4(&c, front, &back);
 		/* records as 64-bit words (x86: little-endian): u, v, then the
 		 * colour and size of hi */
-		__m128i uv0 = _mm_or_si128(u0, _mm_slli_epi32(v0, 16));
-		if (fast) { /* 4 records, 4 keys at once; counted below */
-			_mm256_storeu_si256((__m256i *)(recs + (j - j0)),
-					    _mm256_or_si256(_mm256_cvtepu32_epi64(uv0), hi4));
+		__m128i uv0 = _mm_or_si128(column4(&c, X, Z, k0), _mm_slli_epi32(row4(&c, Y), 16));
+		unsigned ex = (unsigned)(_mm_movemask_ps(exact) | (~_mm256_movemask_pd(fin) & 0xF));
+		if (fast) { /* 4 records, 4 keys at once; counted afterwards */
+			_mm256_storeu_si256(
+				(__m256i *)(recs + (j - j0)),
+				_mm256_or_si256(_mm256_cvtepu32_epi64(uv0), _mm256_set1_epi64x((long long)hi)));
 			_mm_storel_epi64((__m128i *)(keys + (j - j0)), _mm_packus_epi32(k0, k0));
-			for (int l = 0; ex && l < 4; l++)
-				if (ex & (1 << l))
-					stage_fast_exact(b, d, j + (uint64_t)l, recs, keys, j + (uint64_t)l - j0, hist);
+			fast_exact_lanes(b, d, j, 4, ex, recs + (j - j0), keys + (j - j0), hist);
 			continue;
 		}
 		uint32_t ka[4], kb[4], uva[4], ub[4];
 		_mm_storeu_si128((__m128i *)ka, k0);
 		_mm_storeu_si128((__m128i *)kb, back);
 		_mm_storeu_si128((__m128i *)uva, uv0);
-		_mm_storeu_si128((__m128i *)ub, u1);
-		stage_lanes(b, d, j, 4, (unsigned)ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
-			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
+		_mm_storeu_si128((__m128i *)ub, mirrored ? _mm_setzero_si128() : column4(&c, X, Z, back));
+		stage_lanes(b, d, j, 4, ex, ka, kb, uva, ub, hi, turn, recs + slots * (j - j0), keys + slots * (j - j0),
+			    hist);
 	}
 	return j;
 }
 
-/* stage_avx2() eight points at a time on AVX-512 (32 vector registers: no
- * constant spilled), with the same operations lane for lane. */
+/* ---- eight points at a time (AVX-512) ---- */
+
 #define AVX512_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2")))
+#define AVX512_INLINE AVX512_TARGET static inline __attribute__((always_inline))
+
+/* struct lanes4 for eight lanes (32 vector registers: no constant spilled). */
+struct lanes8 {
+	__m512d m[3][4];
+	__m512d fltmax, one, halfv, width, height, h, h2, zero;
+	__m256i wmax, hmax, rowlen, lo16, vM, vN, half;
+	__m256 fabsmask, nbuckets, eps, neps;
+	const float *table;
+	const double *dir;
+};
+
+AVX512_INLINE void lanes8_init(struct lanes8 *c, const struct bin_set *b, const struct scene_draw *d)
+{
+	const struct geometry *g = &b->geom;
+	for (int r = 0; r < 3; r++)
+		for (int i = 0; i < 4; i++)
+			c->m[r][i] = _mm512_set1_pd(d->transform[4 * i + r]);
+	c->fltmax = _mm512_set1_pd(FLT_MAX);
+	c->one = _mm512_set1_pd(1.0);
+	c->halfv = _mm512_set1_pd(0.5);
+	c->width = _mm512_set1_pd((double)g->width);
+	c->height = _mm512_set1_pd((double)g->height);
+	c->h = _mm512_set1_pd(g->half_height);
+	c->h2 = _mm512_set1_pd(2.0 * g->half_height);
+	c->zero = _mm512_setzero_pd();
+	c->wmax = _mm256_set1_epi32((int)g->width - 1);
+	c->hmax = _mm256_set1_epi32((int)g->height - 1);
+	c->rowlen = _mm256_set1_epi32((int)b->slots.buckets + 1);
+	c->lo16 = _mm256_set1_epi32(0xFFFF);
+	c->vM = _mm256_set1_epi32((int)b->images);
+	c->vN = _mm256_set1_epi32((int)g->images_per_rev);
+	c->half = _mm256_set1_epi32((int)(g->images_per_rev / 2));
+	c->fabsmask = _mm256_castsi256_ps(_mm256_set1_epi32(INT32_MAX));
+	c->nbuckets = _mm256_set1_ps((float)b->slots.buckets);
+	c->eps = _mm256_set1_ps(1e-5f);
+	c->neps = _mm256_set1_ps(-1e-5f);
+	c->table = (const float *)b->slots.b;
+	c->dir = b->dir;
+}
+
+/* x, y and z of the eight points at p (24 floats: lanes 0..15 of the
+ * first load, 16..23 of the second), widened. */
+AVX512_INLINE void load8(const float *p, __m512d *x, __m512d *y, __m512d *z)
+{
+	const __m512i ix = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 0, 0, 0, 0, 0, 0, 0, 0);
+	const __m512i one = _mm512_set1_epi32(1);
+	__m512 a = _mm512_loadu_ps(p), c = _mm512_castps256_ps512(_mm256_loadu_ps(p + 16));
+	__m512i iy = _mm512_add_epi32(ix, one), iz = _mm512_add_epi32(iy, one);
+	*x = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, ix, c)));
+	*y = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iy, c)));
+	*z = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iz, c)));
+}
+
+/* transform4() on eight points. */
+AVX512_INLINE __m512d transform8(const struct lanes8 *c, int r, __m512d x, __m512d y, __m512d z, __mmask8 *fin)
+{
+	const __m512d *m = c->m[r];
+	__m512d v = _mm512_add_pd(
+		_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m[0], x), _mm512_mul_pd(m[1], y)), _mm512_mul_pd(m[2], z)),
+		m[3]);
+	*fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(v), c->fltmax, _CMP_LE_OQ);
+	return v;
+}
+
+/* bucket4() on eight lanes. */
+AVX512_INLINE __m256i bucket8(const struct lanes8 *c, __m256 fx, __m256 fz, __m256 *s, __m256 *exact)
+{
+	const __m256 fzero = _mm256_setzero_ps();
+	__m256 ax = _mm256_and_ps(fx, c->fabsmask), az = _mm256_and_ps(fz, c->fabsmask);
+	__m256 xneg = _mm256_cmp_ps(fx, fzero, _CMP_LT_OS), zneg = _mm256_cmp_ps(fz, fzero, _CMP_LT_OS);
+	__m256 odd = _mm256_xor_ps(xneg, zneg);
+	__m256 perp = _mm256_blendv_ps(az, ax, odd), radial = _mm256_blendv_ps(ax, az, odd);
+	__m256 gt = _mm256_cmp_ps(perp, radial, _CMP_GT_OS);
+	__m256 mn = _mm256_min_ps(perp, radial), mx = _mm256_max_ps(perp, radial);
+	__m256 ex = _mm256_or_ps(_mm256_cmp_ps(mx, fzero, _CMP_EQ_OQ),
+				 _mm256_cmp_ps(mx, _mm256_set1_ps(INFINITY), _CMP_EQ_OQ));
+	ex = _mm256_or_ps(ex, _mm256_cmp_ps(fx, fz, _CMP_UNORD_Q));
+	__m256 slope = _mm256_div_ps(mn, mx);
+	slope = _mm256_andnot_ps(_mm256_or_ps(ex, _mm256_cmp_ps(slope, slope, _CMP_UNORD_Q)), slope);
+	__m256i q = _mm256_sub_epi32(
+		_mm256_setzero_si256(),
+		_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
+				 _mm256_castps_si256(odd)));
+	__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
+	__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, c->rowlen),
+				       _mm256_cvttps_epi32(_mm256_mul_ps(slope, c->nbuckets)));
+	*s = slope;
+	*exact = ex;
+	return _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
+}
+
+/* slot4() on eight lanes. */
+AVX512_INLINE __m256i slot8(const struct lanes8 *c, __m512d X, __m512d Z, __m256 *exact)
+{
+	__m256 s;
+	__m256i idx3 = bucket8(c, _mm512_cvtpd_ps(X), _mm512_cvtpd_ps(Z), &s, exact);
+	__m512i eb = _mm512_i32gather_epi64(idx3, c->table, 4); /* edge | below << 32 | above << 48 */
+	__m256 nearv = _mm256_i32gather_ps(c->table + 2, idx3, 4);
+	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
+	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
+	__m256 dd = _mm256_sub_ps(s, nearv);
+	*exact = _mm256_or_ps(
+		*exact, _mm256_and_ps(_mm256_cmp_ps(dd, c->eps, _CMP_LT_OS), _mm256_cmp_ps(dd, c->neps, _CMP_GT_OS)));
+	return _mm256_castps_si256(
+		_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_and_si256(ba, c->lo16)),
+				 _mm256_castsi256_ps(_mm256_srli_epi32(ba, 16)), _mm256_cmp_ps(s, edge, _CMP_GE_OS)));
+}
+
+/* lobes4() on eight lanes. */
+AVX512_INLINE __m256i lobes8(const struct lanes8 *c, __m256i front, __m256i *back)
+{
+	__m256i k = _mm256_add_epi32(front, c->half);
+	*back = _mm256_sub_epi32(k, _mm256_andnot_si256(_mm256_cmpgt_epi32(c->vN, k), c->vN));
+	return _mm256_sub_epi32(front, _mm256_andnot_si256(_mm256_cmpgt_epi32(c->vM, front), c->vM));
+}
+
+/* index4() on eight lanes. */
+AVX512_INLINE __m256i index8(const struct lanes8 *c, __m512d f, __m512d limit, __m256i max)
+{
+	__m256i i = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(f, c->zero, _CMP_GE_OQ), f));
+	return _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(f, limit, _CMP_GE_OQ), i, max);
+}
+
+/* column4() on eight lanes. */
+AVX512_INLINE __m256i column8(const struct lanes8 *c, __m512d X, __m512d Z, __m256i k)
+{
+	__m256i k2 = _mm256_add_epi32(k, k);
+	__m512d S = _mm512_add_pd(_mm512_mul_pd(X, _mm512_i32gather_pd(k2, c->dir, 8)),
+				  _mm512_mul_pd(Z, _mm512_i32gather_pd(k2, c->dir + 1, 8)));
+	return index8(c, _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S, c->one), c->halfv), c->width), c->width, c->wmax);
+}
+
+/* row4() on eight lanes. */
+AVX512_INLINE __m256i row8(const struct lanes8 *c, __m512d Y)
+{
+	__m512d fv = _mm512_mul_pd(_mm512_div_pd(_mm512_sub_pd(c->h, Y), c->h2), c->height);
+	return index8(c, fv, c->height, c->hmax);
+}
+
+/* stage_avx2() eight points at a time on AVX-512, with the same
+ * operations lane for lane. */
 AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct scene_draw *d, uint64_t j0,
 					   uint64_t j1, struct bin_point *recs, uint16_t *keys, uint32_t *hist)
 {
-	const struct geometry *g = &b->geom;
-	const struct slot_table *t = &b->slots;
-	const float *m = d->transform;
-	const uint32_t N = g->images_per_rev, M = b->images, turn = bin_draw_turn(b, d);
-	const bool mirrored = g->mirrored;
-	const __m512d m0 = _mm512_set1_pd(m[0]), m1 = _mm512_set1_pd(m[1]), m2 = _mm512_set1_pd(m[2]);
-	const __m512d m4 = _mm512_set1_pd(m[4]), m5 = _mm512_set1_pd(m[5]), m6 = _mm512_set1_pd(m[6]);
-	const __m512d m8 = _mm512_set1_pd(m[8]), m9 = _mm512_set1_pd(m[9]), m10 = _mm512_set1_pd(m[10]);
-	const __m512d m12 = _mm512_set1_pd(m[12]), m13 = _mm512_set1_pd(m[13]), m14 = _mm512_set1_pd(m[14]);
-	const __m512d fltmax = _mm512_set1_pd(FLT_MAX), one = _mm512_set1_pd(1.0), halfv = _mm512_set1_pd(0.5);
-	const __m512d width = _mm512_set1_pd((double)g->width), height = _mm512_set1_pd((double)g->height);
-	const double hh = g->half_height;
-	const __m512d h = _mm512_set1_pd(hh), h2 = _mm512_set1_pd(2.0 * hh), zero = _mm512_setzero_pd();
-	const __m256i wmax = _mm256_set1_epi32((int)g->width - 1), hmax = _mm256_set1_epi32((int)g->height - 1);
-	const __m256 fzero = _mm256_setzero_ps(), fabsmask = _mm256_castsi256_ps(_mm256_set1_epi32(INT32_MAX));
-	const __m256 nbuckets = _mm256_set1_ps((float)t->buckets), eps = _mm256_set1_ps(1e-5f);
-	const __m256 neps = _mm256_set1_ps(-1e-5f), finf = _mm256_set1_ps(INFINITY);
-	const __m256i rowlen = _mm256_set1_epi32((int)t->buckets + 1), lo16 = _mm256_set1_epi32(0xFFFF);
-	const __m256i vM = _mm256_set1_epi32((int)M), vN = _mm256_set1_epi32((int)N);
-	const __m256i half = _mm256_set1_epi32((int)(N / 2));
-	/* x, y, z of eight points from 24 floats: lanes 0..15 of the first
-	 * load, 16..23 of the second */
-	const __m512i ix = _mm512_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21, 0, 0, 0, 0, 0, 0, 0, 0);
-	const __m512i iy = _mm512_setr_epi32(1, 4, 7, 10, 13, 16, 19, 22, 0, 0, 0, 0, 0, 0, 0, 0);
-	const __m512i iz = _mm512_setr_epi32(2, 5, 8, 11, 14, 17, 20, 23, 0, 0, 0, 0, 0, 0, 0, 0);
-	const float *table = (const float *)t->b;
-	const double *dir = b->dir;
-	const uint64_t size = point_size(d);
-	const uint64_t hi = (uint64_t)d->rgb[0] << 32 | (uint64_t)d->rgb[1] << 40 | (uint64_t)d->rgb[2] << 48 |
-			    size << 56;
-	const __m512i hi8 = _mm512_set1_epi64((long long)hi);
-	const bool fast = stage_fast(b, d);
+	struct lanes8 c;
+	lanes8_init(&c, b, d);
+	const bool mirrored = b->geom.mirrored, fast = stage_fast(b, d);
+	const uint32_t turn = bin_draw_turn(b, d), slots = mirrored ? 1 : 2;
+	const uint64_t hi = record_high(d->rgb, point_size(d));
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
-		const float *p = d->xyz + 3 * j;
-		__m512 a = _mm512_loadu_ps(p), c = _mm512_castps256_ps512(_mm256_loadu_ps(p + 16));
-		__m512d x = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, ix, c)));
-		__m512d y = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iy, c)));
-		__m512d z = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iz, c)));
-		__m512d X = _mm512_add_pd(
-			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m0, x), _mm512_mul_pd(m4, y)), _mm512_mul_pd(m8, z)),
-			m12);
-		__m512d Y = _mm512_add_pd(
-			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m1, x), _mm512_mul_pd(m5, y)), _mm512_mul_pd(m9, z)),
-			m13);
-		__m512d Z = _mm512_add_pd(
-			_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m2, x), _mm512_mul_pd(m6, y)), _mm512_mul_pd(m10, z)),
-			m14);
-		__mmask8 fin = _mm512_cmp_pd_mask(_mm512_abs_pd(X), fltmax, _CMP_LE_OQ) &
-			       _mm512_cmp_pd_mask(_mm512_abs_pd(Y), fltmax, _CMP_LE_OQ) &
-			       _mm512_cmp_pd_mask(_mm512_abs_pd(Z), fltmax, _CMP_LE_OQ);
-		__m256 fx = _mm512_cvtpd_ps(X), fz = _mm512_cvtpd_ps(Z);
-		__m256 ax = _mm256_and_ps(fx, fabsmask), az = _mm256_and_ps(fz, fabsmask);
-		__m256 xneg = _mm256_cmp_ps(fx, fzero, _CMP_LT_OS), zneg = _mm256_cmp_ps(fz, fzero, _CMP_LT_OS);
-		__m256 odd = _mm256_xor_ps(xneg, zneg);
-		__m256 perp = _mm256_blendv_ps(az, ax, odd), radial = _mm256_blendv_ps(ax, az, odd);
-		__m256 gt = _mm256_cmp_ps(perp, radial, _CMP_GT_OS);
-		__m256 mn = _mm256_min_ps(perp, radial), mx = _mm256_max_ps(perp, radial);
-		__m256 exact = _mm256_or_ps(_mm256_cmp_ps(mx, fzero, _CMP_EQ_OQ), _mm256_cmp_ps(mx, finf, _CMP_EQ_OQ));
-		exact = _mm256_or_ps(exact, _mm256_cmp_ps(fx, fz, _CMP_UNORD_Q));
-		__m256 s = _mm256_div_ps(mn, mx);
-		s = _mm256_andnot_ps(_mm256_or_ps(exact, _mm256_cmp_ps(s, s, _CMP_UNORD_Q)), s);
-		__m256i q = _mm256_sub_epi32(
-			_mm256_setzero_si256(),
-			_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
-					 _mm256_castps_si256(odd)));
-		__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
-		__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, rowlen),
-					       _mm256_cvttps_epi32(_mm256_mul_ps(s, nbuckets)));
-		__m256i idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
-		__m512i eb = _mm512_i32gather_epi64(idx3, table, 4); /* edge | below << 32 | above << 48 */
-		__m256 nearv = _mm256_i32gather_ps(table + 2, idx3, 4);
-		__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
-		__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
-		__m256 dd = _mm256_sub_ps(s, nearv);
-		exact = _mm256_or_ps(
-			exact, _mm256_and_ps(_mm256_cmp_ps(dd, eps, _CMP_LT_OS), _mm256_cmp_ps(dd, neps, _CMP_GT_OS)));
-		__m256i front = _mm256_castps_si256(_mm256_blendv_ps(
-			_mm256_castsi256_ps(_mm256_and_si256(ba, lo16)), _mm256_castsi256_ps(_mm256_srli_epi32(ba, 16)),
-			_mm256_cmp_ps(s, edge, _CMP_GE_OS)));
-		__m256i k0 = _mm256_sub_epi32(front, _mm256_andnot_si256(_mm256_cmpgt_epi32(vM, front), vM));
-		__m256i back = _mm256_add_epi32(front, half);
-		back = _mm256_sub_epi32(back, _mm256_andnot_si256(_mm256_cmpgt_epi32(vN, back), vN));
-		__m256i k2 = _mm256_add_epi32(k0, k0);
-		__m512d S = _mm512_add_pd(_mm512_mul_pd(X, _mm512_i32gather_pd(k2, dir, 8)),
-					  _mm512_mul_pd(Z, _mm512_i32gather_pd(k2, dir + 1, 8)));
-		__m512d fu = _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S, one), halfv), width);
-		__m512d fv = _mm512_mul_pd(_mm512_div_pd(_mm512_sub_pd(h, Y), h2), height);
-		__m256i u0 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(fu, zero, _CMP_GE_OQ), fu));
-		u0 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(fu, width, _CMP_GE_OQ), u0, wmax);
-		__m256i v0 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(fv, zero, _CMP_GE_OQ), fv));
-		v0 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(fv, height, _CMP_GE_OQ), v0, hmax);
-		__m256i u1 = _mm256_setzero_si256();
-		if (!mirrored) {
-			__m256i b2 = _mm256_add_epi32(back, back);
-			__m512d S1 = _mm512_add_pd(_mm512_mul_pd(X, _mm512_i32gather_pd(b2, dir, 8)),
-						   _mm512_mul_pd(Z, _mm512_i32gather_pd(b2, dir + 1, 8)));
-			__m512d f1 = _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S1, one), halfv), width);
-			u1 = _mm512_cvttpd_epi32(_mm512_maskz_mov_pd(_mm512_cmp_pd_mask(f1, zero, _CMP_GE_OQ), f1));
-			u1 = _mm256_mask_blend_epi32(_mm512_cmp_pd_mask(f1, width, _CMP_GE_OQ), u1, wmax);
-		}
+		__m512d x, y, z;
+		load8(d->xyz + 3 * j, &x, &y, &z);
+		__mmask8 fin = 0xFF;
+		__m512d X = transform8(&c, 0, x, y, z, &fin), Y = transform8(&c, 1, x, y, z, &fin);
+		__m512d Z = transform8(&c, 2, x, y, z, &fin);
+		__m256 exact;
+		__m256i front = slot8(&c, X, Z, &exact);
+		__m256i back, k0 = lobes8(&c, front, &back);
+		__m256i uv0 = _mm256_or_si256(column8(&c, X, Z, k0), _mm256_slli_epi32(row8(&c, Y), 16));
 		unsigned ex = (unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF);
-		__m256i uv0 = _mm256_or_si256(u0, _mm256_slli_epi32(v0, 16));
 		if (fast) {
-			_mm512_storeu_si512((void *)(recs + (j - j0)),
-					    _mm512_or_si512(_mm512_cvtepu32_epi64(uv0), hi8));
+			_mm512_storeu_si512(
+				(void *)(recs + (j - j0)),
+				_mm512_or_si512(_mm512_cvtepu32_epi64(uv0), _mm512_set1_epi64((long long)hi)));
 			_mm_storeu_si128((__m128i *)(keys + (j - j0)), _mm256_cvtepi32_epi16(k0));
-			for (int l = 0; ex && l < 8; l++)
-				if (ex & (1u << l))
-					stage_fast_exact(b, d, j + (uint64_t)l, recs, keys, j + (uint64_t)l - j0, hist);
+			fast_exact_lanes(b, d, j, 8, ex, recs + (j - j0), keys + (j - j0), hist);
 			continue;
 		}
 		uint32_t ka[8], kb[8], uva[8], ub[8];
 		_mm256_storeu_si256((__m256i *)ka, k0);
 		_mm256_storeu_si256((__m256i *)kb, back);
 		_mm256_storeu_si256((__m256i *)uva, uv0);
-		_mm256_storeu_si256((__m256i *)ub, u1);
-		stage_lanes(b, d, j, 8, ex, ka, kb, uva, ub, hi, turn, recs + (mirrored ? 1 : 2) * (j - j0),
-			    keys + (mirrored ? 1 : 2) * (j - j0), hist);
+		_mm256_storeu_si256((__m256i *)ub, mirrored ? _mm256_setzero_si256() : column8(&c, X, Z, back));
+		stage_lanes(b, d, j, 8, ex, ka, kb, uva, ub, hi, turn, recs + slots * (j - j0), keys + slots * (j - j0),
+			    hist);
 	}
 	return j;
 }
