@@ -203,63 +203,78 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) __m
 	return _mm256_permute4x64_epi64(_mm256_packus_epi16(w[0], w[1]), 0xd8);
 }
 
-/* row_generic() in AVX2: 4 vectors of 8 lanes, packed to bytes. */
-__attribute__((target("avx2"))) static inline __attribute__((always_inline)) void row_avx2(
-	const float *a, const float *b, float t, const struct tile_tf *tf, uint8_t *dst, uint32_t *rows, uint32_t bit,
-	bool tri, bool lut)
+#define AVX2_INLINE __attribute__((target("avx2"))) static inline __attribute__((always_inline))
+
+/* The colours of lanes 8h .. 8h + 7 of window position g (rgb g + 0.5,
+ * truncated; weighed where tf->weight) into q[c][h], zero where not
+ * lit: on, less the lanes whose colours are all zero, which it returns. */
+AVX2_INLINE __m256 colours_avx2(__m256 g, __m256 on, const struct tile_tf *tf, int h, __m256i q[3][4])
 {
-	const __m256 zero = _mm256_setzero_ps(), one = _mm256_set1_ps(1.0f), half = _mm256_set1_ps(0.5f);
-	const __m256 wa = _mm256_set1_ps(1.0f - t), wb = _mm256_set1_ps(t);
-	__m256 g[4];
-	__m256i q[3][4];
-	uint32_t lit = 0;
-	for (int h = 0; h < 4; h++) {
-		__m256 v = _mm256_loadu_ps(a + 8 * h);
-		if (tri)
-			v = _mm256_add_ps(_mm256_mul_ps(v, wa), _mm256_mul_ps(_mm256_loadu_ps(b + 8 * h), wb));
-		__m256 on = _mm256_cmp_ps(v, _mm256_set1_ps(tf->thr), _CMP_GE_OQ);
-		__m256 x = _mm256_mul_ps(_mm256_sub_ps(v, _mm256_set1_ps(tf->lo)), _mm256_set1_ps(tf->scale));
-		x = _mm256_blendv_ps(one, x, _mm256_cmp_ps(x, one, _CMP_LT_OQ));
-		g[h] = _mm256_and_ps(x, _mm256_cmp_ps(x, zero, _CMP_GT_OQ));
-		if (!lut) {
-			__m256i nz = _mm256_setzero_si256();
-			for (int c = 0; c < 3; c++) {
-				__m256 k = _mm256_set1_ps(tf->rgb[c]);
-				q[c][h] = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(k, g[h]), half));
-				nz = _mm256_or_si256(nz, q[c][h]);
-			}
-			on = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nz, _mm256_setzero_si256())), on);
-			if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
-				const __m256 w = _mm256_loadu_ps(tf->weight + 8 * h), e = _mm256_set1_ps(1e-3f);
-				for (int c = 0; c < 3; c++)
-					q[c][h] = _mm256_cvttps_epi32(
-						_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(q[c][h]), w), e));
-			}
-			for (int c = 0; c < 3; c++)
-				q[c][h] = _mm256_and_si256(q[c][h], _mm256_castps_si256(on));
-		}
-		lit |= (uint32_t)_mm256_movemask_ps(on) << (8 * h);
+	__m256i nz = _mm256_setzero_si256();
+	for (int c = 0; c < 3; c++) {
+		__m256 k = _mm256_set1_ps(tf->rgb[c]);
+		q[c][h] = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(k, g), _mm256_set1_ps(0.5f)));
+		nz = _mm256_or_si256(nz, q[c][h]);
 	}
-	if (!lit)
-		return;
-	__m256i px[3];
+	on = _mm256_andnot_ps(_mm256_castsi256_ps(_mm256_cmpeq_epi32(nz, _mm256_setzero_si256())), on);
+	if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
+		const __m256 w = _mm256_loadu_ps(tf->weight + 8 * h), e = _mm256_set1_ps(1e-3f);
+		for (int c = 0; c < 3; c++)
+			q[c][h] = _mm256_cvttps_epi32(_mm256_add_ps(_mm256_mul_ps(_mm256_cvtepi32_ps(q[c][h]), w), e));
+	}
+	for (int c = 0; c < 3; c++)
+		q[c][h] = _mm256_and_si256(q[c][h], _mm256_castps_si256(on));
+	return on;
+}
+
+/* Lanes 8h .. 8h + 7 of row_avx2(): their clamped window position in g[h]
+ * and, without a lut, their colours in q (colours_avx2()). Returns the
+ * lit lanes' bits. */
+AVX2_INLINE uint32_t lanes_avx2(const float *a, const float *b, __m256 wa, __m256 wb, const struct tile_tf *tf,
+				bool tri, bool lut, int h, __m256 g[4], __m256i q[3][4])
+{
+	const __m256 one = _mm256_set1_ps(1.0f);
+	__m256 v = _mm256_loadu_ps(a + 8 * h);
+	if (tri)
+		v = _mm256_add_ps(_mm256_mul_ps(v, wa), _mm256_mul_ps(_mm256_loadu_ps(b + 8 * h), wb));
+	__m256 on = _mm256_cmp_ps(v, _mm256_set1_ps(tf->thr), _CMP_GE_OQ);
+	__m256 x = _mm256_mul_ps(_mm256_sub_ps(v, _mm256_set1_ps(tf->lo)), _mm256_set1_ps(tf->scale));
+	x = _mm256_blendv_ps(one, x, _mm256_cmp_ps(x, one, _CMP_LT_OQ));
+	g[h] = _mm256_and_ps(x, _mm256_cmp_ps(x, _mm256_setzero_ps(), _CMP_GT_OQ));
+	if (!lut)
+		on = colours_avx2(g[h], on, tf, h, q);
+	return (uint32_t)_mm256_movemask_ps(on) << (8 * h);
+}
+
+/* The row's 32 bytes a plane into px: the lit lanes through the lut
+ * (which may leave them all dark: false), or the colours q packed. */
+AVX2_INLINE bool bytes_avx2(const __m256 g[4], __m256i q[3][4], const struct tile_tf *tf, bool lut, uint32_t lit,
+			    __m256i px[3])
+{
 	if (lut) {
 		float gl[LANES];
 		uint8_t bytes[3][LANES];
 		for (int h = 0; h < 4; h++)
 			_mm256_storeu_ps(gl + 8 * h, g[h]);
-		if (!(lit = lut_lanes(gl, lit, tf, bytes)))
-			return;
+		if (!lut_lanes(gl, lit, tf, bytes))
+			return false;
 		for (int c = 0; c < 3; c++)
 			px[c] = _mm256_loadu_si256((const __m256i *)(const void *)bytes[c]);
-	} else {
-		const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
-		for (int c = 0; c < 3; c++) {
-			__m256i w = _mm256_packus_epi16(_mm256_packus_epi32(q[c][0], q[c][1]),
-							_mm256_packus_epi32(q[c][2], q[c][3]));
-			px[c] = _mm256_permutevar8x32_epi32(w, order);
-		}
+		return true;
 	}
+	const __m256i order = _mm256_setr_epi32(0, 4, 1, 5, 2, 6, 3, 7);
+	for (int c = 0; c < 3; c++) {
+		__m256i w = _mm256_packus_epi16(_mm256_packus_epi32(q[c][0], q[c][1]),
+						_mm256_packus_epi32(q[c][2], q[c][3]));
+		px[c] = _mm256_permutevar8x32_epi32(w, order);
+	}
+	return true;
+}
+
+/* The row's bytes px weighed (a lut's) or scaled as tf says, and MAXed
+ * into the row at dst. */
+AVX2_INLINE void store_avx2(__m256i px[3], const struct tile_tf *tf, bool lut, uint8_t *dst)
+{
 	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx2(px[c], tf->weight);
@@ -270,6 +285,21 @@ __attribute__((target("avx2"))) static inline __attribute__((always_inline)) voi
 		__m256i *p = (__m256i *)(void *)(dst + c * HALFTONE_PLANE_BYTES);
 		_mm256_storeu_si256(p, _mm256_max_epu8(_mm256_loadu_si256(p), px[c]));
 	}
+}
+
+/* row_generic() in AVX2: 4 vectors of 8 lanes, packed to bytes. */
+AVX2_INLINE void row_avx2(const float *a, const float *b, float t, const struct tile_tf *tf, uint8_t *dst,
+			  uint32_t *rows, uint32_t bit, bool tri, bool lut)
+{
+	const __m256 wa = _mm256_set1_ps(1.0f - t), wb = _mm256_set1_ps(t);
+	__m256 g[4];
+	__m256i q[3][4], px[3];
+	uint32_t lit = 0;
+	for (int h = 0; h < 4; h++)
+		lit |= lanes_avx2(a, b, wa, wb, tf, tri, lut, h, g, q);
+	if (!lit || !bytes_avx2(g, q, tf, lut, lit, px))
+		return;
+	store_avx2(px, tf, lut, dst);
 	*rows |= bit;
 }
 
@@ -317,50 +347,64 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 	return _mm512_cvtepi16_epi8(_mm512_mask_mov_epi16(w, tf->keep, q));
 }
 
-/* row_generic() in AVX-512: 2 vectors of 16 lanes, narrowed to bytes. */
-__attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((always_inline)) void row_avx512(
-	const float *a, const float *b, float t, const struct tile_tf *tf, uint8_t *dst, uint32_t *rows, uint32_t bit,
-	bool tri, bool lut)
+#define AVX512_INLINE __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((always_inline))
+
+/* Colours x weighed: x w + 1e-3, truncated (weigh_lanes()). */
+AVX512_INLINE __m512i weigh512(__m512i x, __m512 w)
 {
-	const __m512 wa = _mm512_set1_ps(1.0f - t), wb = _mm512_set1_ps(t);
-	__mmask16 on0, on1;
-	__m512 g0 = g512(a, b, wa, wb, tf, tri, &on0), g1 = g512(a + 16, b + 16, wa, wb, tf, tri, &on1);
-	if (!(on0 | on1))
-		return;
-	__m256i px[3];
-	if (lut) {
-		float gl[LANES];
-		uint8_t bytes[3][LANES];
-		_mm512_storeu_ps(gl, g0);
-		_mm512_storeu_ps(gl + 16, g1);
-		if (!lut_lanes(gl, on0 | (uint32_t)on1 << 16, tf, bytes))
-			return;
-		for (int c = 0; c < 3; c++)
-			px[c] = _mm256_loadu_si256((const __m256i *)(const void *)bytes[c]);
-	} else {
-		__m512i r0 = c512(g0, tf, 0), gg0 = c512(g0, tf, 1), b0 = c512(g0, tf, 2);
-		__m512i r1 = c512(g1, tf, 0), gg1 = c512(g1, tf, 1), b1 = c512(g1, tf, 2);
-		__m512i n0 = _mm512_or_si512(_mm512_or_si512(r0, gg0), b0);
-		__m512i n1 = _mm512_or_si512(_mm512_or_si512(r1, gg1), b1);
-		on0 = _mm512_mask_test_epi32_mask(on0, n0, n0);
-		on1 = _mm512_mask_test_epi32_mask(on1, n1, n1);
-		if (!(on0 | on1))
-			return;
-		if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
-			const __m512 w0 = _mm512_loadu_ps(tf->weight), w1 = _mm512_loadu_ps(tf->weight + 16);
-#define WEIGH(x, w) _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(_mm512_cvtepi32_ps(x), w), _mm512_set1_ps(1e-3f)))
-			r0 = WEIGH(r0, w0), gg0 = WEIGH(gg0, w0), b0 = WEIGH(b0, w0);
-			r1 = WEIGH(r1, w1), gg1 = WEIGH(gg1, w1), b1 = WEIGH(b1, w1);
-#undef WEIGH
-		}
-#define JOIN(x0, x1)                                                                           \
-	_mm256_inserti128_si256(_mm256_castsi128_si256(_mm512_maskz_cvtusepi32_epi8(on0, x0)), \
-				_mm512_maskz_cvtusepi32_epi8(on1, x1), 1)
-		px[0] = JOIN(r0, r1);
-		px[1] = JOIN(gg0, gg1);
-		px[2] = JOIN(b0, b1);
-#undef JOIN
+	return _mm512_cvttps_epi32(_mm512_add_ps(_mm512_mul_ps(_mm512_cvtepi32_ps(x), w), _mm512_set1_ps(1e-3f)));
+}
+
+/* Channel c of the row's colours (window positions g0, g1 of its two
+ * halves of 16 lanes) as 32 bytes, weighed where tf->weight, zero where
+ * not lit (on0, on1). */
+AVX512_INLINE __m256i channel512(__m512 g0, __m512 g1, __mmask16 on0, __mmask16 on1, const struct tile_tf *tf, int c)
+{
+	__m512i x0 = c512(g0, tf, c), x1 = c512(g1, tf, c);
+	if (tf->weight) { /* weigh_lanes() on the colours before they are bytes */
+		x0 = weigh512(x0, _mm512_loadu_ps(tf->weight));
+		x1 = weigh512(x1, _mm512_loadu_ps(tf->weight + 16));
 	}
+	return _mm256_inserti128_si256(_mm256_castsi128_si256(_mm512_maskz_cvtusepi32_epi8(on0, x0)),
+				       _mm512_maskz_cvtusepi32_epi8(on1, x1), 1);
+}
+
+/* The colours of the row's lit lanes (on0, on1) as 32 bytes a plane in
+ * px (channel512()), less the lanes whose three colours are zero; false:
+ * none is left. */
+AVX512_INLINE bool colours_avx512(__m512 g0, __m512 g1, __mmask16 on0, __mmask16 on1, const struct tile_tf *tf,
+				  __m256i px[3])
+{
+	__m512i n0 = _mm512_or_si512(_mm512_or_si512(c512(g0, tf, 0), c512(g0, tf, 1)), c512(g0, tf, 2));
+	__m512i n1 = _mm512_or_si512(_mm512_or_si512(c512(g1, tf, 0), c512(g1, tf, 1)), c512(g1, tf, 2));
+	on0 = _mm512_mask_test_epi32_mask(on0, n0, n0);
+	on1 = _mm512_mask_test_epi32_mask(on1, n1, n1);
+	if (!(on0 | on1))
+		return false;
+	px[0] = channel512(g0, g1, on0, on1, tf, 0);
+	px[1] = channel512(g0, g1, on0, on1, tf, 1);
+	px[2] = channel512(g0, g1, on0, on1, tf, 2);
+	return true;
+}
+
+/* The row's lit lanes (lit) of window positions g0, g1 through the lut,
+ * as 32 bytes a plane in px; false: all dark. */
+AVX512_INLINE bool lut_avx512(__m512 g0, __m512 g1, uint32_t lit, const struct tile_tf *tf, __m256i px[3])
+{
+	float gl[LANES];
+	uint8_t bytes[3][LANES];
+	_mm512_storeu_ps(gl, g0);
+	_mm512_storeu_ps(gl + 16, g1);
+	if (!lut_lanes(gl, lit, tf, bytes))
+		return false;
+	for (int c = 0; c < 3; c++)
+		px[c] = _mm256_loadu_si256((const __m256i *)(const void *)bytes[c]);
+	return true;
+}
+
+/* store_avx2() in AVX-512. */
+AVX512_INLINE void store_avx512(__m256i px[3], const struct tile_tf *tf, bool lut, uint8_t *dst)
+{
 	if (tf->weight && lut)
 		for (int c = 0; c < 3; c++)
 			px[c] = weigh_avx512(px[c], tf->weight);
@@ -371,6 +415,23 @@ __attribute__((target("avx512f,avx512bw,avx2"))) static inline __attribute__((al
 		__m256i *p = (__m256i *)(void *)(dst + c * HALFTONE_PLANE_BYTES);
 		_mm256_storeu_si256(p, _mm256_max_epu8(_mm256_loadu_si256(p), px[c]));
 	}
+}
+
+/* row_generic() in AVX-512: 2 vectors of 16 lanes, narrowed to bytes. */
+AVX512_INLINE void row_avx512(const float *a, const float *b, float t, const struct tile_tf *tf, uint8_t *dst,
+			      uint32_t *rows, uint32_t bit, bool tri, bool lut)
+{
+	const __m512 wa = _mm512_set1_ps(1.0f - t), wb = _mm512_set1_ps(t);
+	__mmask16 on0, on1;
+	__m512 g0 = g512(a, b, wa, wb, tf, tri, &on0), g1 = g512(a + 16, b + 16, wa, wb, tf, tri, &on1);
+	if (!(on0 | on1))
+		return;
+	__m256i px[3];
+	bool any = lut ? lut_avx512(g0, g1, on0 | (uint32_t)on1 << 16, tf, px)
+		       : colours_avx512(g0, g1, on0, on1, tf, px);
+	if (!any)
+		return;
+	store_avx512(px, tf, lut, dst);
 	*rows |= bit;
 }
 #endif
