@@ -351,6 +351,32 @@ static int run_scene(const char *name, const struct geometry *g, struct variant 
 	return r;
 }
 
+/* One variant's line of the preamble: its renderer, threads, halftone
+ * and what it keeps. */
+static void print_variant(const struct variant *v)
+{
+	char th[32];
+	if (v->gl[0]) {
+		printf("- %s: GL renderer%s on %s; binning on one thread per core%s\n", v->name,
+		       v->naive ? " (the naive pipeline)" : "", render_gl_describe(v->r),
+		       v->keep ? ", kept while the scene's draws stay the same" : "");
+		return;
+	}
+	if (v->threads)
+		snprintf(th, sizeof(th), "%u thread%s", v->threads, v->threads > 1 ? "s" : "");
+	else
+		snprintf(th, sizeof(th), "one thread per core");
+	/* render_cpu.c: the eight-lane triangles go with auto and avx512 */
+	bool lanes = (strcmp(v->simd, "auto") == 0 || strcmp(v->simd, "avx512") == 0) && section_batch_supported();
+	const char *tris = lanes ? "triangles sectioned and staged eight at a time" : "triangles one at a time";
+	const char *keep = v->keep ? "; binning kept while the scene's draws stay the same" : "";
+	if (strcmp(v->simd, "auto") == 0)
+		printf("- %s: %s, halftone auto (%s here), %s%s\n", v->name, th, halftone_variants()[0].name, tris,
+		       keep);
+	else
+		printf("- %s: %s, halftone %s, %s%s\n", v->name, th, v->simd, tris, keep);
+}
+
 static void print_preamble(const char *profile, const struct geometry *g, const struct volume *vol,
 			   const struct variant *vars, int nvars, const struct options *o)
 {
@@ -360,29 +386,8 @@ static void print_preamble(const char *profile, const struct geometry *g, const 
 	       profile, g->width, g->height, g->images_per_rev, g->mirrored ? ", mirrored" : "", vol->image_count,
 	       volume_tiles_per_image(vol), dense / 1e6);
 	printf("Variants (%u cores here; the reference is %s):\n", cores(), REFERENCE_VARIANT);
-	for (int i = 0; i < nvars; i++) {
-		char th[32];
-		if (vars[i].gl[0]) {
-			printf("- %s: GL renderer%s on %s; binning on one thread per core%s\n", vars[i].name,
-			       vars[i].naive ? " (the naive pipeline)" : "", render_gl_describe(vars[i].r),
-			       vars[i].keep ? ", kept while the scene's draws stay the same" : "");
-			continue;
-		}
-		if (vars[i].threads)
-			snprintf(th, sizeof(th), "%u thread%s", vars[i].threads, vars[i].threads > 1 ? "s" : "");
-		else
-			snprintf(th, sizeof(th), "one thread per core");
-		/* render_cpu.c: the eight-lane triangles go with auto and avx512 */
-		bool lanes = (strcmp(vars[i].simd, "auto") == 0 || strcmp(vars[i].simd, "avx512") == 0) &&
-			     section_batch_supported();
-		const char *tris = lanes ? "triangles sectioned and staged eight at a time" : "triangles one at a time";
-		const char *keep = vars[i].keep ? "; binning kept while the scene's draws stay the same" : "";
-		if (strcmp(vars[i].simd, "auto") == 0)
-			printf("- %s: %s, halftone auto (%s here), %s%s\n", vars[i].name, th,
-			       halftone_variants()[0].name, tris, keep);
-		else
-			printf("- %s: %s, halftone %s, %s%s\n", vars[i].name, th, vars[i].simd, tris, keep);
-	}
+	for (int i = 0; i < nvars; i++)
+		print_variant(&vars[i]);
 	printf("\nEach scene and variant: %u warm-up volume%s, then up to %u measured volumes or "
 	       "%.3g s, whichever comes first (volumes). Times are wall ms per volume, animation "
 	       "included; p99 is nearest rank. cores used = process CPU time / wall time while "

@@ -73,6 +73,63 @@ static void report(struct spindle *sp, const char *what, int err)
 	fprintf(stderr, "%s: %s: %s\n", prog, what, why ? why : strerror(err));
 }
 
+/* Draws the mesh's vertices of buf in white as list's one draw, makes
+ * list the layer's and commits it, until it is shown. 0 or -errno. */
+static int show_list(struct run *run, struct spindle_list *list, struct spindle_buffer *buf, const struct vbuf *m,
+		     enum spindle_mode mode)
+{
+	int r = spindle_list_set_color(list, 255, 255, 255, 255);
+	if (r == 0)
+		r = spindle_list_draw(list, mode, buf, 0, m->count, 0);
+	if (r == 0)
+		r = spindle_layer_set_list(run->layer, list);
+	if (r == 0)
+		r = spindle_commit_and_wait(run->sp, NULL);
+	return r;
+}
+
+/* Captures the next volume shown into fd and size. 0 or -errno
+ * (reported). */
+static int capture(struct spindle *sp, int *fd, size_t *size)
+{
+	int r = spindle_capture(sp, fd, size);
+	if (r == -EACCES)
+		fprintf(stderr,
+			"%s: capture refused: only root, the daemon's user and members of its admin group "
+			"may capture\n",
+			prog);
+	else if (r < 0)
+		report(sp, "capture", -r);
+	return r;
+}
+
+/* Takes the shape off the layer and commits. 0 or -errno (reported). */
+static int remove_shape(struct run *run)
+{
+	int r = spindle_layer_set_list(run->layer, NULL);
+	if (r == 0)
+		r = spindle_commit(run->sp);
+	if (r < 0)
+		report(run->sp, "removing a shape", -r);
+	return r;
+}
+
+/* Maps the capture (fd, size bytes) and profiles it as ls. 0 or -errno
+ * (reported). */
+static int profile_capture(int fd, size_t size, const struct light_shape *ls, struct light_profile *prof)
+{
+	void *data = size ? mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+	if (data == MAP_FAILED) {
+		report(NULL, "mapping the capture", size ? errno : EINVAL);
+		return -EINVAL;
+	}
+	int r = light_profile_compute(data, size, ls, prof);
+	if (r < 0)
+		fprintf(stderr, "%s: the capture is no valid .svol file\n", prog);
+	munmap(data, size);
+	return r;
+}
+
 /* Shows the mesh alone (white), captures the next volume shown, removes
  * it and profiles the capture as ls. 0 or -errno (reported). */
 static int measure(struct run *run, const struct vbuf *m, enum spindle_mode mode, const struct light_shape *ls,
@@ -85,51 +142,19 @@ static int measure(struct run *run, const struct vbuf *m, enum spindle_mode mode
 	}
 	int fd = -1;
 	size_t size = 0;
-	void *data = MAP_FAILED;
 	struct spindle_buffer *buf = spindle_buffer_create(sp, m->xyz, m->count * 3 * sizeof(float));
 	struct spindle_list *list = buf ? spindle_list_create(sp) : NULL;
 	int r = list ? 0 : -errno;
 	if (r == 0)
-		r = spindle_list_set_color(list, 255, 255, 255, 255);
-	if (r == 0)
-		r = spindle_list_draw(list, mode, buf, 0, m->count, 0);
-	if (r == 0)
-		r = spindle_layer_set_list(run->layer, list);
-	if (r == 0)
-		r = spindle_commit_and_wait(sp, NULL);
-	if (r < 0) {
+		r = show_list(run, list, buf, m, mode);
+	if (r < 0)
 		report(sp, "showing a shape", -r);
-	} else {
-		r = spindle_capture(sp, &fd, &size);
-		if (r == -EACCES)
-			fprintf(stderr,
-				"%s: capture refused: only root, the daemon's user and members of its admin group "
-				"may capture\n",
-				prog);
-		else if (r < 0)
-			report(sp, "capture", -r);
-	}
-	if (r == 0) {
-		r = spindle_layer_set_list(run->layer, NULL);
-		if (r == 0)
-			r = spindle_commit(sp);
-		if (r < 0)
-			report(sp, "removing a shape", -r);
-	}
-	if (r == 0) {
-		data = size ? mmap(NULL, size, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
-		if (data == MAP_FAILED) {
-			r = -EINVAL;
-			report(NULL, "mapping the capture", size ? errno : EINVAL);
-		}
-	}
-	if (r == 0) {
-		r = light_profile_compute(data, size, ls, prof);
-		if (r < 0)
-			fprintf(stderr, "%s: the capture is no valid .svol file\n", prog);
-	}
-	if (data != MAP_FAILED)
-		munmap(data, size);
+	else
+		r = capture(sp, &fd, &size);
+	if (r == 0)
+		r = remove_shape(run);
+	if (r == 0)
+		r = profile_capture(fd, size, ls, prof);
 	if (fd >= 0)
 		close(fd);
 	spindle_list_destroy(list);
@@ -184,40 +209,40 @@ static size_t tube_radii(const struct light_device *d, double nominal[], size_t 
 	return out;
 }
 
-static int run_shape(struct run *run, enum shape shape)
+/* Measures the tubes, one at a time, a result each. */
+static int run_tubes(struct run *run)
 {
 	const struct light_device *d = &run->dev;
 	struct vbuf m = { 0 };
 	int r = 0;
-	if (shape == SHAPE_TUBES) {
-		double nominal[32];
-		size_t n = tube_radii(d, nominal, 32);
-		for (size_t i = 0; i < n && r == 0; i++) {
-			struct result *res = add_result(run);
-			if (!res)
-				return -ENOMEM;
-			res->shape = shape;
-			res->nominal_px = nominal[i];
-			res->radius_px = column_centre(nominal[i]);
-			res->ls = (struct light_shape){ LIGHT_SHAPE_TUBE, res->radius_px * d->px,
-							d->y_top - d->y_bottom };
-			m.count = 0;
-			light_shape_tube(&m, d, res->radius_px);
-			r = measure(run, &m, SPINDLE_TRIANGLES, &res->ls, &res->prof);
-		}
-		vbuf_free(&m);
-		return r;
+	double nominal[32];
+	size_t n = tube_radii(d, nominal, 32);
+	for (size_t i = 0; i < n && r == 0; i++) {
+		struct result *res = add_result(run);
+		if (!res)
+			return -ENOMEM;
+		res->shape = SHAPE_TUBES;
+		res->nominal_px = nominal[i];
+		res->radius_px = column_centre(nominal[i]);
+		res->ls = (struct light_shape){ LIGHT_SHAPE_TUBE, res->radius_px * d->px, d->y_top - d->y_bottom };
+		m.count = 0;
+		light_shape_tube(&m, d, res->radius_px);
+		r = measure(run, &m, SPINDLE_TRIANGLES, &res->ls, &res->prof);
 	}
-	struct result *res = add_result(run);
-	if (!res)
-		return -ENOMEM;
-	res->shape = shape;
+	vbuf_free(&m);
+	return r;
+}
+
+/* Builds the mesh of shape (not the tubes) into m and fills in what res
+ * says of it. Returns the mode to draw the mesh in. */
+static enum spindle_mode build_shape(const struct light_device *d, enum shape shape, struct result *res, struct vbuf *m)
+{
 	enum spindle_mode mode = SPINDLE_TRIANGLES;
 	switch (shape) {
 	case SHAPE_DISK:
 		res->ls = (struct light_shape){ LIGHT_SHAPE_DISK, 1.0, 0.0 };
 		res->radius_px = d->w / 2.0;
-		light_shape_disk(&m, d);
+		light_shape_disk(m, d);
 		break;
 	case SHAPE_WALL: {
 		/* The centre of image j: it lies in that one slice. */
@@ -225,14 +250,14 @@ static int run_shape(struct run *run, enum shape shape)
 		res->ls = (struct light_shape){ LIGHT_SHAPE_WALL, 1.0, d->y_top - d->y_bottom };
 		res->radius_px = d->w / 2.0;
 		res->nominal_px = j; /* the image */
-		light_shape_wall(&m, d, 2.0 * M_PI * j / d->n);
+		light_shape_wall(m, d, 2.0 * M_PI * j / d->n);
 		break;
 	}
 	case SHAPE_RING:
 		res->nominal_px = 0.5 * d->w / 2.0;
 		res->radius_px = column_centre(res->nominal_px);
 		res->ls = (struct light_shape){ LIGHT_SHAPE_RING, res->radius_px * d->px, 0.0 };
-		light_shape_ring(&m, d, res->radius_px);
+		light_shape_ring(m, d, res->radius_px);
 		mode = SPINDLE_LINE_STRIP;
 		break;
 	case SHAPE_SPHERE: {
@@ -240,13 +265,26 @@ static int run_shape(struct run *run, enum shape shape)
 		res->nominal_px = radius * d->w / 2.0;
 		res->radius_px = column_centre(res->nominal_px);
 		res->ls = (struct light_shape){ LIGHT_SHAPE_SPHERE, res->radius_px * d->px, 0.0 };
-		light_shape_sphere(&m, d, res->radius_px);
+		light_shape_sphere(m, d, res->radius_px);
 		break;
 	}
 	default:
 		break;
 	}
-	r = measure(run, &m, mode, &res->ls, &res->prof);
+	return mode;
+}
+
+static int run_shape(struct run *run, enum shape shape)
+{
+	if (shape == SHAPE_TUBES)
+		return run_tubes(run);
+	struct vbuf m = { 0 };
+	struct result *res = add_result(run);
+	if (!res)
+		return -ENOMEM;
+	res->shape = shape;
+	enum spindle_mode mode = build_shape(&run->dev, shape, res, &m);
+	int r = measure(run, &m, mode, &res->ls, &res->prof);
 	vbuf_free(&m);
 	return r;
 }
@@ -347,105 +385,168 @@ static void where(char *out, size_t size, const struct result *res, int band)
 	}
 }
 
-/* Writes why the check failed into msg; returns true when it passed. */
-static bool check(const struct run *run, const struct summary *s, enum check c, unsigned shapes, char *msg, size_t size)
+/* Where shape sh's brightest band (or tube) from FROM_PX to r0 is, into
+ * out. */
+static void peak_where(const struct run *run, const struct summary *s, int sh, char *out, size_t size)
 {
-	msg[0] = '\0';
-	size_t len = 0;
-	bool ok = true;
+	if (sh == SHAPE_TUBES)
+		snprintf(out, size, "tube %.1f px", run->results[s->peak_index[sh]].radius_px);
+	else
+		for (size_t i = 0; i < run->count; i++)
+			if (run->results[i].shape == (enum shape)sh)
+				where(out, size, &run->results[i], s->peak_index[sh]);
+}
+
+/* Appends to msg (size bytes) what the check says; len is what it holds. */
 #define SAY(...)                                                                     \
 	do {                                                                         \
 		if (len < size)                                                      \
 			len += (size_t)snprintf(msg + len, size - len, __VA_ARGS__); \
 	} while (0)
-	if (c == CHECK_EXACT) {
-		const struct result *disk = NULL;
-		for (size_t i = 0; i < run->count; i++)
-			if (run->results[i].shape == SHAPE_DISK)
-				disk = &run->results[i];
-		const struct light_band *b = NULL;
-		for (unsigned i = 0; disk && i < disk->prof.band_count; i++)
-			if (disk->prof.band[i].lo == 2.0)
-				b = &disk->prof.band[i];
-		if (!b || !(b->relative >= EXACT_GLOW)) {
-			SAY("disk: band 2-4 px is %.2fx its r0 band, exact mode gives at least %.1fx",
-			    b ? b->relative : 0.0, EXACT_GLOW);
+
+/* The exact check: the disk glows at the axis. */
+static bool check_exact(const struct run *run, char *msg, size_t size)
+{
+	size_t len = 0;
+	const struct result *disk = NULL;
+	for (size_t i = 0; i < run->count; i++)
+		if (run->results[i].shape == SHAPE_DISK)
+			disk = &run->results[i];
+	const struct light_band *b = NULL;
+	for (unsigned i = 0; disk && i < disk->prof.band_count; i++)
+		if (disk->prof.band[i].lo == 2.0)
+			b = &disk->prof.band[i];
+	if (!b || !(b->relative >= EXACT_GLOW)) {
+		SAY("disk: band 2-4 px is %.2fx its r0 band, exact mode gives at least %.1fx", b ? b->relative : 0.0,
+		    EXACT_GLOW);
+		return false;
+	}
+	return true;
+}
+
+/* The even check: no surface brighter inside r0 than at r0. */
+static bool check_even(const struct run *run, const struct summary *s, unsigned shapes, char *msg, size_t size)
+{
+	size_t len = 0;
+	bool ok = true;
+	for (int sh = 0; sh < SHAPE_COUNT; sh++) {
+		if (!(shapes & (1u << sh)) || !is_surface((enum shape)sh))
+			continue;
+		if (!s->has_r0[sh]) {
+			SAY("%s%s: nothing lit at r0 to compare with", ok ? "" : "; ", shape_names[sh]);
 			ok = false;
-		}
-	} else if (c == CHECK_EVEN) {
-		for (int sh = 0; sh < SHAPE_COUNT; sh++) {
-			if (!(shapes & (1u << sh)) || !is_surface((enum shape)sh))
-				continue;
-			if (!s->has_r0[sh]) {
-				SAY("%s%s: nothing lit at r0 to compare with", ok ? "" : "; ", shape_names[sh]);
-				ok = false;
-			} else if (s->peak[sh] > EVEN_LIMIT) {
-				char w[64];
-				if (sh == SHAPE_TUBES)
-					snprintf(w, sizeof(w), "tube %.1f px",
-						 run->results[s->peak_index[sh]].radius_px);
-				else
-					for (size_t i = 0; i < run->count; i++)
-						if (run->results[i].shape == (enum shape)sh)
-							where(w, sizeof(w), &run->results[i], s->peak_index[sh]);
-				SAY("%s%s is %.2fx the r0 %s (at most %.2fx inside r0)", ok ? "" : "; ", w, s->peak[sh],
-				    sh == SHAPE_TUBES ? "tube" : "band", EVEN_LIMIT);
-				ok = false;
-			}
-		}
-	} else if (c == CHECK_UNIFORM) {
-		double spread = s->min > 0.0 ? s->max / s->min : INFINITY;
-		if (s->values == 0 || spread > UNIFORM_LIMIT) {
-			char a[64], b[64];
-			where(a, sizeof(a), s->max_of, s->max_band);
-			where(b, sizeof(b), s->min_of, s->min_band);
-			SAY("spread %.2f (brightest %s: %.3g, dimmest %s: %.3g), at most %.2f", spread, a, s->max, b,
-			    s->min, UNIFORM_LIMIT);
+		} else if (s->peak[sh] > EVEN_LIMIT) {
+			char w[64];
+			peak_where(run, s, sh, w, sizeof(w));
+			SAY("%s%s is %.2fx the r0 %s (at most %.2fx inside r0)", ok ? "" : "; ", w, s->peak[sh],
+			    sh == SHAPE_TUBES ? "tube" : "band", EVEN_LIMIT);
 			ok = false;
 		}
 	}
-#undef SAY
 	return ok;
 }
 
+/* The uniform check: the spread over all surfaces is small. */
+static bool check_uniform(const struct summary *s, char *msg, size_t size)
+{
+	size_t len = 0;
+	double spread = s->min > 0.0 ? s->max / s->min : INFINITY;
+	if (s->values == 0 || spread > UNIFORM_LIMIT) {
+		char a[64], b[64];
+		where(a, sizeof(a), s->max_of, s->max_band);
+		where(b, sizeof(b), s->min_of, s->min_band);
+		SAY("spread %.2f (brightest %s: %.3g, dimmest %s: %.3g), at most %.2f", spread, a, s->max, b, s->min,
+		    UNIFORM_LIMIT);
+		return false;
+	}
+	return true;
+}
+
+#undef SAY
+
+/* Writes why the check failed into msg; returns true when it passed. */
+static bool check(const struct run *run, const struct summary *s, enum check c, unsigned shapes, char *msg, size_t size)
+{
+	msg[0] = '\0';
+	if (c == CHECK_EXACT)
+		return check_exact(run, msg, size);
+	if (c == CHECK_EVEN)
+		return check_even(run, s, shapes, msg, size);
+	if (c == CHECK_UNIFORM)
+		return check_uniform(s, msg, size);
+	return true;
+}
+
 /* ---- output ---- */
+
+/* The tubes' or the ring's table: a row per radius. */
+static void print_radii(const struct run *run, enum shape shape)
+{
+	const struct light_device *d = &run->dev;
+	if (shape == SHAPE_TUBES)
+		printf("tubes: vertical cylinders about the axis, rows %u-%u (%.2f px high), each at the "
+		       "centre of "
+		       "its pixel column\n",
+		       d->v0, d->v1 - 1, (d->y_top - d->y_bottom) / d->row);
+	else
+		printf("ring: horizontal circle, a line strip at the middle of row %u (light per pixel of "
+		       "length)\n",
+		       d->h / 2);
+	printf("  %-18s %12s %12s %12s%s\n", "radius px", "lit voxels", "area px^2", "light/area",
+	       shape == SHAPE_TUBES ? " rel. r0 tube" : "");
+	for (size_t i = 0; i < run->count; i++) {
+		const struct result *res = &run->results[i];
+		if (res->shape != shape)
+			continue;
+		char name[40];
+		bool is_r0 = shape == SHAPE_TUBES && res->radius_px == column_centre(d->r0);
+		snprintf(name, sizeof(name), "%.1f (%.4g)%s", res->radius_px, res->nominal_px, is_r0 ? " r0" : "");
+		printf("  %-18s %12llu %12.1f %12.4f", name, (unsigned long long)res->prof.lit, res->prof.area,
+		       res->prof.value);
+		if (shape == SHAPE_TUBES)
+			printf(" %12.3f", res->relative);
+		printf("\n");
+	}
+	printf("\n");
+}
+
+/* A profile's bands: the header and a row per band. */
+static void print_bands(const struct light_profile *p)
+{
+	printf("  %-18s %12s %12s %12s %12s\n", "band px", "lit voxels", "area px^2", "light/area", "rel. r0 band");
+	for (unsigned b = 0; b < p->band_count; b++) {
+		const struct light_band *band = &p->band[b];
+		char name[40];
+		band_name(name, sizeof(name), band);
+		if ((int)b == p->r0_band)
+			strcat(name, " r0");
+		if (band->area > 0.0)
+			printf("  %-18s %12llu %12.1f %12.4f %12.3f\n", name, (unsigned long long)band->lit, band->area,
+			       band->value, band->relative);
+		else
+			printf("  %-18s %12llu %12s %12s %12s\n", name, (unsigned long long)band->lit, "-", "-", "-");
+	}
+	printf("\n");
+}
+
+/* The last result of shape, or NULL. */
+static const struct result *find_result(const struct run *run, enum shape shape)
+{
+	const struct result *res = NULL;
+	for (size_t i = 0; i < run->count; i++)
+		if (run->results[i].shape == shape)
+			res = &run->results[i];
+	return res;
+}
 
 static void print_table(const struct run *run, enum shape shape)
 {
 	const struct light_device *d = &run->dev;
 	if (shape == SHAPE_TUBES || shape == SHAPE_RING) {
-		if (shape == SHAPE_TUBES)
-			printf("tubes: vertical cylinders about the axis, rows %u-%u (%.2f px high), each at the "
-			       "centre of "
-			       "its pixel column\n",
-			       d->v0, d->v1 - 1, (d->y_top - d->y_bottom) / d->row);
-		else
-			printf("ring: horizontal circle, a line strip at the middle of row %u (light per pixel of "
-			       "length)\n",
-			       d->h / 2);
-		printf("  %-18s %12s %12s %12s%s\n", "radius px", "lit voxels", "area px^2", "light/area",
-		       shape == SHAPE_TUBES ? " rel. r0 tube" : "");
-		for (size_t i = 0; i < run->count; i++) {
-			const struct result *res = &run->results[i];
-			if (res->shape != shape)
-				continue;
-			char name[40];
-			bool is_r0 = shape == SHAPE_TUBES && res->radius_px == column_centre(d->r0);
-			snprintf(name, sizeof(name), "%.1f (%.4g)%s", res->radius_px, res->nominal_px,
-				 is_r0 ? " r0" : "");
-			printf("  %-18s %12llu %12.1f %12.4f", name, (unsigned long long)res->prof.lit, res->prof.area,
-			       res->prof.value);
-			if (shape == SHAPE_TUBES)
-				printf(" %12.3f", res->relative);
-			printf("\n");
-		}
-		printf("\n");
+		print_radii(run, shape);
 		return;
 	}
-	const struct result *res = NULL;
-	for (size_t i = 0; i < run->count; i++)
-		if (run->results[i].shape == shape)
-			res = &run->results[i];
+	const struct result *res = find_result(run, shape);
 	if (!res)
 		return;
 	switch (shape) {
@@ -464,21 +565,7 @@ static void print_table(const struct run *run, enum shape shape)
 	default:
 		break;
 	}
-	const struct light_profile *p = &res->prof;
-	printf("  %-18s %12s %12s %12s %12s\n", "band px", "lit voxels", "area px^2", "light/area", "rel. r0 band");
-	for (unsigned b = 0; b < p->band_count; b++) {
-		const struct light_band *band = &p->band[b];
-		char name[40];
-		band_name(name, sizeof(name), band);
-		if ((int)b == p->r0_band)
-			strcat(name, " r0");
-		if (band->area > 0.0)
-			printf("  %-18s %12llu %12.1f %12.4f %12.3f\n", name, (unsigned long long)band->lit, band->area,
-			       band->value, band->relative);
-		else
-			printf("  %-18s %12llu %12s %12s %12s\n", name, (unsigned long long)band->lit, "-", "-", "-");
-	}
-	printf("\n");
+	print_bands(&res->prof);
 }
 
 static void print_summary(const struct run *run, const struct summary *s, unsigned shapes)
@@ -493,12 +580,7 @@ static void print_summary(const struct run *run, const struct summary *s, unsign
 			       FROM_PX);
 			continue;
 		}
-		if (sh == SHAPE_TUBES)
-			snprintf(w, sizeof(w), "tube %.1f px", run->results[s->peak_index[sh]].radius_px);
-		else
-			for (size_t i = 0; i < run->count; i++)
-				if (run->results[i].shape == (enum shape)sh)
-					where(w, sizeof(w), &run->results[i], s->peak_index[sh]);
+		peak_where(run, s, sh, w, sizeof(w));
 		printf("  %-6s brightest from %g px to r0: %.2fx the r0 %s (%s)\n", shape_names[sh], FROM_PX,
 		       s->peak[sh], sh == SHAPE_TUBES ? "tube" : "band", w);
 	}
@@ -518,89 +600,114 @@ static void json_number(double v)
 		printf("null");
 }
 
-static void print_json(const struct run *run, const struct summary *s, unsigned shapes, int c, bool passed,
-		       const char *msg)
+/* The device's object, its name first. */
+static void json_device(const struct light_device *d)
 {
-	const struct light_device *d = &run->dev;
-	printf("{\"device\":{\"width\":%u,\"height\":%u,\"images_per_rev\":%u,\"mirrored\":%s,\"half_height\":", d->w,
+	printf("\"device\":{\"width\":%u,\"height\":%u,\"images_per_rev\":%u,\"mirrored\":%s,\"half_height\":", d->w,
 	       d->h, d->n, d->mirrored ? "true" : "false");
 	json_number(d->half_height);
 	printf(",\"r0_px\":");
 	json_number(d->r0);
-	printf("},\"shapes\":{");
+	printf("}");
+}
+
+/* The tubes' or the rings' array: an object per radius. */
+static void json_radii(const struct run *run, int sh)
+{
+	printf("\"%s\":[", sh == SHAPE_TUBES ? "tubes" : "rings");
+	bool first = true;
+	for (size_t i = 0; i < run->count; i++) {
+		const struct result *res = &run->results[i];
+		if (res->shape != (enum shape)sh)
+			continue;
+		printf("%s{\"nominal_px\":", first ? "" : ",");
+		first = false;
+		json_number(res->nominal_px);
+		printf(",\"radius_px\":");
+		json_number(res->radius_px);
+		printf(",\"lit\":%llu,\"area\":", (unsigned long long)res->prof.lit);
+		json_number(res->prof.area);
+		printf(",\"value\":");
+		json_number(res->prof.value);
+		printf(",\"relative\":");
+		json_number(res->relative);
+		printf("}");
+	}
+	printf("]");
+}
+
+/* A profile's numbers and its array of bands. */
+static void json_bands(const struct light_profile *p)
+{
+	printf("\"r0_band\":%d,\"lit\":%llu,\"area\":", p->r0_band, (unsigned long long)p->lit);
+	json_number(p->area);
+	printf(",\"bands\":[");
+	for (unsigned b = 0; b < p->band_count; b++) {
+		const struct light_band *band = &p->band[b];
+		printf("%s{\"lo\":", b ? "," : "");
+		json_number(band->lo);
+		printf(",\"hi\":");
+		json_number(band->hi);
+		printf(",\"lit\":%llu,\"area\":", (unsigned long long)band->lit);
+		json_number(band->area);
+		printf(",\"value\":");
+		json_number(band->value);
+		printf(",\"relative\":");
+		json_number(band->relative);
+		printf("}");
+	}
+	printf("]");
+}
+
+/* Shape sh's object, its name first. */
+static void json_shape(const struct run *run, const struct summary *s, int sh, bool first)
+{
+	printf("%s\"%s\":{", first ? "" : ",", shape_names[sh]);
+	if (sh == SHAPE_TUBES || sh == SHAPE_RING) {
+		json_radii(run, sh);
+	} else {
+		const struct result *res = find_result(run, (enum shape)sh);
+		if (!res) {
+			printf("}");
+			return;
+		}
+		json_bands(&res->prof);
+	}
+	if (is_surface((enum shape)sh)) {
+		printf(",\"peak_to_r0\":");
+		json_number(s->has_r0[sh] ? s->peak[sh] : NAN);
+	}
+	printf("}");
+}
+
+/* The check's object, its message escaped. */
+static void json_check(int c, bool passed, const char *msg)
+{
+	printf(",\"check\":{\"mode\":\"%s\",\"passed\":%s,\"message\":\"", check_names[c], passed ? "true" : "false");
+	for (const char *p = msg; *p; p++)
+		printf(*p == '"' || *p == '\\' ? "\\%c" : "%c", *p);
+	printf("\"}");
+}
+
+static void print_json(const struct run *run, const struct summary *s, unsigned shapes, int c, bool passed,
+		       const char *msg)
+{
+	printf("{");
+	json_device(&run->dev);
+	printf(",\"shapes\":{");
 	bool first_shape = true;
 	for (int sh = 0; sh < SHAPE_COUNT; sh++) {
 		if (!(shapes & (1u << sh)))
 			continue;
-		printf("%s\"%s\":{", first_shape ? "" : ",", shape_names[sh]);
+		json_shape(run, s, sh, first_shape);
 		first_shape = false;
-		if (sh == SHAPE_TUBES || sh == SHAPE_RING) {
-			printf("\"%s\":[", sh == SHAPE_TUBES ? "tubes" : "rings");
-			bool first = true;
-			for (size_t i = 0; i < run->count; i++) {
-				const struct result *res = &run->results[i];
-				if (res->shape != (enum shape)sh)
-					continue;
-				printf("%s{\"nominal_px\":", first ? "" : ",");
-				first = false;
-				json_number(res->nominal_px);
-				printf(",\"radius_px\":");
-				json_number(res->radius_px);
-				printf(",\"lit\":%llu,\"area\":", (unsigned long long)res->prof.lit);
-				json_number(res->prof.area);
-				printf(",\"value\":");
-				json_number(res->prof.value);
-				printf(",\"relative\":");
-				json_number(res->relative);
-				printf("}");
-			}
-			printf("]");
-		} else {
-			const struct result *res = NULL;
-			for (size_t i = 0; i < run->count; i++)
-				if (run->results[i].shape == (enum shape)sh)
-					res = &run->results[i];
-			if (!res) {
-				printf("}");
-				continue;
-			}
-			printf("\"r0_band\":%d,\"lit\":%llu,\"area\":", res->prof.r0_band,
-			       (unsigned long long)res->prof.lit);
-			json_number(res->prof.area);
-			printf(",\"bands\":[");
-			for (unsigned b = 0; b < res->prof.band_count; b++) {
-				const struct light_band *band = &res->prof.band[b];
-				printf("%s{\"lo\":", b ? "," : "");
-				json_number(band->lo);
-				printf(",\"hi\":");
-				json_number(band->hi);
-				printf(",\"lit\":%llu,\"area\":", (unsigned long long)band->lit);
-				json_number(band->area);
-				printf(",\"value\":");
-				json_number(band->value);
-				printf(",\"relative\":");
-				json_number(band->relative);
-				printf("}");
-			}
-			printf("]");
-		}
-		if (is_surface((enum shape)sh)) {
-			printf(",\"peak_to_r0\":");
-			json_number(s->has_r0[sh] ? s->peak[sh] : NAN);
-		}
-		printf("}");
 	}
 	printf("},\"spread\":");
 	json_number(s->values && s->min > 0.0 ? s->max / s->min : NAN);
 	printf(",\"mean\":");
 	json_number(s->values ? s->mean : NAN);
-	if (c != CHECK_NONE) {
-		printf(",\"check\":{\"mode\":\"%s\",\"passed\":%s,\"message\":\"", check_names[c],
-		       passed ? "true" : "false");
-		for (const char *p = msg; *p; p++)
-			printf(*p == '"' || *p == '\\' ? "\\%c" : "%c", *p);
-		printf("\"}");
-	}
+	if (c != CHECK_NONE)
+		json_check(c, passed, msg);
 	printf("}\n");
 }
 
@@ -651,7 +758,22 @@ struct args {
 	int check; /* enum check */
 };
 
-/* Returns 0 to run, or the exit status (0 for --help). */
+/* Whether the shapes are what the check needs: -1 when they are, else
+ * the exit status 2 (reported). */
+static int check_needs(const struct args *a)
+{
+	if (a->check == CHECK_EXACT && !(a->shapes & (1u << SHAPE_DISK))) {
+		fprintf(stderr, "%s: --check exact needs the disk among the shapes\n", prog);
+		return 2;
+	}
+	if (a->check == CHECK_UNIFORM && !(a->shapes & ALL_SHAPES & ~(1u << SHAPE_RING))) {
+		fprintf(stderr, "%s: --check uniform needs a surface among the shapes\n", prog);
+		return 2;
+	}
+	return -1;
+}
+
+/* Returns -1 to run, or the exit status (0 for --help). */
 static int parse_args(int argc, char **argv, struct args *a)
 {
 	static const struct option longopts[] = {
@@ -685,15 +807,7 @@ static int parse_args(int argc, char **argv, struct args *a)
 	}
 	if (optind < argc)
 		return usage(stderr), 2;
-	if (a->check == CHECK_EXACT && !(a->shapes & (1u << SHAPE_DISK))) {
-		fprintf(stderr, "%s: --check exact needs the disk among the shapes\n", prog);
-		return 2;
-	}
-	if (a->check == CHECK_UNIFORM && !(a->shapes & ALL_SHAPES & ~(1u << SHAPE_RING))) {
-		fprintf(stderr, "%s: --check uniform needs a surface among the shapes\n", prog);
-		return 2;
-	}
-	return -1;
+	return check_needs(a);
 }
 
 /* Prints what was measured and checks it; 0, or 1 when the check failed. */

@@ -109,22 +109,47 @@ static int count_lit(const uint8_t *svol, const struct svol_header *hd, const do
 	return 0;
 }
 
+/* Reads the file's header into h and what the profile takes from it
+ * into out. 0, or -EINVAL for no valid .svol file. */
+static int read_header(const uint8_t *svol, size_t size, struct svol_header *h, struct light_profile *out)
+{
+	if (size < SVOL_HEADER_SIZE || svol_header_decode(svol, h) < 0 || svol_file_size(h) != size)
+		return -EINVAL;
+	if (h->width < 2 || h->height < 1 || !(h->half_height > 0.0f))
+		return -EINVAL;
+	out->width = h->width;
+	out->height = h->height;
+	out->images = h->image_count;
+	out->images_per_rev = h->images_per_rev;
+	out->mirrored = (h->flags & SVOL_FLAG_MIRRORED) != 0;
+	out->half_height = h->half_height;
+	struct geometry g = { .width = h->width, .height = h->height, .images_per_rev = h->images_per_rev };
+	out->r0_px = geometry_r0_px(&g);
+	return 0;
+}
+
+/* Each band's light per area, relative to the r0 band's, and the whole
+ * shape's, from the lit voxels counted. */
+static void compute_values(struct light_profile *out)
+{
+	unsigned n = out->band_count;
+	for (unsigned i = 0; i < n; i++) {
+		struct light_band *b = &out->band[i];
+		out->lit += b->lit;
+		b->value = b->area > 0.0 ? b->lit / b->area : 0.0;
+	}
+	out->value = out->lit / out->area;
+	double ref = out->r0_band >= 0 ? out->band[out->r0_band].value : 0.0;
+	for (unsigned i = 0; i < n; i++)
+		out->band[i].relative = ref > 0.0 && out->band[i].area > 0.0 ? out->band[i].value / ref : 0.0;
+}
+
 int light_profile_compute(const uint8_t *svol, size_t size, const struct light_shape *shape, struct light_profile *out)
 {
 	struct svol_header h;
 	memset(out, 0, sizeof(*out));
-	if (size < SVOL_HEADER_SIZE || svol_header_decode(svol, &h) < 0 || svol_file_size(&h) != size)
+	if (read_header(svol, size, &h, out) < 0)
 		return -EINVAL;
-	if (h.width < 2 || h.height < 1 || !(h.half_height > 0.0f))
-		return -EINVAL;
-	out->width = h.width;
-	out->height = h.height;
-	out->images = h.image_count;
-	out->images_per_rev = h.images_per_rev;
-	out->mirrored = (h.flags & SVOL_FLAG_MIRRORED) != 0;
-	out->half_height = h.half_height;
-	struct geometry g = { .width = h.width, .height = h.height, .images_per_rev = h.images_per_rev };
-	out->r0_px = geometry_r0_px(&g);
 
 	double lo[LIGHT_PROFILE_MAX_BANDS], hi[LIGHT_PROFILE_MAX_BANDS];
 	unsigned n = light_profile_bands(h.width, lo, hi, LIGHT_PROFILE_MAX_BANDS);
@@ -146,15 +171,7 @@ int light_profile_compute(const uint8_t *svol, size_t size, const struct light_s
 
 	if (count_lit(svol, &h, hi, n, out) < 0)
 		return -EINVAL;
-	for (unsigned i = 0; i < n; i++) {
-		struct light_band *b = &out->band[i];
-		out->lit += b->lit;
-		b->value = b->area > 0.0 ? b->lit / b->area : 0.0;
-	}
-	out->value = out->lit / out->area;
-	double ref = out->r0_band >= 0 ? out->band[out->r0_band].value : 0.0;
-	for (unsigned i = 0; i < n; i++)
-		out->band[i].relative = ref > 0.0 && out->band[i].area > 0.0 ? out->band[i].value / ref : 0.0;
+	compute_values(out);
 	return 0;
 }
 

@@ -298,40 +298,24 @@ static int16_t phantom_value(double x, double y, double z)
 	return (int16_t)v;
 }
 
-static int build_grid(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
-		      const struct bench_files *f, uint32_t param, char *err, size_t err_size)
+/* The phantom's samples on a grid of n[0] x n[1] x n[2], j (up) fastest:
+ * sample (i, j, k) at (k n0 + i) n1 + j. */
+static void fill_phantom(int16_t *samples, const uint32_t n[3])
 {
-	const struct grid_scene *gs = &grids[param];
-	const uint32_t *n = gs->n;
-	d->samples = malloc((size_t)n[0] * n[1] * n[2] * sizeof(*d->samples));
-	if (!d->samples || alloc_draws(s, 1) < 0)
-		return -ENOMEM;
-	/* j (up) fastest: sample (i, j, k) at (k n0 + i) n1 + j. */
 	for (uint32_t k = 0; k < n[2]; k++)
 		for (uint32_t i = 0; i < n[0]; i++)
 			for (uint32_t j = 0; j < n[1]; j++) {
 				double x = (i + 0.5) / n[0] * 2 - 1, y = (j + 0.5) / n[1] * 2 - 1;
 				double z = (k + 0.5) / n[2] * 2 - 1;
-				d->samples[((size_t)k * n[0] + i) * n[1] + j] = phantom_value(x, y, z);
+				samples[((size_t)k * n[0] + i) * n[1] + j] = phantom_value(x, y, z);
 			}
-	/* The grid a unit cube; the transform makes it the box. */
-	const float sp[3] = { 1.0f / (float)n[0], 1.0f / (float)n[1], 1.0f / (float)n[2] };
-	d->grid =
-		(struct scene_grid){ SCENE_GRID_I16, { n[0], n[1], n[2] }, { sp[0], sp[1], sp[2] }, d->samples, NULL };
-	d->brick_max = malloc(grid_brick_count(&d->grid) * sizeof(*d->brick_max));
-	if (!d->brick_max)
-		return -ENOMEM;
-	grid_brick_max(&d->grid, d->brick_max);
-	d->grid.brick_max = d->brick_max;
-	struct scene_draw *dr = &s->draws[0];
-	set_draw(dr, SCENE_GRID, NULL, 0, colours[6]);
-	dr->grid = &d->grid;
-	dr->transfer = (struct scene_transfer){ .threshold = gs->threshold,
-						.lo = gs->lo,
-						.hi = gs->hi,
-						.sampling = gs->sampling };
-	double h = g->half_height * gs->height;
-	/* The box centred, then tilted about x. */
+}
+
+/* The transform that makes the unit cube gs's box: 1.3 across, gs->height
+ * half heights h high, centred, then tilted about x. */
+static void box_transform(float out[16], const struct grid_scene *gs, double half_height)
+{
+	double h = half_height * gs->height;
 	double c = cos(gs->tilt * M_PI / 180), sn = sin(gs->tilt * M_PI / 180);
 	const float m[16] = {
 		1.3f,
@@ -351,7 +335,35 @@ static int build_grid(struct bench_scene *s, struct scene_data *d, const struct 
 		(float)(-h / 2 * sn - 0.65 * c),
 		1
 	};
-	memcpy(dr->transform, m, sizeof(m));
+	memcpy(out, m, sizeof(m));
+}
+
+static int build_grid(struct bench_scene *s, struct scene_data *d, const struct geometry *g,
+		      const struct bench_files *f, uint32_t param, char *err, size_t err_size)
+{
+	const struct grid_scene *gs = &grids[param];
+	const uint32_t *n = gs->n;
+	d->samples = malloc((size_t)n[0] * n[1] * n[2] * sizeof(*d->samples));
+	if (!d->samples || alloc_draws(s, 1) < 0)
+		return -ENOMEM;
+	fill_phantom(d->samples, n);
+	/* The grid a unit cube; the transform makes it the box. */
+	const float sp[3] = { 1.0f / (float)n[0], 1.0f / (float)n[1], 1.0f / (float)n[2] };
+	d->grid =
+		(struct scene_grid){ SCENE_GRID_I16, { n[0], n[1], n[2] }, { sp[0], sp[1], sp[2] }, d->samples, NULL };
+	d->brick_max = malloc(grid_brick_count(&d->grid) * sizeof(*d->brick_max));
+	if (!d->brick_max)
+		return -ENOMEM;
+	grid_brick_max(&d->grid, d->brick_max);
+	d->grid.brick_max = d->brick_max;
+	struct scene_draw *dr = &s->draws[0];
+	set_draw(dr, SCENE_GRID, NULL, 0, colours[6]);
+	dr->grid = &d->grid;
+	dr->transfer = (struct scene_transfer){ .threshold = gs->threshold,
+						.lo = gs->lo,
+						.hi = gs->hi,
+						.sampling = gs->sampling };
+	box_transform(dr->transform, gs, g->half_height);
 	return 0;
 }
 

@@ -265,6 +265,38 @@ static void stderr_line(void *arg, const char *line, int64_t now)
 	fprintf(stderr, "%s: %s: %7.3f s: (stderr) %s\n", prog, s->name, (double)(now - s->t0) / 1e9, line);
 }
 
+/* While the scan is shown: the daemon's memory, and its render's time,
+ * into r. */
+static void note_shown(struct bench *b, struct run *r)
+{
+	struct bench_memory m;
+	struct spindle_status st;
+	bench_memory(prog, b->pid, &m);
+	get_status(b, &st);
+	r->rss_shown = m.rss_kib;
+	r->hwm = m.hwm_kib;
+	r->render_us = st.render_us;
+	r->rendered = st.volumes_rendered;
+}
+
+/* Waits for spindlectl to exit. 0 when it showed the scan and exited
+ * with status 0. */
+static int reap_show(pid_t pid, const struct show_state *s)
+{
+	int status;
+	while (waitpid(pid, &status, 0) < 0)
+		if (errno != EINTR)
+			die("waitpid", errno);
+	if (!s->shown)
+		return -1;
+	if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+		fprintf(stderr, "%s: %s: spindlectl exited with status %d (signal %d) after SIGTERM\n", prog, s->name,
+			WIFEXITED(status) ? WEXITSTATUS(status) : -1, WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+		return -1;
+	}
+	return 0;
+}
+
 /* Until both pipes end; stops spindlectl once `shown` came (or on the
  * timeout). 0 when it showed the scan and exited with status 0. */
 static int follow(struct bench *b, pid_t pid, struct show_state *s, struct run *r, int out_fd, int err_fd)
@@ -286,33 +318,14 @@ static int follow(struct bench *b, pid_t pid, struct show_state *s, struct run *
 		if (fds[1].fd >= 0 && fds[1].revents && !read_lines(&le, stderr_line, s))
 			fds[1].fd = -1;
 		if (s->shown && !stopped) {
-			/* While it is shown: the daemon's memory, and its render's time. */
-			struct bench_memory m;
-			struct spindle_status st;
-			bench_memory(prog, b->pid, &m);
-			get_status(b, &st);
-			r->rss_shown = m.rss_kib;
-			r->hwm = m.hwm_kib;
-			r->render_us = st.render_us;
-			r->rendered = st.volumes_rendered;
+			note_shown(b, r);
 			kill(pid, SIGTERM); /* spindlectl catches it from `shown` on */
 			stopped = true;
 		}
 	}
 	close(out_fd);
 	close(err_fd);
-	int status;
-	while (waitpid(pid, &status, 0) < 0)
-		if (errno != EINTR)
-			die("waitpid", errno);
-	if (!s->shown)
-		return -1;
-	if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-		fprintf(stderr, "%s: %s: spindlectl exited with status %d (signal %d) after SIGTERM\n", prog, s->name,
-			WIFEXITED(status) ? WEXITSTATUS(status) : -1, WIFSIGNALED(status) ? WTERMSIG(status) : 0);
-		return -1;
-	}
-	return 0;
+	return reap_show(pid, s);
 }
 
 /* Until the daemon has dropped the last run's client and volume (as many
