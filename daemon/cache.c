@@ -43,9 +43,10 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
-	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, c->prev->mask_bytes) == 0;
+	uint32_t tiles = c->prev ? volume_tiles_per_image(c->prev) : 0;
+	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, tiles) == 0;
 	for (unsigned g = 0; marks && g < CHANGED_HISTORY; g++)
-		marks = tile_set_init(&c->changed[g], c->prev->image_count, c->prev->mask_bytes) == 0;
+		marks = tile_set_init(&c->changed[g], c->prev->image_count, tiles) == 0;
 	if (c->prev)
 		c->changed_mask = calloc(1, c->prev->mask_bytes);
 	if (!c->compose || !c->prev || !marks || !c->changed_mask || !c->rest_vol || !c->tmp || !c->turned_vol) {

@@ -95,7 +95,7 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 	brightness_map_finish(&bright);
 	if (err < 0)
 		goto fail;
-	if (tile_set_init(&c->all_dirty, c->image_count, c->mask_bytes) < 0)
+	if (tile_set_init(&c->all_dirty, c->image_count, c->tiles_per_image) < 0)
 		goto fail;
 	tile_set_fill(&c->all_dirty);
 	if (workers_create(c) < 0)
@@ -515,9 +515,12 @@ void compose_add_footprint(struct tile_set *dirty, const struct compose_source *
 
 /* ---- tile sets ---- */
 
-int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t mask_bytes)
+int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t tiles_per_image)
 {
-	*s = (struct tile_set){ .image_count = image_count, .mask_bytes = mask_bytes };
+	uint32_t mask_bytes = (tiles_per_image + 7) / 8;
+	*s = (struct tile_set){ .image_count = image_count,
+				.tiles_per_image = tiles_per_image,
+				.mask_bytes = mask_bytes };
 	s->mask = calloc(image_count, mask_bytes);
 	s->images = calloc(image_count, 1);
 	if (s->mask && s->images)
@@ -535,7 +538,13 @@ void tile_set_finish(struct tile_set *s)
 
 void tile_set_fill(struct tile_set *s)
 {
-	memset(s->mask, 0xff, (size_t)s->image_count * s->mask_bytes);
+	uint32_t full = s->tiles_per_image / 8, rest = s->tiles_per_image % 8;
+	for (uint32_t k = 0; k < s->image_count; k++) {
+		uint8_t *m = s->mask + (size_t)k * s->mask_bytes;
+		memset(m, 0xff, full);
+		if (rest)
+			m[full] = (uint8_t)((1u << rest) - 1);
+	}
 	memset(s->images, 1, s->image_count);
 }
 

@@ -28,16 +28,17 @@ struct pool;
  * the marks pays for the images flagged, not for all: a small object
  * marks a few. */
 struct tile_set {
-	uint32_t image_count, mask_bytes;
+	uint32_t image_count, tiles_per_image, mask_bytes;
 	uint8_t *mask;
 	uint8_t *images;
 };
 
-/* Empty; 0 or -ENOMEM. */
-int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t mask_bytes);
+/* Empty, for a volume of image_count images of tiles_per_image tiles
+ * (mask_bytes as volume.h's); 0 or -ENOMEM. */
+int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t tiles_per_image);
 /* Accepts a zeroed one. */
 void tile_set_finish(struct tile_set *s);
-/* Every tile marked. */
+/* Every tile marked (no bit past the last tile of an image). */
 void tile_set_fill(struct tile_set *s);
 /* Nothing marked (the flagged images' masks zeroed). */
 void tile_set_clear(struct tile_set *s);
