@@ -85,6 +85,25 @@ def composition_exact():
 
 
 @case
+def composition_exact_calibrated():
+    """With an axis offset the pipeline renders into a volume that keeps
+    the render unshifted, and moves it into the one it uploads: the cache
+    then patches its last composition there volume after volume, and what
+    is shown is still the volume rendered whole and moved, bit for bit."""
+    settings = ('axis-offset-u=3', 'axis-offset-v=-2')
+    on, off = Daemon(*settings), Daemon(*settings, 'cache=false')
+    try:
+        cap_on, comp = script(on)
+        cap_off, _ = script(off)
+    finally:
+        on.stop()
+        off.stop()
+    check(lit(cap_on) > 0, 'the scene lights voxels')
+    check(cap_on == cap_off, 'calibrated: the composed volume is the volume rendered whole, bit for bit')
+    check(comp['hits'] >= 3 * 8 and comp['objects_reused'] >= 5, f'the static layers were reused: {comp}')
+
+
+@case
 def cache_yields_to_clients():
     """The cache holds at most what of memory-budget the clients leave:
     with 2 MiB in all and a client holding 1.5 MiB of buffers, its budget
