@@ -63,15 +63,20 @@ def script(d, frames=12):
     return cap, comp
 
 
-@case
-def composition_exact():
-    on, off = Daemon(), Daemon('cache=false')
+def on_and_off(*settings):
+    """script() on a daemon with the cache and on one without it (both
+    with settings): the captures and composition events of each."""
+    on, off = Daemon(*settings), Daemon(*settings, 'cache=false')
     try:
-        cap_on, comp = script(on)
-        cap_off, comp_off = script(off)
+        return script(on) + script(off)
     finally:
         on.stop()
         off.stop()
+
+
+@case
+def composition_exact():
+    cap_on, comp, cap_off, comp_off = on_and_off()
     check(lit(cap_on) > 0, 'the scene lights voxels')
     check(cap_on == cap_off, 'the composed volume is the volume rendered whole, bit for bit')
     check(comp['flags'] & CACHE, f'cache on: {comp}')
@@ -90,14 +95,7 @@ def composition_exact_calibrated():
     the render unshifted, and moves it into the one it uploads: the cache
     then patches its last composition there volume after volume, and what
     is shown is still the volume rendered whole and moved, bit for bit."""
-    settings = ('axis-offset-u=3', 'axis-offset-v=-2')
-    on, off = Daemon(*settings), Daemon(*settings, 'cache=false')
-    try:
-        cap_on, comp = script(on)
-        cap_off, _ = script(off)
-    finally:
-        on.stop()
-        off.stop()
+    cap_on, comp, cap_off, _ = on_and_off('axis-offset-u=3', 'axis-offset-v=-2')
     check(lit(cap_on) > 0, 'the scene lights voxels')
     check(cap_on == cap_off, 'calibrated: the composed volume is the volume rendered whole, bit for bit')
     check(comp['hits'] >= 3 * 8 and comp['objects_reused'] >= 5, f'the static layers were reused: {comp}')
