@@ -179,16 +179,16 @@ static void image_job(void *arg, unsigned index)
 	}
 }
 
-/* fn on every image of c->out, on the pool's workers (alone: on this
- * thread, as worker 0). */
-static int run_images(struct compose *c, struct volume *out, image_fn fn, bool alone)
+/* fn on every image of c->out, on the pool's workers (on this thread, as
+ * worker 0, without a pool). */
+static int run_images(struct compose *c, struct volume *out, image_fn fn)
 {
 	struct image_job j = { c, fn };
 	c->out = out;
 	atomic_store(&c->next_image, 0);
 	for (unsigned i = 0; i < c->workers; i++)
 		c->w[i].err = 0;
-	if (c->pool && !alone)
+	if (c->pool)
 		pool_run(c->pool, image_job, &j);
 	else
 		image_job(&j, 0);
@@ -387,18 +387,21 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 
 typedef void (*lit_fn)(struct compose *c, unsigned s, uint32_t k, struct rle_span span);
 
-/* Calls fn(c, s, k, span) for each image k in which source s has tiles,
- * with the mask bytes they lie in (all, where not known). */
+/* Calls fn(c, s, k, span) for each image k that the patch marks and in
+ * which source s has tiles, with the mask bytes they lie in (all, where
+ * not known). */
 static void for_each_lit(struct compose *c, unsigned s, lit_fn fn)
 {
 	const struct compose_source *src = &c->src[s];
+	const uint8_t *marked = c->dirty->images;
 	if (src->rle && src->rle->lit) {
 		for (uint32_t i = 0; i < src->rle->lit_count; i++)
-			fn(c, s, src->rle->lit[i], src->rle->lit_span[i]);
+			if (marked[src->rle->lit[i]])
+				fn(c, s, src->rle->lit[i], src->rle->lit_span[i]);
 		return;
 	}
 	for (uint32_t k = 0; k < c->image_count; k++)
-		if (source_mask(src, k))
+		if (marked[k] && source_mask(src, k))
 			fn(c, s, k, (struct rle_span){ 0, c->mask_bytes - 1 });
 }
 
@@ -412,8 +415,8 @@ static void place_lit(struct compose *c, unsigned s, uint32_t k, struct rle_span
 	c->img_src[c->img_first[k]++] = (struct img_source){ s, span };
 }
 
-/* The sources of each image (img_first, img_src): an object touches a
- * few images, and there may be thousands of objects. */
+/* The sources of each image the patch marks (img_first, img_src): an
+ * object touches a few images, and there may be thousands of objects. */
 static int index_sources(struct compose *c)
 {
 	if (!c->img_first && !(c->img_first = malloc((c->image_count + 1) * sizeof(*c->img_first))))
@@ -466,6 +469,18 @@ static bool few_dirty(const struct tile_set *dirty)
 	return n <= COMPOSE_FEW_TILES;
 }
 
+/* A patch of few tiles, on this thread: the marked images in turn. */
+static int patch_alone(struct compose *c, struct volume *vol)
+{
+	int err = 0;
+	c->out = vol;
+	for (uint32_t k = 0; k < c->image_count && err == 0; k++)
+		if (c->dirty->images[k])
+			err = patch_image(c, &c->w[0], k);
+	c->out = NULL;
+	return err;
+}
+
 int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty, const struct compose_source *src,
 		  unsigned n)
 {
@@ -477,7 +492,7 @@ int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *
 	c->dirty = dirty;
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return run_images(c, vol, patch_image, few_dirty(dirty));
+	return few_dirty(dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image);
 }
 
 /* A composition from nothing is a patch of an empty volume where every
@@ -690,7 +705,7 @@ int compose_turned(struct compose *c, struct volume *out, const struct turned_so
 	volume_clear(out);
 	c->turned = src;
 	c->n = n;
-	return run_images(c, out, turn_image, false);
+	return run_images(c, out, turn_image);
 }
 
 unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_t height,
