@@ -194,16 +194,23 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
 	return 0;
 }
 
-uint32_t volume_stored_index(const uint8_t *mask, uint32_t t)
+uint32_t volume_mask_count(const uint8_t *mask, size_t bytes)
 {
-	uint32_t i = 0, b = 0;
-	for (; b + 8 <= t / 8; b += 8) { /* eight mask bytes at a time */
+	uint32_t n = 0;
+	size_t b = 0;
+	for (; b + 8 <= bytes; b += 8) {
 		uint64_t w;
 		memcpy(&w, mask + b, sizeof(w));
-		i += volume_word_bits(w);
+		n += volume_word_bits(w);
 	}
-	for (; b < t / 8; b++)
-		i += volume_mask_bits(mask[b]);
+	for (; b < bytes; b++)
+		n += volume_mask_bits(mask[b]);
+	return n;
+}
+
+uint32_t volume_stored_index(const uint8_t *mask, uint32_t t)
+{
+	uint32_t i = volume_mask_count(mask, t / 8);
 	return t % 8 ? i + volume_mask_bits(mask[t / 8] & ((1u << (t % 8)) - 1)) : i;
 }
 
@@ -339,11 +346,8 @@ int volume_pixel(const struct volume *vol, uint32_t k, uint32_t u, uint32_t v, i
 	uint32_t t = (v / VOLUME_TILE) * vol->tiles_x + u / VOLUME_TILE;
 	if (!volume_tile_present(img, t))
 		return 0;
-	uint32_t idx = 0;
-	for (uint32_t b = 0; b < t / 8; b++)
-		idx += volume_mask_bits(img->mask[b]);
-	idx += volume_mask_bits(img->mask[t / 8] & ((1u << (t % 8)) - 1));
-	const uint8_t *plane = img->tiles + (size_t)idx * VOLUME_TILE_BYTES + c * VOLUME_TILE_PLANE_BYTES;
+	const uint8_t *plane = img->tiles + (size_t)volume_stored_index(img->mask, t) * VOLUME_TILE_BYTES +
+			       c * VOLUME_TILE_PLANE_BYTES;
 	uint32_t x = u % VOLUME_TILE, y = v % VOLUME_TILE;
 	return (plane[y * 4 + x / 8] >> (7 - x % 8)) & 1;
 }

@@ -69,6 +69,14 @@ static inline void volume_tile_zero(uint8_t *dst)
 		*(volume_chunk *)(dst + i) = (volume_chunk){ 0 };
 }
 
+/* dst |= src over a packed tile, in 16-byte moves (the composition of
+ * lit bits: compose.h). */
+static inline void volume_tile_or(uint8_t *restrict dst, const uint8_t *restrict src)
+{
+	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(volume_chunk))
+		*(volume_chunk *)(dst + i) |= *(const volume_chunk *)(src + i);
+}
+
 /* Tiles across n pixels: ceil(n / VOLUME_TILE). */
 static inline uint32_t volume_tiles_across(uint32_t n)
 {
@@ -142,6 +150,8 @@ void volume_image_clear(struct volume *vol, uint32_t k);
  * same geometry): tiles, mask and counts, without copying tiles. */
 void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint32_t kb);
 
+/* The set bits of the first bytes bytes of mask (eight at a time). */
+uint32_t volume_mask_count(const uint8_t *mask, size_t bytes);
 /* The stored index of tile t in an image with this mask: how many of its
  * tiles come before t (t up to tiles per image: all of them). */
 uint32_t volume_stored_index(const uint8_t *mask, uint32_t t);

@@ -65,11 +65,9 @@ static int decode_image(struct volume *vol, uint32_t k, const uint8_t **pp, cons
 	const uint8_t *p = *pp;
 	if ((size_t)(end - p) < 4 + (size_t)mask)
 		return -EINVAL;
-	uint32_t count = le_get32(p), bits = 0;
+	uint32_t count = le_get32(p);
 	const uint8_t *m = p + 4;
-	for (uint32_t i = 0; i < vol->mask_bytes; i++)
-		bits += volume_mask_bits(m[i]);
-	if (bits != count || (size_t)(end - p - 4 - mask) / VOLUME_TILE_BYTES < count)
+	if (volume_mask_count(m, vol->mask_bytes) != count || (size_t)(end - p - 4 - mask) / VOLUME_TILE_BYTES < count)
 		return -EINVAL;
 	p += 4 + mask;
 	if (count && volume_image_reserve(vol, k, count) < 0)

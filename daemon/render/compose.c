@@ -125,19 +125,6 @@ void compose_destroy(struct compose *c)
 	free(c);
 }
 
-/* dst |= src over a packed tile, 8 bytes at a time (a loop of bytes is
- * not vectorised at -O2). */
-static void or_tile(uint8_t *restrict dst, const uint8_t *restrict src)
-{
-	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(uint64_t)) {
-		uint64_t a, b;
-		memcpy(&a, dst + i, sizeof(a));
-		memcpy(&b, src + i, sizeof(b));
-		a |= b;
-		memcpy(dst + i, &a, sizeof(a));
-	}
-}
-
 /* The touched tiles of w's dense image, in order, as image k of c->out
  * (count of them), leaving the dense image zero. */
 static int emit_image(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t count)
@@ -265,7 +252,7 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 			w->touched[t] = 1;
 			if (tiles) {
-				or_tile(dst, tiles + (size_t)i * VOLUME_TILE_BYTES);
+				volume_tile_or(dst, tiles + (size_t)i * VOLUME_TILE_BYTES);
 				continue;
 			}
 			uint32_t off;
@@ -443,21 +430,6 @@ static int index_sources(struct compose *c)
 	return 0;
 }
 
-/* The bits of n bytes at p (n a multiple of 8 or not). */
-static uint32_t count_bits(const uint8_t *p, size_t n)
-{
-	uint32_t bits = 0;
-	size_t i = 0;
-	for (; i + 8 <= n; i += 8) {
-		uint64_t word;
-		memcpy(&word, p + i, sizeof(word));
-		bits += volume_word_bits(word);
-	}
-	for (; i < n; i++)
-		bits += volume_mask_bits(p[i]);
-	return bits;
-}
-
 /* Whether so few tiles are dirty (a small object moving) that waking the
  * pool's workers would cost more than patching them on this thread. */
 static bool few_dirty(const struct tile_set *dirty)
@@ -465,7 +437,7 @@ static bool few_dirty(const struct tile_set *dirty)
 	uint32_t n = 0;
 	for (uint32_t k = 0; k < dirty->image_count && n <= COMPOSE_FEW_TILES; k++)
 		if (dirty->images[k])
-			n += count_bits(dirty->mask + (size_t)k * dirty->mask_bytes, dirty->mask_bytes);
+			n += volume_mask_count(dirty->mask + (size_t)k * dirty->mask_bytes, dirty->mask_bytes);
 	return n <= COMPOSE_FEW_TILES;
 }
 
@@ -634,7 +606,7 @@ static void halftone_into(struct compose *c, struct compose_worker *w, uint32_t 
 	if (c->halftone(tile + sizeof(rows), rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
 		*count += !w->touched[t];
 		w->touched[t] = 1;
-		or_tile(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);
+		volume_tile_or(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);
 	}
 }
 

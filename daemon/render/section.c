@@ -101,12 +101,10 @@ uint32_t section_canvas_next(const struct section_canvas *c, uint32_t t)
 void section_canvas_pack_lit(const struct section_canvas *c, uint32_t t, uint8_t *out, bool fresh)
 {
 	const uint8_t *bits = (const uint8_t *)(c->lit_bits + (size_t)t * SECTION_LIT_TILE);
-	if (fresh) {
+	if (fresh)
 		volume_tile_copy(out, bits);
-		return;
-	}
-	for (size_t i = 0; i < VOLUME_TILE_BYTES; i += sizeof(volume_chunk))
-		*(volume_chunk *)(out + i) |= *(const volume_chunk *)(bits + i);
+	else
+		volume_tile_or(out, bits);
 }
 
 bool section_canvas_pack_plain(const struct section_canvas *c, uint32_t t, const uint32_t pattern[3][16], uint8_t *out)
