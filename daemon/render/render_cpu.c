@@ -157,12 +157,11 @@ static int pack_image(struct render_cpu *r, struct cpu_worker *w, uint32_t k)
 static void light_point(struct section_canvas *c, const struct bin_point *p, const struct brightness_tables *lit,
 			uint32_t k)
 {
-	if (p->size == 1 && lit) {
-		section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(lit, k, p->u / VOLUME_TILE));
-		return;
-	}
 	if (p->size == 1) { /* the common case */
-		section_pixel(c, p->u, p->v, p->rgb);
+		if (lit)
+			section_lit_pixel(c, p->u, p->v, p->rgb, brightness_table(lit, k, p->u / VOLUME_TILE));
+		else
+			section_pixel(c, p->u, p->v, p->rgb);
 		return;
 	}
 	uint32_t u0, u1, v0, v1;
