@@ -37,6 +37,7 @@ struct proj_sim {
 	struct projwire_info info;
 	uint8_t *wire; /* encode buffer, grown as needed */
 	size_t wire_cap;
+	struct projwire_delta plan; /* the upload being written */
 	uint64_t bytes_sent, device_errors, arrivals;
 	int epfd, plug_fd;
 	struct plug_event plugs[2 * SIM_FAULTS_MAX_EVENTS];
@@ -127,8 +128,9 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		return r;
 	if (buffer == st.shown || buffer == st.pending)
 		return -EBUSY;
-	bool delta;
-	size_t size = projwire_upload_size(vol, base, &delta);
+	size_t size;
+	if ((r = projwire_upload_plan(vol, base, &s->plan, &size)) < 0)
+		return r;
 	if (size > s->wire_cap) {
 		uint8_t *w = realloc(s->wire, size);
 		if (!w)
@@ -136,7 +138,7 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 		s->wire = w;
 		s->wire_cap = size;
 	}
-	size_t len = projwire_upload_encode(vol, delta ? base : NULL, buffer, s->wire);
+	size_t len = projwire_upload_encode(vol, base, &s->plan, buffer, s->wire);
 	for (size_t off = 0; off < len; off += BULK_CHUNK)
 		proj_simdev_bulk_out(s->dev, s->wire + off, len - off < BULK_CHUNK ? len - off : BULK_CHUNK);
 	s->bytes_sent += len;
@@ -300,6 +302,7 @@ static void sim_destroy(struct projector *p)
 	if (s->plug_fd >= 0)
 		close(s->plug_fd);
 	free(s->wire);
+	projwire_delta_free(&s->plan);
 	free(s);
 }
 

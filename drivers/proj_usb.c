@@ -48,6 +48,7 @@ struct proj_usb {
 	uint64_t begin_end[PROJWIRE_MAX_BUFFERS]; /* stream position after its latest VOLUME_BEGIN */
 	uint8_t evq[EVQ_SIZE];                    /* event bytes received, not yet handled */
 	size_t evq_len;
+	struct projwire_delta plan; /* the upload being written */
 
 	uint64_t bytes_sent, device_errors, arrivals, gone;
 };
@@ -282,12 +283,14 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 		return -EBUSY;
 	if (u->info.version_minor < 1)
 		base = NULL; /* a 1.0 device rejects delta records */
-	bool delta;
-	size_t size = projwire_upload_size(vol, base, &delta);
+	size_t size;
+	int r = projwire_upload_plan(vol, base, &u->plan, &size);
+	if (r < 0)
+		return r;
 	uint8_t *rec = usbt_out_reserve(u->t, size);
 	if (!rec)
 		return -ENOMEM;
-	size_t len = projwire_upload_encode(vol, delta ? base : NULL, buffer, rec);
+	size_t len = projwire_upload_encode(vol, base, &u->plan, buffer, rec);
 	/* Where its first record (VOLUME_BEGIN) ends: from then on the device
 	 * holds the buffer as being written and accepts a swap to it. */
 	u->begin_end[buffer] = usbt_out_queued(u->t) + PROJWIRE_HEADER_SIZE + le_get32(rec + 4);
@@ -466,6 +469,7 @@ static void usb_destroy(struct projector *p)
 	if (usbt_is_ready(u->t))
 		usb_blank(p, true); /* dark on every exit */
 	usbt_destroy(u->t);
+	projwire_delta_free(&u->plan);
 	free(u);
 }
 

@@ -4,6 +4,7 @@
 #include "projwire.h"
 
 #include <errno.h>
+#include <stdlib.h>
 #include <string.h>
 #include <zlib.h>
 
@@ -444,37 +445,52 @@ void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_
 	le_put64(out + 24, base_seq);
 }
 
-/* The tiles of image k that differ between vol and base: counts them and,
- * when tiles is given, writes the new tiles there (all zero for a tile
- * that vol no longer has) and the change mask into mask. */
-static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask,
-			    uint8_t *tiles)
+/* Marks in mask (mask_bytes, cleared first) the tiles of image k that
+ * differ between vol and base, a tile that only one of them has among
+ * them; returns how many. The one comparison of the two volumes. */
+static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask)
 {
 	const struct volume_image *a = &vol->images[k], *b = &base->images[k];
 	const uint8_t *pa = a->tiles, *pb = b->tiles;
-	uint32_t n = 0, end = a->next_tile > b->next_tile ? a->next_tile : b->next_tile;
-	if (tiles)
-		memset(mask, 0, vol->mask_bytes);
-	for (uint32_t t = 0; t < end; t++) {
-		if (!(t % 8) && !(a->mask[t / 8] | b->mask[t / 8])) {
-			t += 7; /* nothing in this mask byte */
-			continue;
-		}
-		int ia = volume_tile_present(a, t), ib = volume_tile_present(b, t);
-		if ((ia || ib) && (ia != ib || memcmp(pa, pb, VOLUME_TILE_BYTES))) {
-			if (tiles) {
-				mask[t / 8] |= (uint8_t)(1u << (t % 8));
-				if (ia)
-					memcpy(tiles + (size_t)n * VOLUME_TILE_BYTES, pa, VOLUME_TILE_BYTES);
-				else
-					memset(tiles + (size_t)n * VOLUME_TILE_BYTES, 0, VOLUME_TILE_BYTES);
+	uint32_t n = 0;
+	memset(mask, 0, vol->mask_bytes);
+	for (uint32_t byte = 0; byte < vol->mask_bytes; byte++) {
+		uint8_t ma = a->mask[byte], mb = b->mask[byte];
+		for (uint32_t bits = ma | mb; bits; bits &= bits - 1) {
+			uint32_t bit = (uint32_t)__builtin_ctz(bits);
+			bool ia = (ma >> bit) & 1, ib = (mb >> bit) & 1;
+			if (ia != ib || memcmp(pa, pb, VOLUME_TILE_BYTES)) {
+				mask[byte] |= (uint8_t)(1u << bit);
+				n++;
 			}
-			n++;
+			pa += ia ? VOLUME_TILE_BYTES : 0;
+			pb += ib ? VOLUME_TILE_BYTES : 0;
 		}
-		pa += ia ? VOLUME_TILE_BYTES : 0;
-		pb += ib ? VOLUME_TILE_BYTES : 0;
 	}
 	return n;
+}
+
+/* The tiles of image k of vol that mask marks, in order into out: a
+ * tile vol no longer has goes as zeros. */
+static void delta_copy(const struct volume *vol, uint32_t k, const uint8_t *mask, uint8_t *out)
+{
+	const struct volume_image *a = &vol->images[k];
+	const uint8_t *pa = a->tiles;
+	for (uint32_t byte = 0; byte < vol->mask_bytes; byte++) {
+		uint8_t ma = a->mask[byte], m = mask[byte];
+		for (uint32_t bits = ma | m; bits; bits &= bits - 1) {
+			uint32_t bit = (uint32_t)__builtin_ctz(bits);
+			bool ia = (ma >> bit) & 1;
+			if ((m >> bit) & 1) {
+				if (ia)
+					memcpy(out, pa, VOLUME_TILE_BYTES);
+				else
+					memset(out, 0, VOLUME_TILE_BYTES);
+				out += VOLUME_TILE_BYTES;
+			}
+			pa += ia ? VOLUME_TILE_BYTES : 0;
+		}
+	}
 }
 
 static size_t delta_image_size(const struct volume *vol, uint32_t tiles)
@@ -488,47 +504,76 @@ static bool delta_fits(const struct volume *vol, const struct volume *base)
 	       base->tiles_x == vol->tiles_x;
 }
 
-static size_t delta_size(const struct volume *vol, const struct volume *base)
+/* Room in d for vol's images. 0 or -ENOMEM. */
+static int delta_reserve(struct projwire_delta *d, const struct volume *vol)
 {
-	size_t n = PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE;
-	for (uint32_t k = 0; k < vol->image_count; k++) {
-		uint32_t t = delta_tiles(vol, base, k, NULL, NULL);
-		n += t ? delta_image_size(vol, t) : 0;
+	size_t bytes = (size_t)vol->image_count * vol->mask_bytes;
+	if (vol->image_count > d->images_cap) {
+		uint32_t *t = realloc(d->tiles, vol->image_count * sizeof(*t));
+		if (!t)
+			return -ENOMEM;
+		d->tiles = t;
+		d->images_cap = vol->image_count;
 	}
-	return n;
+	if (bytes > d->masks_cap) {
+		uint8_t *m = realloc(d->masks, bytes);
+		if (!m)
+			return -ENOMEM;
+		d->masks = m;
+		d->masks_cap = bytes;
+	}
+	return 0;
+}
+
+void projwire_delta_free(struct projwire_delta *d)
+{
+	free(d->tiles);
+	free(d->masks);
+	*d = (struct projwire_delta){ 0 };
 }
 
 /* A delta when there is a base and it is the smaller form: a delta sends
  * removed tiles as zeros, so a volume unlike its base is cheaper whole. */
-size_t projwire_upload_size(const struct volume *vol, const struct volume *base, bool *delta)
+int projwire_upload_plan(const struct volume *vol, const struct volume *base, struct projwire_delta *d, size_t *size)
 {
-	size_t whole = projwire_volume_size(vol);
-	size_t d = delta_fits(vol, base) ? delta_size(vol, base) : SIZE_MAX;
-	*delta = d < whole;
-	return *delta ? d : whole;
+	*size = projwire_volume_size(vol);
+	d->delta = false;
+	if (!delta_fits(vol, base))
+		return 0;
+	int r = delta_reserve(d, vol);
+	if (r < 0)
+		return r;
+	size_t n = PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE;
+	for (uint32_t k = 0; k < vol->image_count; k++) {
+		d->tiles[k] = delta_tiles(vol, base, k, d->masks + (size_t)k * vol->mask_bytes);
+		n += d->tiles[k] ? delta_image_size(vol, d->tiles[k]) : 0;
+	}
+	d->delta = n < *size;
+	if (d->delta)
+		*size = n;
+	return 0;
 }
 
 /* A delta volume: an IMAGE_DELTA record for each image with a changed
  * tile; images not sent keep what the buffer holds. */
-static size_t delta_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out)
+static size_t delta_encode(const struct volume *vol, const struct volume *base, const struct projwire_delta *d,
+			   uint32_t buffer, uint8_t *out)
 {
 	size_t n = PROJWIRE_DELTA_BEGIN_SIZE;
 	uint32_t images = 0;
-	uint8_t mask[PROJWIRE_MAX_TILES / 8];
 	projwire_delta_begin_encode(out, buffer, vol->image_count, vol->seq, base->seq);
 	for (uint32_t k = 0; k < vol->image_count; k++) {
-		/* Tiles go straight to their place (an image with any has its
-		 * record there); the mask waits aside, since out has no room
-		 * for the mask of an image that turns out unchanged. */
-		uint8_t *rec = out + n, *head = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
-		uint32_t t = delta_tiles(vol, base, k, mask, head + vol->mask_bytes);
+		uint32_t t = d->tiles[k];
 		if (!t)
 			continue;
-		memcpy(head, mask, vol->mask_bytes);
+		const uint8_t *mask = d->masks + (size_t)k * vol->mask_bytes;
+		uint8_t *rec = out + n, *head = rec + PROJWIRE_HEADER_SIZE + PROJWIRE_IMAGE_HEAD;
 		size_t size = delta_image_size(vol, t);
 		header_encode(rec, PROJWIRE_IMAGE_DELTA, (uint32_t)(size - PROJWIRE_HEADER_SIZE));
 		le_put32(rec + 8, k);
 		le_put32(rec + 12, t);
+		memcpy(head, mask, vol->mask_bytes);
+		delta_copy(vol, k, mask, head + vol->mask_bytes);
 		n += size;
 		images++;
 	}
@@ -536,9 +581,10 @@ static size_t delta_encode(const struct volume *vol, const struct volume *base, 
 	return n + PROJWIRE_END_SIZE;
 }
 
-size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out)
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, const struct projwire_delta *d,
+			      uint32_t buffer, uint8_t *out)
 {
-	if (!delta_fits(vol, base))
+	if (!d->delta)
 		return projwire_volume_encode(vol, buffer, out);
-	return delta_encode(vol, base, buffer, out);
+	return delta_encode(vol, base, d, buffer, out);
 }

@@ -192,16 +192,30 @@ void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_
  * Returns the bytes written. */
 size_t projwire_volume_encode(const struct volume *vol, uint32_t buffer, uint8_t *out);
 
-/* The upload of vol into a buffer that holds base (NULL: empty or unknown),
- * for a version 1.1 device: its exact size in the smaller of two forms, a
- * delta volume carrying only the tiles that differ from base (an unchanged
- * volume costs 48 bytes; *delta set) or the whole volume. Compares the
- * volumes once (about 0.5 ms for 9 MB at perspecta). */
-size_t projwire_upload_size(const struct volume *vol, const struct volume *base, bool *delta);
-/* Writes it: a delta against base when base is given (pass it only where
- * projwire_upload_size() chose the delta: out is sized for that form),
- * else projwire_volume_encode(). Returns the bytes written. */
-size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, uint32_t buffer, uint8_t *out);
+/* An upload's form, and for a delta which tiles of each image differ
+ * from the base, found once by projwire_upload_plan() and written by
+ * projwire_upload_encode(), so that the two volumes are compared once.
+ * Zero-initialise; the arrays grow to the volumes planned. */
+struct projwire_delta {
+	bool delta;      /* the form planned: a delta, else whole */
+	uint32_t *tiles; /* per image: the tiles that differ */
+	uint8_t *masks;  /* per image: which (the volume's mask_bytes each) */
+	uint32_t images_cap;
+	size_t masks_cap;
+};
+void projwire_delta_free(struct projwire_delta *d);
+
+/* Plans the upload of vol into a buffer that holds base (NULL: empty or
+ * unknown), for a version 1.1 device: *size is its exact size in the
+ * smaller of two forms, a delta volume carrying only the tiles that
+ * differ from base (an unchanged volume costs 48 bytes; d->delta set) or
+ * the whole volume. Compares the volumes (about 0.5 ms for 9 MB at
+ * perspecta). Returns 0 or -ENOMEM. */
+int projwire_upload_plan(const struct volume *vol, const struct volume *base, struct projwire_delta *d, size_t *size);
+/* Writes the upload d plans for vol (and the same base) into out, which
+ * has the planned size. Returns the bytes written. */
+size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, const struct projwire_delta *d,
+			      uint32_t buffer, uint8_t *out);
 
 /* ---- Bulk OUT decoder (device side) ---- */
 

@@ -653,12 +653,14 @@ static void test_crc_and_errors(void)
 /* Encodes r->src as a delta against base for buffer. */
 static uint8_t *encode_delta(struct rig *r, const struct volume *base, uint32_t buffer, size_t *len)
 {
-	bool delta;
-	size_t size = projwire_upload_size(r->src, base, &delta);
+	struct projwire_delta plan = { 0 };
+	size_t size;
+	CHECK(projwire_upload_plan(r->src, base, &plan, &size) == 0);
 	uint8_t *out = malloc(size);
 	CHECK(out);
-	*len = projwire_upload_encode(r->src, delta ? base : NULL, buffer, out);
+	*len = projwire_upload_encode(r->src, base, &plan, buffer, out);
 	CHECK_EQ(*len, size);
+	projwire_delta_free(&plan);
 	return out;
 }
 

@@ -55,9 +55,12 @@ static void test_delta(void)
 			continue; /* until every buffer holds a volume of this scene */
 		const struct volume *base = shown[i - 2];
 		size_t whole = projwire_volume_size(shown[i]);
-		bool delta;
-		CHECK_EQ(sent, projwire_upload_size(shown[i], base, &delta));
-		CHECK(delta);
+		struct projwire_delta plan = { 0 };
+		size_t size;
+		CHECK(projwire_upload_plan(shown[i], base, &plan, &size) == 0);
+		CHECK_EQ(sent, size);
+		CHECK(plan.delta);
+		projwire_delta_free(&plan);
 		double tiles = (double)tiles_changed(shown[i], base) / (double)volume_tile_count(shown[i]);
 		double bytes = (double)sent / (double)whole;
 		printf("volume %d: %.1f%% of %llu tiles changed, %llu of %zu bytes sent (%.1f%%)\n", i, 100 * tiles,
