@@ -16,6 +16,7 @@
 #include "draw.h"
 #include "grid.h"
 #include "log.h"
+#include "prefault.h"
 #include "stage.h"
 
 #define VOLUME_MAX_SIZE 4096
@@ -139,6 +140,8 @@ static void vgrid_make(struct vgrid *g, const uint8_t *src, uint32_t z0, uint32_
 {
 	/* RGBA8 is bytes; the wider types are little-endian on the wire. */
 	bool swap = __BYTE_ORDER__ != __ORDER_LITTLE_ENDIAN__ && g->grid.type != SCENE_GRID_RGBA8;
+	size_t slab = (size_t)g->grid.n[0] * g->grid.n[1] * sample_bytes(g->grid.type);
+	prefault_write((uint8_t *)g->samples + z0 * slab, (z1 - z0) * slab); /* written whole below */
 	relayout(g->samples, src, g->grid.n, sample_bytes(g->grid.type), swap, z0, z1);
 	grid_brick_max_slabs(&g->grid, z0, z1, g->brick_max);
 }

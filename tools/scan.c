@@ -15,6 +15,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "prefault.h"
 #include "scan_priv.h"
 
 int scan_fail(char *err, size_t err_size, int code, const char *path, const char *fmt, ...)
@@ -230,6 +231,8 @@ int scan_read_raw(const struct scan_input *in, const struct scan_raw *raw, struc
 	void *buf = ret == 0 ? malloc(size) : NULL;
 	if (ret == 0 && !buf)
 		ret = scan_fail(err, err_size, -ENOMEM, in->path, "out of memory for %zu bytes", size);
+	if (ret == 0)
+		prefault_write(buf, size); /* filled whole below */
 	if (ret == 0 && (ret = pread_all(in->fd, buf, size, raw->offset)) != 0)
 		scan_fail(err, err_size, ret, in->path, "%s", ret == -EINVAL ? "the file ended early" : strerror(-ret));
 	if (ret != 0) {

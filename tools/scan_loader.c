@@ -13,6 +13,7 @@
 #include "fdio.h"
 #include "model_sandbox.h"
 #include "model_wire.h"
+#include "prefault.h"
 #include "scan_priv.h"
 
 _Static_assert(SCAN_MAX_FILES <= MODEL_CONFINE_MAX_INPUTS, "a DICOM directory's files are the loader's inputs");
@@ -152,6 +153,7 @@ static int receive_samples(struct sandbox *sb, struct scan_shown *out)
 	void *map = mmap(NULL, out->size, PROT_READ | PROT_WRITE, MAP_SHARED, out->fd, 0);
 	if (map == MAP_FAILED)
 		return -errno;
+	prefault_write(map, out->size); /* written whole below */
 	int ret = sandbox_read(sb, map, out->size);
 	munmap(map, out->size);
 	if (ret < 0)

@@ -16,6 +16,7 @@
 #include <string.h>
 #include <zlib.h>
 
+#include "prefault.h"
 #include "scan_priv.h"
 
 #define HEADER_MAX 540          /* sizeof(nifti_2_header) */
@@ -201,6 +202,8 @@ static int read_voxels(gzFile z, uint64_t bytes, void **out, const char *path, c
 	size_t cap = gzdirect(z) || bytes < FIRST_CHUNK ? (size_t)bytes : FIRST_CHUNK, have = 0, n = 1;
 	uint8_t *buf = malloc(cap ? cap : 1);
 	int ret = buf ? 0 : scan_fail(err, err_size, -ENOMEM, path, "out of memory for %zu bytes", cap);
+	if (buf && gzdirect(z)) /* to be filled: the file holds the bytes (check_file_size()) */
+		prefault_write(buf, cap);
 	while (ret == 0 && have < bytes && n > 0) {
 		if (have == cap) {
 			cap = bytes - cap < cap ? (size_t)bytes : 2 * cap;
