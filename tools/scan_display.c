@@ -73,11 +73,34 @@ size_t scan_layout_source(const struct scan_layout *l, const uint32_t scan_dims[
 	return index;
 }
 
+/* Samples of n bytes, step elements apart; n a constant in each use, so
+ * that each copy is a move, not a call (a call a sample was a fifth of
+ * spindlectl's time showing a 157 MB scan). */
+#define GATHER(n)                                                                   \
+	for (uint32_t x = 0; x < nx; x++, src += step * (ptrdiff_t)(n), dst += (n)) \
+		memcpy(dst, src, (n));
+
 /* One display row (fixed y and z): nx samples from src, step elements apart. */
 static void gather_row(uint8_t *dst, const uint8_t *src, ptrdiff_t step, uint32_t nx, size_t per)
 {
-	for (uint32_t x = 0; x < nx; x++, src += step * (ptrdiff_t)per, dst += per)
-		memcpy(dst, src, per);
+	if (step == 1) { /* the row as it is stored */
+		memcpy(dst, src, (size_t)nx * per);
+		return;
+	}
+	switch (per) {
+	case 1:
+		GATHER(1)
+		break;
+	case 2:
+		GATHER(2)
+		break;
+	case 4:
+		GATHER(4)
+		break;
+	default:
+		GATHER(per)
+		break;
+	}
 }
 
 #define WRITE_CHUNK (4u << 20)
