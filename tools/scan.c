@@ -224,15 +224,21 @@ static int raw_check(const struct scan_input *in, const struct scan_raw *raw, si
 	return 0;
 }
 
+void *scan_samples_alloc(size_t size)
+{
+	void *p = malloc(size ? size : 1);
+	if (p)
+		prefault_write(p, size);
+	return p;
+}
+
 int scan_read_raw(const struct scan_input *in, const struct scan_raw *raw, struct scan *out, char *err, size_t err_size)
 {
 	size_t size = 0;
 	int ret = raw_check(in, raw, &size, err, err_size);
-	void *buf = ret == 0 ? malloc(size) : NULL;
+	void *buf = ret == 0 ? scan_samples_alloc(size) : NULL;
 	if (ret == 0 && !buf)
 		ret = scan_fail(err, err_size, -ENOMEM, in->path, "out of memory for %zu bytes", size);
-	if (ret == 0)
-		prefault_write(buf, size); /* filled whole below */
 	if (ret == 0 && (ret = pread_all(in->fd, buf, size, raw->offset)) != 0)
 		scan_fail(err, err_size, ret, in->path, "%s", ret == -EINVAL ? "the file ended early" : strerror(-ret));
 	if (ret != 0) {

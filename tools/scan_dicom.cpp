@@ -584,7 +584,8 @@ int read_volume(const std::vector<slice_file> &sl, scan *out, const char *dir, c
 		return ret;
 	enum scan_stored stored = scan_dicom_stored(&sl[0].s);
 	size_t per_slice = static_cast<size_t>(out->dims[0]) * out->dims[1] * scan_stored_size(stored);
-	std::unique_ptr<uint8_t, decltype(&free)> buf(static_cast<uint8_t *>(malloc(per_slice * sl.size())), &free);
+	std::unique_ptr<uint8_t, decltype(&free)> buf(static_cast<uint8_t *>(scan_samples_alloc(per_slice * sl.size())),
+						      &free);
 	if (!buf)
 		return scan_fail(err, err_size, -ENOMEM, dir, "out of memory for %zu bytes", per_slice * sl.size());
 	std::vector<scan_rescale> r(sl.size());

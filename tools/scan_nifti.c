@@ -16,7 +16,6 @@
 #include <string.h>
 #include <zlib.h>
 
-#include "prefault.h"
 #include "scan_priv.h"
 
 #define HEADER_MAX 540          /* sizeof(nifti_2_header) */
@@ -200,10 +199,9 @@ static int check_file_size(gzFile z, uint64_t have, const char *path, uint64_t o
 static int read_voxels(gzFile z, uint64_t bytes, void **out, const char *path, char *err, size_t err_size)
 {
 	size_t cap = gzdirect(z) || bytes < FIRST_CHUNK ? (size_t)bytes : FIRST_CHUNK, have = 0, n = 1;
-	uint8_t *buf = malloc(cap ? cap : 1);
+	/* Uncompressed, the file holds the bytes (check_file_size()): read whole. */
+	uint8_t *buf = gzdirect(z) ? scan_samples_alloc(cap) : malloc(cap ? cap : 1);
 	int ret = buf ? 0 : scan_fail(err, err_size, -ENOMEM, path, "out of memory for %zu bytes", cap);
-	if (buf && gzdirect(z)) /* to be filled: the file holds the bytes (check_file_size()) */
-		prefault_write(buf, cap);
 	while (ret == 0 && have < bytes && n > 0) {
 		if (have == cap) {
 			cap = bytes - cap < cap ? (size_t)bytes : 2 * cap;

@@ -55,6 +55,11 @@ int scan_check_geometry(const struct scan *s, const char *path, char *err, size_
 
 /* Reverses the bytes of count units of width bytes (2, 4 or 8). */
 void scan_swap_bytes(void *data, size_t count, size_t width);
+
+/* size bytes (at least 1) for samples about to be read into them whole,
+ * their pages made present at once (prefault.h); NULL when out of
+ * memory. Free with free(). */
+void *scan_samples_alloc(size_t size);
 /* to_ras := diag(spacing[0], spacing[1], spacing[2], 1). */
 void scan_set_diagonal(struct scan *s);
 /* s->what := "FORMAT WxHxD TYPE, SXxSYxSZ mm" and then extra (may be NULL). */
