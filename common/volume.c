@@ -254,13 +254,13 @@ int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t
 static bool presence_differs(const uint8_t *a, const uint8_t *b, uint32_t bytes, uint32_t *first, uint32_t *last)
 {
 	bool any = false;
-	for (uint32_t i = 0; i < bytes; i++) {
-		uint32_t d = a[i] ^ b[i];
+	for (uint32_t x = 0; x < volume_mask_words(bytes); x++) {
+		uint64_t d = volume_mask_word(a, bytes, x) ^ volume_mask_word(b, bytes, x);
 		if (!d)
 			continue;
 		if (!any)
-			*first = i * 8 + (uint32_t)__builtin_ctz(d);
-		*last = i * 8 + 31 - (uint32_t)__builtin_clz(d);
+			*first = x * 64 + (uint32_t)__builtin_ctzll(d);
+		*last = x * 64 + 63 - (uint32_t)__builtin_clzll(d);
 		any = true;
 	}
 	return any;
@@ -272,24 +272,27 @@ int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src
 		return -EINVAL;
 	const struct volume_image *s = &src->images[k];
 	struct volume_image *d = &dst->images[k];
+	const uint32_t bytes = src->mask_bytes;
 	uint32_t first = 0, last = 0;
-	bool moved = presence_differs(s->mask, d->mask, src->mask_bytes, &first, &last);
+	bool moved = presence_differs(s->mask, d->mask, bytes, &first, &last);
 	if (moved) { /* both hold the same tiles before first and after last */
 		const uint8_t *run = s->tiles + (size_t)volume_stored_index(s->mask, first) * VOLUME_TILE_BYTES;
 		int r = volume_image_splice(dst, k, first, last, s->mask, run);
 		if (r < 0)
 			return r;
 	}
-	uint32_t base = 0; /* the stored index of the first tile of byte b */
-	for (uint32_t b = 0; b < src->mask_bytes; base += volume_mask_bits(s->mask[b]), b++)
-		for (uint32_t c = changed[b] & s->mask[b]; c; c &= c - 1) {
-			uint32_t bitno = (uint32_t)__builtin_ctz(c), t = b * 8 + bitno;
+	uint32_t base = 0; /* the stored index of word x's first tile */
+	for (uint32_t x = 0; x < volume_mask_words(bytes); x++) {
+		uint64_t m = volume_mask_word(s->mask, bytes, x);
+		for (uint64_t c = volume_mask_word(changed, bytes, x) & m; c; c &= c - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctzll(c), t = x * 64 + bitno;
 			if (moved && t >= first && t <= last)
 				continue; /* copied with the run */
-			size_t at = (size_t)(base + volume_mask_bits(s->mask[b] & ((1u << bitno) - 1))) *
-				    VOLUME_TILE_BYTES;
+			size_t at = (size_t)(base + volume_word_bits(m & ((1ull << bitno) - 1))) * VOLUME_TILE_BYTES;
 			volume_tile_copy(d->tiles + at, s->tiles + at);
 		}
+		base += volume_word_bits(m);
+	}
 	dst->origin = 0;
 	return 0;
 }

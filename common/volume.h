@@ -14,6 +14,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 
 #include "geometry.h"
 
@@ -110,6 +111,32 @@ static inline uint32_t volume_word_bits(uint64_t x)
 	x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
 	x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0full;
 	return (uint32_t)((x * 0x0101010101010101ull) >> 56);
+}
+
+/* Tiles 64 w .. 64 w + 63 of a mask of bytes bytes as one word: bit i is
+ * tile 64 w + i (byte b's bit j is tile 8 b + j), 0 past the mask's end.
+ * The mask loops go a word at a time: a byte at a time, an image's 72
+ * bytes cost more than the few tiles a small object changes. */
+static inline uint64_t volume_mask_word(const uint8_t *mask, uint32_t bytes, uint32_t w)
+{
+	uint32_t at = 8 * w;
+	uint64_t x = 0;
+	if (bytes - at >= 8) {
+		memcpy(&x, mask + at, sizeof(x));
+#if __BYTE_ORDER__ == __ORDER_BIG_ENDIAN__
+		x = __builtin_bswap64(x);
+#endif
+		return x;
+	}
+	for (uint32_t i = 0; at + i < bytes; i++)
+		x |= (uint64_t)mask[at + i] << (8 * i);
+	return x;
+}
+
+/* Words of a mask of bytes bytes (volume_mask_word()). */
+static inline uint32_t volume_mask_words(uint32_t bytes)
+{
+	return (bytes + 7) / 8;
 }
 
 /* Whether n bytes are all zero (eight at a time). */

@@ -233,10 +233,11 @@ static const uint8_t *rle_codes(const struct compose *c, const struct rle_image 
 static int gather_dirty(const struct compose *c, struct compose_worker *w, const struct img_source *is, uint32_t k,
 			const uint8_t *dirty)
 {
-	uint32_t b = is->span.first;
-	while (b <= is->span.last && !dirty[b]) /* without reading the source */
-		b++;
-	if (b > is->span.last)
+	const uint32_t bytes = c->mask_bytes, w0 = is->span.first / 8, w1 = is->span.last / 8;
+	uint32_t x = w0;
+	while (x <= w1 && !volume_mask_word(dirty, bytes, x)) /* without reading the source */
+		x++;
+	if (x > w1)
 		return 0;
 	const struct compose_source *s = &c->src[is->src];
 	const uint8_t *mask = source_mask(s, k);
@@ -244,11 +245,12 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 	const struct rle_image *img = s->rle ? &s->rle->images[k] : NULL;
 	size_t avail = 0;
 	const uint8_t *codes = img ? rle_codes(c, img, &avail) : NULL;
-	uint32_t base = 0; /* the stored index of the first tile of byte b */
-	for (b = is->span.first; b <= is->span.last; base += volume_mask_bits(mask[b]), b++) {
-		for (uint32_t both = mask[b] & dirty[b]; both; both &= both - 1) {
-			uint32_t bitno = (uint32_t)__builtin_ctz(both), t = b * 8 + bitno;
-			uint32_t i = base + volume_mask_bits(mask[b] & ((1u << bitno) - 1));
+	uint32_t base = 0; /* the stored index of word x's first tile (none before w0) */
+	for (x = w0; x <= w1; x++) {
+		uint64_t m = volume_mask_word(mask, bytes, x);
+		for (uint64_t both = m & volume_mask_word(dirty, bytes, x); both; both &= both - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctzll(both), t = x * 64 + bitno;
+			uint32_t i = base + volume_word_bits(m & ((1ull << bitno) - 1));
 			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 			w->touched[t] = 1;
 			if (tiles) {
@@ -260,6 +262,7 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 			if (off >= avail || !or_coded_tile(codes + off, avail - off, dst))
 				return -EINVAL;
 		}
+		base += volume_word_bits(m);
 	}
 	return 0;
 }
@@ -269,18 +272,21 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 static void write_touched(const struct compose *c, struct compose_worker *w, struct volume_image *old,
 			  const uint8_t *dirty)
 {
-	uint32_t base = 0; /* the stored index of the first tile of byte b */
-	for (uint32_t b = 0; b < c->mask_bytes; base += volume_mask_bits(old->mask[b]), b++)
-		for (uint32_t d = dirty[b] & old->mask[b]; d; d &= d - 1) {
-			uint32_t bitno = (uint32_t)__builtin_ctz(d), t = b * 8 + bitno;
+	uint32_t base = 0; /* the stored index of word x's first tile */
+	for (uint32_t x = 0; x < volume_mask_words(c->mask_bytes); x++) {
+		uint64_t m = volume_mask_word(old->mask, c->mask_bytes, x);
+		for (uint64_t d = volume_mask_word(dirty, c->mask_bytes, x) & m; d; d &= d - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctzll(d), t = x * 64 + bitno;
 			if (!w->touched[t]) /* spliced in already (lay_run()) */
 				continue;
-			uint32_t i = base + volume_mask_bits(old->mask[b] & ((1u << bitno) - 1));
+			uint32_t i = base + volume_word_bits(m & ((1ull << bitno) - 1));
 			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 			volume_tile_copy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile);
 			volume_tile_zero(tile);
 			w->touched[t] = 0;
 		}
+		base += volume_word_bits(m);
+	}
 }
 
 /* The first and last dirty tiles whose presence changes (old has them
@@ -289,15 +295,17 @@ static bool presence_changes(const struct compose *c, const struct compose_worke
 			     const uint8_t *dirty, uint32_t *first, uint32_t *last)
 {
 	bool any = false;
-	for (uint32_t b = 0; b < c->mask_bytes; b++)
-		for (uint32_t d = dirty[b]; d; d &= d - 1) {
-			uint32_t t = b * 8 + (uint32_t)__builtin_ctz(d);
-			if (bit(old->mask, t) == (w->touched[t] != 0))
+	for (uint32_t x = 0; x < volume_mask_words(c->mask_bytes); x++) {
+		uint64_t m = volume_mask_word(old->mask, c->mask_bytes, x);
+		for (uint64_t d = volume_mask_word(dirty, c->mask_bytes, x); d; d &= d - 1) {
+			uint32_t bitno = (uint32_t)__builtin_ctzll(d), t = x * 64 + bitno;
+			if (((m >> bitno) & 1) == (w->touched[t] != 0))
 				continue;
 			*first = any ? *first : t;
 			*last = t;
 			any = true;
 		}
+	}
 	return any;
 }
 
