@@ -15,6 +15,7 @@
 #include "halftone.h"
 #include "log.h"
 #include "micro.h"
+#include "rng.h"
 #include "options.h"
 #include "render.h"
 #include "scenes.h"
@@ -182,21 +183,41 @@ static int warm_up(struct variant *v, int nvars, struct bench_scene *s, const st
 	return 0;
 }
 
+/* order[0 .. n) a new random order of 0 .. n - 1 (Fisher-Yates). */
+static void shuffle(struct rng *r, int *order, int n)
+{
+	for (int i = 0; i < n; i++)
+		order[i] = i;
+	for (int i = n - 1; i > 0; i--) {
+		int j = (int)(rng_next(r) % (uint64_t)(i + 1)), t = order[i];
+		order[i] = order[j];
+		order[j] = t;
+	}
+}
+
 /* Measured volumes until o->volumes or o->seconds, at least one: each
  * variant's run of them in turn, or (o->interleave) one volume of each
- * variant in turn, the same frames for all, so that the drift of a shared
- * machine falls on every variant alike (o->seconds then is per variant). */
+ * variant a round, the same frames for all, so that the drift of a shared
+ * machine falls on every variant alike (o->seconds then is per variant).
+ * Each round takes the variants in a new order (the same from run to run):
+ * what one volume leaves the next (the second core idle through a
+ * single-threaded one, which the host then runs slowly for a while; see
+ * docs/performance.md) falls on every variant alike too, not always on
+ * the one after it in the list. */
 static int measure(struct variant *v, int nvars, struct bench_scene *s, const struct options *o, struct measurement *m)
 {
 	uint64_t first = o->warmup + 1;
+	int order[MAX_VARIANTS];
+	struct rng rng = rng_seed(0x5350494eu);
 	for (int i = 0; i < nvars; i++)
 		if (measure_start(o, &m[i]) < 0)
 			return -1;
 	int64_t start = now_ns();
 	bool again = true;
 	for (uint32_t n = 0; again && n < o->volumes; n++) {
+		shuffle(&rng, order, nvars);
 		for (int i = 0; i < nvars; i++)
-			if (measure_volume(&v[i], s, first + n, &m[i]) < 0)
+			if (measure_volume(&v[order[i]], s, first + n, &m[order[i]]) < 0)
 				return -1;
 		again = (double)(now_ns() - start) < o->seconds * nvars * 1e9;
 	}
