@@ -1,6 +1,7 @@
 #include "volume.h"
 
 #include <errno.h>
+#include <stdatomic.h>
 #include <stdbool.h>
 #include <stdlib.h>
 #include <string.h>
@@ -45,11 +46,19 @@ void volume_destroy(struct volume *vol)
 	free(vol);
 }
 
+uint64_t volume_new_stamp(void)
+{
+	static atomic_uint_fast64_t stamps;
+	return atomic_fetch_add(&stamps, 1) + 1;
+}
+
 void volume_clear(struct volume *vol)
 {
 	memset(vol->images[0].mask, 0, (size_t)vol->image_count * vol->mask_bytes);
-	for (uint32_t k = 0; k < vol->image_count; k++)
+	for (uint32_t k = 0; k < vol->image_count; k++) {
 		vol->images[k].tile_count = vol->images[k].next_tile = 0;
+		vol->images[k].stamp = 0;
+	}
 	vol->seq = 0;
 	vol->shown_ns = 0;
 	vol->origin = 0;
@@ -59,6 +68,7 @@ void volume_image_clear(struct volume *vol, uint32_t k)
 {
 	memset(vol->images[k].mask, 0, vol->mask_bytes);
 	vol->images[k].tile_count = vol->images[k].next_tile = 0;
+	vol->images[k].stamp = 0;
 	vol->origin = 0;
 }
 
@@ -78,10 +88,12 @@ void volume_image_exchange(struct volume *a, uint32_t ka, struct volume *b, uint
 	x->tile_cap = y->tile_cap;
 	x->next_tile = y->next_tile;
 	x->tiles = y->tiles;
+	x->stamp = y->stamp;
 	y->tile_count = t.tile_count;
 	y->tile_cap = t.tile_cap;
 	y->next_tile = t.next_tile;
 	y->tiles = t.tiles;
+	y->stamp = t.stamp;
 }
 
 int volume_image_reserve(struct volume *vol, uint32_t k, uint32_t n)
@@ -150,6 +162,7 @@ int volume_image_push(struct volume *vol, uint32_t k, uint32_t t)
 	img->tile_count++;
 	img->next_tile = t + 1;
 	img->mask[t / 8] |= (uint8_t)(1u << (t % 8));
+	img->stamp = 0;
 	if (vol->origin) /* not written when it is already 0: the line stays shared */
 		vol->origin = 0;
 	return 0;
@@ -171,6 +184,7 @@ int volume_image_set(struct volume *vol, uint32_t k, const uint8_t *mask, uint32
 	memcpy(img->mask, mask, vol->mask_bytes);
 	img->tile_count = count;
 	img->next_tile = count ? last + 1 : 0;
+	img->stamp = 0;
 	if (vol->origin)
 		vol->origin = 0;
 	return 0;
@@ -190,6 +204,7 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
 		memcpy(d->tiles, s->tiles, (size_t)s->tile_count * VOLUME_TILE_BYTES);
 	d->tile_count = s->tile_count;
 	d->next_tile = s->next_tile;
+	d->stamp = s->stamp;
 	dst->origin = 0;
 	return 0;
 }
@@ -245,6 +260,7 @@ int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t
 	}
 	img->tile_count = count;
 	img->next_tile = count ? last_tile(img->mask, vol->mask_bytes) + 1 : 0;
+	img->stamp = 0;
 	vol->origin = 0;
 	return 0;
 }
@@ -293,6 +309,7 @@ int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src
 		}
 		base += volume_word_bits(m);
 	}
+	d->stamp = s->stamp; /* the same contents now */
 	dst->origin = 0;
 	return 0;
 }

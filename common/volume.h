@@ -28,6 +28,14 @@ struct volume_image {
 	uint32_t next_tile;  /* 1 + the last stored tile's number, 0 if none */
 	uint8_t *mask;       /* mask_bytes, owned by the volume */
 	uint8_t *tiles;      /* tile_count * VOLUME_TILE_BYTES, owned */
+	/* What a writer that knows an image's contents may mark it with
+	 * (volume_new_stamp()), so that two images with the same stamp, not
+	 * 0, need not be compared (the upload delta, projwire.h): every
+	 * change through the calls below sets it to 0, and a copy of an image
+	 * (volume_copy_image(), volume_update_image(), volume_image_exchange())
+	 * takes the source's. A writer that changes an image's tiles in place
+	 * sets it to 0 first. */
+	uint64_t stamp;
 };
 
 struct volume {
@@ -43,6 +51,9 @@ struct volume {
 	uint64_t origin;
 	struct volume_image *images;
 };
+
+/* A stamp no image has had (struct volume_image), never 0. Thread-safe. */
+uint64_t volume_new_stamp(void);
 
 /* Creates an empty volume (every image has no tiles). NULL + errno on
  * failure. */

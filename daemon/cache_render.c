@@ -196,6 +196,19 @@ static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8
 	return any;
 }
 
+/* The images of the composition just made that may have changed (all
+ * when it was made whole) get new stamps (volume.h): each then differs
+ * from every volume handed out before, and an image that did not change
+ * keeps the stamp that the volumes handed out with it have, so that an
+ * upload against one of them skips comparing it (projwire.h). */
+static void stamp_changes(struct cache *c, bool whole)
+{
+	for (uint32_t k = 0; k < c->prev->image_count; k++)
+		if (whole || (c->dirty.images[k] &&
+			      !volume_all_zero(c->dirty.mask + (size_t)k * c->dirty.mask_bytes, c->dirty.mask_bytes)))
+			c->prev->images[k].stamp = volume_new_stamp();
+}
+
 /* The composition copied into out: only the images changed since the one
  * out holds, when out is a volume handed out lately and unchanged since
  * (its origin mark), else whole. out is then marked. */
@@ -251,12 +264,15 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	/* The last composition, patched where something may have changed
 	 * (or composed whole when there is none), then handed out. */
 	note_changes(c);
-	if (c->prev_valid)
+	bool whole = !c->prev_valid;
+	if (!whole)
 		err = compose_patch(c->compose, c->prev, &c->dirty, c->sources, p.n);
 	else
 		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
-	if (err == 0)
+	if (err == 0) {
+		stamp_changes(c, whole);
 		err = hand_out(c, out);
+	}
 	c->composed = err == 0;
 	c->render_us = (uint32_t)((t1 - t0) / 1000);
 	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);

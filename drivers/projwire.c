@@ -447,13 +447,18 @@ void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_
 
 /* Marks in mask (mask_bytes, cleared first) the tiles of image k that
  * differ between vol and base, a tile that only one of them has among
- * them; returns how many. The one comparison of the two volumes. */
+ * them; returns how many. The one comparison of the two volumes; none
+ * where the two images carry the same stamp (volume.h): the object
+ * cache's compositions stamp what they change, so an image that no
+ * object touched since base is not read at all. */
 static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask)
 {
 	const struct volume_image *a = &vol->images[k], *b = &base->images[k];
 	const uint8_t *pa = a->tiles, *pb = b->tiles;
 	uint32_t n = 0;
 	memset(mask, 0, vol->mask_bytes);
+	if (a->stamp && a->stamp == b->stamp)
+		return 0;
 	for (uint32_t byte = 0; byte < vol->mask_bytes; byte++) {
 		uint8_t ma = a->mask[byte], mb = b->mask[byte];
 		for (uint32_t bits = ma | mb; bits; bits &= bits - 1) {

@@ -210,7 +210,8 @@ void projwire_delta_free(struct projwire_delta *d);
  * smaller of two forms, a delta volume carrying only the tiles that
  * differ from base (an unchanged volume costs 48 bytes; d->delta set) or
  * the whole volume. Compares the volumes (about 0.5 ms for 9 MB at
- * perspecta). Returns 0 or -ENOMEM. */
+ * perspecta), but not images whose stamps are equal and not 0
+ * (volume.h). Returns 0 or -ENOMEM. */
 int projwire_upload_plan(const struct volume *vol, const struct volume *base, struct projwire_delta *d, size_t *size);
 /* Writes the upload d plans for vol (and the same base) into out, which
  * has the planned size. Returns the bytes written. */

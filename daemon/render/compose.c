@@ -365,6 +365,7 @@ static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 	const uint8_t *dirty = c->dirty->mask + (size_t)k * c->mask_bytes;
 	if (!c->dirty->images[k] || volume_all_zero(dirty, c->mask_bytes)) /* most images */
 		return 0;
+	c->out->images[k].stamp = 0; /* its tiles change in place below */
 	int err = 0;
 	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
 		err = gather_dirty(c, w, &c->img_src[i], k, dirty);

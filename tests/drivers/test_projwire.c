@@ -710,6 +710,73 @@ static void test_delta(void)
 	rig_finish(&r);
 }
 
+/* The tiles planned for image k of src against base. */
+static uint32_t planned_tiles(const struct volume *src, const struct volume *base, uint32_t k)
+{
+	struct projwire_delta plan = { 0 };
+	size_t size;
+	CHECK(projwire_upload_plan(src, base, &plan, &size) == 0);
+	CHECK(plan.delta);
+	uint32_t n = plan.tiles[k];
+	projwire_delta_free(&plan);
+	return n;
+}
+
+/* Images that carry the same stamp (volume.h) are not compared: the delta
+ * of a copy whose one image was redrawn reads that image alone, and is
+ * still exact. */
+static void test_delta_stamps(void)
+{
+	struct rig r;
+	rig_init(&r);
+	struct volume *base = volume_create(&geom);
+	CHECK(base);
+	random_volume(base, 5, 200);
+	CHECK_EQ(base->images[0].stamp, 0u);
+	for (uint32_t k = 0; k < base->image_count; k++)
+		base->images[k].stamp = volume_new_stamp();
+	CHECK(base->images[1].stamp > base->images[0].stamp);
+	CHECK_EQ(volume_copy(r.src, base), 0);
+	CHECK_EQ(r.src->images[3].stamp, base->images[3].stamp);
+	size_t len;
+	uint8_t *wire = encode(&r, 1, &len);
+	CHECK_EQ(feed_chunked(r.dec, wire, len, 500), 0);
+	free(wire);
+	/* Image 3 redrawn: its stamp goes, the others' stay. */
+	uint8_t tile[VOLUME_TILE_BYTES];
+	volume_image_clear(r.src, 3);
+	CHECK_EQ(r.src->images[3].stamp, 0u);
+	random_tile(r.src, 5, tile);
+	CHECK_EQ(volume_image_append(r.src, 3, 5, tile), 0);
+	r.src->seq = 201;
+	struct projwire_delta plan = { 0 };
+	size_t size;
+	CHECK(projwire_upload_plan(r.src, base, &plan, &size) == 0);
+	CHECK(plan.delta);
+	for (uint32_t k = 0; k < r.src->image_count; k++)
+		CHECK_MSG(k == 3 ? plan.tiles[k] > 0 : plan.tiles[k] == 0, "image %u: %u tiles", k, plan.tiles[k]);
+	projwire_delta_free(&plan);
+	wire = encode_delta(&r, base, 1, &len);
+	CHECK_EQ(feed_chunked(r.dec, wire, len, 300), 0);
+	CHECK_EQ(r.sink.result[1], 0);
+	CHECK(volumes_equal(r.sink.vols[1], r.src));
+	free(wire);
+	/* The stamp is trusted, not checked: image 4 changed in place with
+	 * its stamp kept is not compared (which is why every writer that
+	 * changes tiles in place sets it to 0 first); with the stamp gone it
+	 * is. */
+	uint32_t k4 = 4;
+	while (k4 < r.src->image_count && !r.src->images[k4].tile_count)
+		k4++;
+	CHECK(k4 < r.src->image_count);
+	r.src->images[k4].tiles[0] ^= 0x80;
+	CHECK_EQ(planned_tiles(r.src, base, k4), 0u);
+	r.src->images[k4].stamp = 0;
+	CHECK_EQ(planned_tiles(r.src, base, k4), 1u);
+	volume_destroy(base);
+	rig_finish(&r);
+}
+
 int main(void)
 {
 	test_crc_and_errors();
@@ -717,6 +784,7 @@ int main(void)
 	test_info_status_events();
 	test_round_trip();
 	test_delta();
+	test_delta_stamps();
 	test_rejects();
 	test_image_order();
 	test_busy_and_abandon();

@@ -257,7 +257,24 @@ static void build(struct world *w)
 struct run_totals {
 	unsigned volumes;
 	struct cache_stats st;
+	unsigned stamped; /* images an upload would skip comparing (volume.h) */
 };
+
+/* Images of a and b that carry the same stamp (not 0) and differ: an
+ * upload of a against b would skip them, and lose the difference. */
+static unsigned stamp_lies(const struct volume *a, const struct volume *b, unsigned *same)
+{
+	unsigned n = 0;
+	for (uint32_t k = 0; k < a->image_count; k++) {
+		const struct volume_image *x = &a->images[k], *y = &b->images[k];
+		if (!x->stamp || x->stamp != y->stamp)
+			continue;
+		*same += 1;
+		n += x->tile_count != y->tile_count || memcmp(x->mask, y->mask, a->mask_bytes) ||
+		     (x->tile_count && memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES));
+	}
+	return n;
+}
 
 /* steps volumes of random changes through a cache of budget bytes on r,
  * composing on pool (or on this thread: NULL), as the daemon's pipeline
@@ -276,6 +293,12 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	 * cache did not make. */
 	struct volume *outs[3] = { volume_create(g), volume_create(g), volume_create(g) }, *full = volume_create(g);
 	CHECK(outs[0] && outs[1] && outs[2] && full);
+	/* What the projector's buffers hold: copies of the last volumes
+	 * handed out (stamps and all), the bases of the pipeline's uploads. */
+	struct volume *sent[4];
+	for (int i = 0; i < 4; i++)
+		CHECK((sent[i] = volume_create(g)) != NULL);
+	unsigned lies = 0, same = 0;
 	for (int i = 0; i < MAX_OBJECTS / 2; i++)
 		create(&w, &w.obj[i]);
 	unsigned bad = 0;
@@ -308,6 +331,11 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 			alive += w.obj[i].alive;
 		CHECK_MSG(now.objects <= alive, "step %u (%s): %u objects followed, %u alive", s, what, now.objects,
 			  alive);
+		for (int i = 0; i < 4; i++)
+			lies += stamp_lies(composed, sent[i], &same);
+		for (int i = 0; i < 3; i++)
+			lies += outs[i] != composed ? stamp_lies(composed, outs[i], &same) : 0;
+		CHECK_EQ(volume_copy(sent[s % 4], composed), 0);
 		CHECK_EQ(render_volume(r, &w.snap.scene, full), 0);
 		if (!rtest_same(composed, full)) {
 			if (bad++ < 5)
@@ -321,17 +349,19 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 		}
 	}
 	CHECK_EQ(bad, 0);
+	CHECK_MSG(lies == 0, "%u images with another's stamp and other tiles", lies);
 	cache_get_stats(c, &out->st);
 	out->volumes = steps;
+	out->stamped = same;
 	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
 	       "turned %llu, misses %llu, creates %llu (batched %llu), invalidations %llu, evictions %llu, expired "
-	       "%llu\n",
+	       "%llu; %u images an upload would skip comparing\n",
 	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, steps,
 	       out->st.objects, out->st.cached, (unsigned long long)out->st.bytes, (unsigned long long)out->st.hits,
 	       (unsigned long long)out->st.turned, (unsigned long long)out->st.misses,
 	       (unsigned long long)out->st.creates, (unsigned long long)out->st.batched,
 	       (unsigned long long)out->st.invalidations, (unsigned long long)out->st.evictions,
-	       (unsigned long long)out->st.expired);
+	       (unsigned long long)out->st.expired, out->stamped);
 	CHECK(out->st.bytes <= budget || out->st.cached == 0);
 	cache_destroy(c);
 	for (int i = 0; i < MAX_OBJECTS; i++)
@@ -339,6 +369,8 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 			destroy(&w.obj[i]);
 	for (int i = 0; i < 3; i++)
 		volume_destroy(outs[i]);
+	for (int i = 0; i < 4; i++)
+		volume_destroy(sent[i]);
 	volume_destroy(full);
 }
 
@@ -410,6 +442,7 @@ int main(void)
 	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
 	CHECK(t.st.turned > 0); /* turned objects composed from their canvases */
 	CHECK(t.st.batched > 0);
+	CHECK(t.stamped > 0);                  /* uploads skip what did not change */
 	run(cpu, NULL, 40u << 10, 120, 2, &t); /* a few entries at a time */
 	CHECK(t.st.evictions > 0);
 	run(cpu, NULL, 0, 40, 3, &t); /* nothing may be cached */
