@@ -236,6 +236,21 @@ static int hand_out(struct cache *c, struct volume *out)
 	return 0;
 }
 
+/* The last composition, patched where something may have changed (or
+ * composed whole when there is none) from the n sources, its changed
+ * images stamped, then handed out into out. */
+static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
+{
+	note_changes(c);
+	bool whole = !c->prev_valid;
+	int err = whole ? compose_volumes(c->compose, c->prev, c->sources, n)
+			: compose_patch(c->compose, c->prev, &c->dirty, c->sources, n);
+	if (err < 0)
+		return err;
+	stamp_changes(c, whole);
+	return hand_out(c, out);
+}
+
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
 	if (!c->planned)
@@ -261,18 +276,7 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	if (p.mixed)
 		return render_whole(c, r, scene, out, t0);
 	c->engine = p.engine;
-	/* The last composition, patched where something may have changed
-	 * (or composed whole when there is none), then handed out. */
-	note_changes(c);
-	bool whole = !c->prev_valid;
-	if (!whole)
-		err = compose_patch(c->compose, c->prev, &c->dirty, c->sources, p.n);
-	else
-		err = compose_volumes(c->compose, c->prev, c->sources, p.n);
-	if (err == 0) {
-		stamp_changes(c, whole);
-		err = hand_out(c, out);
-	}
+	err = compose_hand_out(c, out, p.n);
 	c->composed = err == 0;
 	c->render_us = (uint32_t)((t1 - t0) / 1000);
 	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);

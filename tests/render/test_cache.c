@@ -276,6 +276,19 @@ static unsigned stamp_lies(const struct volume *a, const struct volume *b, unsig
 	return n;
 }
 
+/* stamp_lies() of composed against the other volumes handed out (outs)
+ * and the copies of those sent before (sent). */
+static unsigned stamps_against(const struct volume *composed, struct volume *const outs[3],
+			       struct volume *const sent[4], unsigned *same)
+{
+	unsigned lies = 0;
+	for (int i = 0; i < 4; i++)
+		lies += stamp_lies(composed, sent[i], same);
+	for (int i = 0; i < 3; i++)
+		lies += outs[i] != composed ? stamp_lies(composed, outs[i], same) : 0;
+	return lies;
+}
+
 /* steps volumes of random changes through a cache of budget bytes on r,
  * composing on pool (or on this thread: NULL), as the daemon's pipeline
  * does; each composed volume against r's full render. */
@@ -331,10 +344,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 			alive += w.obj[i].alive;
 		CHECK_MSG(now.objects <= alive, "step %u (%s): %u objects followed, %u alive", s, what, now.objects,
 			  alive);
-		for (int i = 0; i < 4; i++)
-			lies += stamp_lies(composed, sent[i], &same);
-		for (int i = 0; i < 3; i++)
-			lies += outs[i] != composed ? stamp_lies(composed, outs[i], &same) : 0;
+		lies += stamps_against(composed, outs, sent, &same);
 		CHECK_EQ(volume_copy(sent[s % 4], composed), 0);
 		CHECK_EQ(render_volume(r, &w.snap.scene, full), 0);
 		if (!rtest_same(composed, full)) {
