@@ -212,14 +212,8 @@ int volume_copy_image(struct volume *dst, uint32_t k, const struct volume *src)
 uint32_t volume_mask_count(const uint8_t *mask, size_t bytes)
 {
 	uint32_t n = 0;
-	size_t b = 0;
-	for (; b + 8 <= bytes; b += 8) {
-		uint64_t w;
-		memcpy(&w, mask + b, sizeof(w));
-		n += volume_word_bits(w);
-	}
-	for (; b < bytes; b++)
-		n += volume_mask_bits(mask[b]);
+	for (uint32_t w = 0; w < volume_mask_words((uint32_t)bytes); w++)
+		n += volume_word_bits(volume_mask_word(mask, (uint32_t)bytes, w));
 	return n;
 }
 

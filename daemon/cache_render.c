@@ -204,8 +204,7 @@ static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8
 static void stamp_changes(struct cache *c, bool whole)
 {
 	for (uint32_t k = 0; k < c->prev->image_count; k++)
-		if (whole || (c->dirty.images[k] &&
-			      !volume_all_zero(c->dirty.mask + (size_t)k * c->dirty.mask_bytes, c->dirty.mask_bytes)))
+		if (whole || tile_set_image_any(&c->dirty, k))
 			c->prev->images[k].stamp = volume_new_stamp();
 }
 

@@ -363,7 +363,7 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
 static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
 {
 	const uint8_t *dirty = c->dirty->mask + (size_t)k * c->mask_bytes;
-	if (!c->dirty->images[k] || volume_all_zero(dirty, c->mask_bytes)) /* most images */
+	if (!tile_set_image_any(c->dirty, k)) /* most images */
 		return 0;
 	c->out->images[k].stamp = 0; /* its tiles change in place below */
 	int err = 0;
@@ -562,6 +562,11 @@ void tile_set_copy(struct tile_set *dst, const struct tile_set *src)
 			memcpy(dst->mask + at, src->mask + at, src->mask_bytes);
 			dst->images[k] = 1;
 		}
+}
+
+bool tile_set_image_any(const struct tile_set *s, uint32_t k)
+{
+	return s->images[k] && !volume_all_zero(s->mask + (size_t)k * s->mask_bytes, s->mask_bytes);
 }
 
 bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask)

@@ -46,6 +46,8 @@ void tile_set_clear(struct tile_set *s);
 void tile_set_copy(struct tile_set *dst, const struct tile_set *src);
 /* mask |= image k's marks (mask_bytes); whether it has any. */
 bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask);
+/* Whether image k has a mark (its flag, then its mask). */
+bool tile_set_image_any(const struct tile_set *s, uint32_t k);
 
 /* Expands r into out (same geometry; cleared first). 0 or -ENOMEM/-EINVAL. */
 int rle_volume_decode(const struct rle_volume *r, struct volume *out);

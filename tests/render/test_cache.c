@@ -289,6 +289,19 @@ static unsigned stamps_against(const struct volume *composed, struct volume *con
 	return lies;
 }
 
+static void print_totals(const struct renderer *r, uint64_t budget, const struct run_totals *t)
+{
+	const struct geometry *g = &r->geom;
+	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
+	       "turned %llu, misses %llu, creates %llu (batched %llu), invalidations %llu, evictions %llu, expired "
+	       "%llu; %u images an upload would skip comparing\n",
+	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, t->volumes,
+	       t->st.objects, t->st.cached, (unsigned long long)t->st.bytes, (unsigned long long)t->st.hits,
+	       (unsigned long long)t->st.turned, (unsigned long long)t->st.misses, (unsigned long long)t->st.creates,
+	       (unsigned long long)t->st.batched, (unsigned long long)t->st.invalidations,
+	       (unsigned long long)t->st.evictions, (unsigned long long)t->st.expired, t->stamped);
+}
+
 /* steps volumes of random changes through a cache of budget bytes on r,
  * composing on pool (or on this thread: NULL), as the daemon's pipeline
  * does; each composed volume against r's full render. */
@@ -363,15 +376,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	cache_get_stats(c, &out->st);
 	out->volumes = steps;
 	out->stamped = same;
-	printf("%s %ux%u N=%u budget %llu: %u volumes, %u objects followed, %u cached (%llu bytes); hits %llu, "
-	       "turned %llu, misses %llu, creates %llu (batched %llu), invalidations %llu, evictions %llu, expired "
-	       "%llu; %u images an upload would skip comparing\n",
-	       r->impl->name, g->width, g->height, g->images_per_rev, (unsigned long long)budget, steps,
-	       out->st.objects, out->st.cached, (unsigned long long)out->st.bytes, (unsigned long long)out->st.hits,
-	       (unsigned long long)out->st.turned, (unsigned long long)out->st.misses,
-	       (unsigned long long)out->st.creates, (unsigned long long)out->st.batched,
-	       (unsigned long long)out->st.invalidations, (unsigned long long)out->st.evictions,
-	       (unsigned long long)out->st.expired, out->stamped);
+	print_totals(r, budget, out);
 	CHECK(out->st.bytes <= budget || out->st.cached == 0);
 	cache_destroy(c);
 	for (int i = 0; i < MAX_OBJECTS; i++)
