@@ -32,6 +32,10 @@ struct bin_work {
 	size_t point_keys_cap;
 	uint32_t *hist; /* threads x (prim keys + point keys) */
 	size_t hist_cap;
+	/* threads x draws: the mask (bin_set.masks) a thread's points of a
+	 * draw go to, or -1: records. */
+	int32_t *mask_of;
+	size_t mask_of_cap, masks_cap;
 	size_t prim_cap, point_cap, turn_cap; /* of the sorted arrays */
 	/* With bin_set.keep: the draws of the scene the set holds, while
 	 * valid. */
@@ -80,15 +84,20 @@ int bin_init(struct bin_set *b, const struct geometry *g)
 void bin_finish(struct bin_set *b)
 {
 	struct bin_work *w = b->work;
+	size_t masks_cap = w ? w->masks_cap : 0;
 	if (w) {
 		free(w->base);
 		free(w->stage_prims);
 		free(w->point_recs);
 		free(w->point_keys);
 		free(w->hist);
+		free(w->mask_of);
 		free(w->kept);
 		free(w);
 	}
+	for (uint32_t i = 0; b->masks && i < masks_cap; i++)
+		free(b->masks[i].bits);
+	free(b->masks);
 	slot_table_finish(&b->slots);
 	free(b->dir);
 	free(b->prims);
@@ -291,9 +300,16 @@ static void count_job(void *arg, unsigned t)
 	c = chunk_of(w->point_items, w->threads, t);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
-		if (point_run(w, di, c, &lo, &hi))
+		if (!point_run(w, di, c, &lo, &hi))
+			continue;
+		int32_t m = w->mask_of[(size_t)t * w->scene->draw_count + di];
+		if (m >= 0) {
+			memset(b->masks[m].bits, 0, bin_mask_words(b) * sizeof(uint32_t));
+			bin_points_mask(b, &w->scene->draws[di], lo - base, hi - base, b->masks[m].bits);
+		} else {
 			bin_points_stage(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
 					 w->point_keys + slots * lo, hist + pk);
+		}
 	}
 }
 
@@ -326,7 +342,7 @@ static void scatter_job(void *arg, unsigned t)
 	c = chunk_of(w->point_items, w->threads, t);
 	for (uint32_t di = 0; di < w->scene->draw_count; di++) {
 		uint64_t lo, hi, base = w->base[di].point;
-		if (point_run(w, di, c, &lo, &hi))
+		if (point_run(w, di, c, &lo, &hi) && w->mask_of[(size_t)t * w->scene->draw_count + di] < 0)
 			bin_points_scatter(b, &w->scene->draws[di], lo - base, hi - base, w->point_recs + slots * lo,
 					   w->point_keys + slots * lo, off + pk);
 	}
@@ -347,12 +363,61 @@ static int grow(void **p, size_t *cap, size_t need, size_t size)
 	return 0;
 }
 
-/* Counts items and sizes the work space. */
+/* Mask i of b->masks there, with its bits. 0 or -ENOMEM. */
+static int ensure_mask(struct bin_set *b, uint32_t i)
+{
+	struct bin_work *w = b->work;
+	if (i >= w->masks_cap) {
+		size_t cap = w->masks_cap ? 2 * w->masks_cap : 8;
+		struct bin_point_mask *m = realloc(b->masks, cap * sizeof(*m));
+		if (!m)
+			return -ENOMEM;
+		memset(m + w->masks_cap, 0, (cap - w->masks_cap) * sizeof(*m));
+		b->masks = m;
+		w->masks_cap = cap;
+	}
+	if (!b->masks[i].bits && !(b->masks[i].bits = malloc(bin_mask_words(b) * sizeof(uint32_t))))
+		return -ENOMEM;
+	return 0;
+}
+
+/* Which of each thread's runs of points go to a mask of their own
+ * (bin_points_maskable()): w->mask_of. A mask has no more words than its
+ * run has points. 0 or -ENOMEM. */
+static int plan_masks(struct bin_set *b)
+{
+	struct bin_work *w = b->work;
+	uint32_t draws = w->scene ? w->scene->draw_count : 0;
+	int r = grow((void **)&w->mask_of, &w->mask_of_cap, (size_t)w->threads * draws, sizeof(*w->mask_of));
+	if (r < 0)
+		return r;
+	for (unsigned t = 0; t < w->threads; t++) {
+		struct chunk c = chunk_of(w->point_items, w->threads, t);
+		for (uint32_t di = 0; di < draws; di++) {
+			const struct scene_draw *d = &w->scene->draws[di];
+			int32_t *m = &w->mask_of[(size_t)t * draws + di];
+			uint64_t lo, hi;
+			*m = -1;
+			if (!point_run(w, di, c, &lo, &hi) || !bin_points_maskable(b, d, lo, hi))
+				continue;
+			if ((r = ensure_mask(b, b->mask_count)) < 0)
+				return r;
+			memcpy(b->masks[b->mask_count].rgb, d->rgb, 3);
+			*m = (int32_t)b->mask_count++;
+			b->mask_points += hi - lo;
+		}
+	}
+	return 0;
+}
+
+/* Counts items, sizes the work space and plans the masks. */
 static int prepare(struct bin_set *b, const struct scene *scene, unsigned threads)
 {
 	struct bin_work *w = b->work;
 	uint32_t draws = scene ? scene->draw_count : 0;
 	b->turned = false;
+	b->mask_count = 0;
+	b->mask_points = 0;
 	int r = grow((void **)&w->base, &w->base_cap, draws, sizeof(*w->base));
 	if (r < 0)
 		return r;
@@ -384,7 +449,7 @@ static int prepare(struct bin_set *b, const struct scene *scene, unsigned thread
 	    (r = grow((void **)&w->hist, &w->hist_cap, threads * keys, sizeof(uint32_t))) < 0)
 		return r;
 	memset(w->hist, 0, threads * keys * sizeof(uint32_t));
-	return 0;
+	return plan_masks(b);
 }
 
 /* Turns the per-thread counts into per-thread offsets, key-major, and the

@@ -31,6 +31,7 @@
 #include "geometry.h"
 #include "scene.h"
 #include "slot.h"
+#include "volume.h"
 
 struct pool;
 
@@ -65,6 +66,19 @@ struct bin_point {
 };
 
 #define BIN_POINT_MIRRORED 0x80
+
+/* The voxels a run of one-pixel points of colour rgb lights, a bit each,
+ * for a draw dense enough that a bit per voxel of the volume costs less
+ * than a record per point (bin_points_maskable()): the same voxels as the
+ * records of those points (bin_points_mask()). bits holds each volume
+ * image's tiles in order (bin_mask_image()), each tile as VOLUME_TILE
+ * rows of one 32-bit word with pixel x at bit x ^ 7: the layout of a
+ * canvas's lit bits (section.h), so that a tile's rows AND the halftone
+ * pattern of rgb are the bits those points light. */
+struct bin_point_mask {
+	uint8_t rgb[3];
+	uint32_t *bits;
+};
 
 /* A contiguous run of b->prims that image k must look at; entries whose
  * range does not hold k are skipped with bin_prim_in_image(). */
@@ -105,6 +119,14 @@ struct bin_set {
 	uint32_t point_count;
 	struct bin_point *points; /* sorted by image */
 	uint32_t *point_start;    /* M + 1 offsets into points */
+	/* Set by the renderer that can light them (the CPU renderer): the
+	 * dense draws of one-pixel points of one colour come as masks
+	 * (struct bin_point_mask), not records. Those points are not in
+	 * points; mask_points counts them. */
+	bool point_masks;
+	uint32_t mask_count;
+	struct bin_point_mask *masks;
+	uint64_t mask_points;
 	/* Tests: the path that bins points (bin_points.c); every path gives
 	 * the same records. 0 (BIN_POINTS_AUTO): the fastest there is. */
 	enum bin_points_isa points_isa;
@@ -206,6 +228,29 @@ void bin_points_stage(const struct bin_set *b, const struct scene_draw *d, uint6
  * bin_points_stage()) to b->points[off[image]++], in point order. */
 void bin_points_scatter(struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1,
 			const struct bin_point *recs, const uint16_t *keys, uint32_t *off);
+
+/* Words of a point mask: VOLUME_TILE a tile of every volume image. */
+static inline size_t bin_mask_words(const struct bin_set *b)
+{
+	return (size_t)b->images * volume_geometry_tiles(&b->geom) * VOLUME_TILE;
+}
+
+/* Image k's tiles of a point mask's bits. */
+static inline const uint32_t *bin_mask_image(const struct bin_set *b, const struct bin_point_mask *m, uint32_t k)
+{
+	return m->bits + (size_t)k * volume_geometry_tiles(&b->geom) * VOLUME_TILE;
+}
+
+/* Whether points lo .. hi - 1 of draw d may be binned as a mask: the
+ * renderer takes masks, the CPU has the eight-lane path, the device is
+ * mirrored, the draw unturned, of one colour and one-pixel points, and
+ * the run has at least as many points as the mask has words. */
+bool bin_points_maskable(const struct bin_set *b, const struct scene_draw *d, uint64_t lo, uint64_t hi);
+
+/* Points j0 .. j1 - 1 of draw d ORed into bits (a mask's, bin_mask_words()
+ * long): every voxel their records light (bin_points_stage()) has its bit
+ * set. bin_points_maskable() must hold. */
+void bin_points_mask(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1, uint32_t *bits);
 
 /* Segments and triangles at binning, for bin.c and bin_tris.c (the
  * eight-lane triangle staging): each is first written as a record and its

@@ -592,6 +592,65 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 	}
 	return j;
 }
+/* A voxel (u, v) of volume image k set in a mask's bits (bin.h). */
+static inline void mask_set(const struct bin_set *b, uint32_t *bits, uint32_t k, uint32_t u, uint32_t v)
+{
+	uint32_t tiles_x = volume_tiles_across(b->geom.width);
+	size_t t = (size_t)k * volume_geometry_tiles(&b->geom) + (v / VOLUME_TILE) * tiles_x + u / VOLUME_TILE;
+	bits[t * VOLUME_TILE + v % VOLUME_TILE] |= 1u << ((u % VOLUME_TILE) ^ 7);
+}
+
+/* Point j's records (the scalar rule) set in a mask. */
+static void mask_exact(const struct bin_set *b, const struct scene_draw *d, uint64_t j, uint32_t *bits)
+{
+	struct bin_point r[2];
+	uint32_t k[2];
+	point_exact(b, d, d->xyz + 3 * j, d->rgb, 0, r, k);
+	for (int i = 0; i < 2; i++)
+		if (k[i] != NO_IMAGE)
+			mask_set(b, bits, k[i], r[i].u, r[i].v);
+}
+
+/* stage_avx512()'s fast path with each record's voxel set in a mask
+ * instead: the same operations lane for lane, and the lanes it hands to
+ * the scalar rule handed to it here. Returns the first point not done. */
+AVX512_TARGET static uint64_t mask_avx512(const struct bin_set *b, const struct scene_draw *d, uint64_t j0,
+					  uint64_t j1, uint32_t *bits)
+{
+	struct lanes8 c;
+	lanes8_init(&c, b, d);
+	const uint32_t tiles_x = volume_tiles_across(b->geom.width);
+	const __m256i vtiles = _mm256_set1_epi32((int)volume_geometry_tiles(&b->geom));
+	const __m256i vtx = _mm256_set1_epi32((int)tiles_x), low = _mm256_set1_epi32(VOLUME_TILE - 1);
+	const __m256i seven = _mm256_set1_epi32(7), one = _mm256_set1_epi32(1);
+	uint64_t j = j0;
+	for (; j + 8 <= j1; j += 8) {
+		__m512d x, y, z;
+		load8(d->xyz + 3 * j, &x, &y, &z);
+		__mmask8 fin = 0xFF;
+		__m512d X = transform8(&c, 0, x, y, z, &fin), Y = transform8(&c, 1, x, y, z, &fin);
+		__m512d Z = transform8(&c, 2, x, y, z, &fin);
+		__m256 exact;
+		__m256i back, k = lobes8(&c, slot8(&c, X, Z, &exact), &back);
+		__m256i u = column8(&c, X, Z, k), v = row8(&c, Y);
+		/* tile (k, v / 32, u / 32), its row v % 32, the bit of column u % 32 */
+		__m256i t = _mm256_add_epi32(_mm256_mullo_epi32(k, vtiles),
+					     _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 5), vtx),
+							      _mm256_srli_epi32(u, 5)));
+		unsigned ex = (unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF);
+		__mmask8 vec = (__mmask8)~ex; /* the others: word 0, no bit */
+		__m256i word = _mm256_maskz_add_epi32(vec, _mm256_slli_epi32(t, 5), _mm256_and_si256(v, low));
+		__m256i bit = _mm256_maskz_sllv_epi32(vec, one, _mm256_xor_si256(_mm256_and_si256(u, low), seven));
+		uint32_t wa[8], ba[8];
+		_mm256_storeu_si256((__m256i *)wa, word);
+		_mm256_storeu_si256((__m256i *)ba, bit);
+		for (unsigned l = 0; l < 8; l++)
+			bits[wa[l]] |= ba[l];
+		for (; ex; ex &= ex - 1)
+			mask_exact(b, d, j + (uint64_t)__builtin_ctz(ex), bits);
+	}
+	return j;
+}
 #endif
 
 bool bin_points_isa_supported(enum bin_points_isa isa)
@@ -671,4 +730,24 @@ void bin_points_scatter(struct bin_set *b, const struct scene_draw *d, uint64_t 
 			out[off[k[1]]++] = r[1];
 		}
 	}
+}
+
+bool bin_points_maskable(const struct bin_set *b, const struct scene_draw *d, uint64_t lo, uint64_t hi)
+{
+#ifdef BIN_POINTS_X86
+	return b->point_masks && stage_fast(b, d) && point_size(d) == 1 && b->geom.images_per_rev % 2 == 0 &&
+	       isa_of(b->points_isa) == BIN_POINTS_AVX512 && hi - lo >= bin_mask_words(b);
+#else
+	return false;
+#endif
+}
+
+void bin_points_mask(const struct bin_set *b, const struct scene_draw *d, uint64_t j0, uint64_t j1, uint32_t *bits)
+{
+	uint64_t j = j0;
+#ifdef BIN_POINTS_X86
+	j = mask_avx512(b, d, j0, j1, bits);
+#endif
+	for (; j < j1; j++)
+		mask_exact(b, d, j, bits);
 }

@@ -36,6 +36,7 @@ struct cpu_worker {
 	/* The canvas's plain colour under recent tables, for
 	 * section_canvas_pack_plain(); emptied with the counters each pass. */
 	struct halftone_patterns plain;
+	struct halftone_patterns masks; /* the point masks' colours */
 	uint8_t *mask; /* pack_image()'s image mask (volume mask_bytes) */
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
@@ -250,6 +251,9 @@ static uint64_t raster_image(struct render_cpu *r, struct cpu_worker *w, uint32_
 	const struct brightness_tables *lit = c->lit_tables; /* once: the stores may alias it */
 	for (uint32_t i = b->point_start[k]; i < b->point_start[k + 1]; i++)
 		light_point(c, &b->points[i], lit, k);
+	for (uint32_t i = 0; i < b->mask_count; i++)
+		section_canvas_mask(c, k, bin_mask_image(b, &b->masks[i], k), b->masks[i].rgb, &w->masks, r->halftone);
+	drawn += b->mask_count;
 	uint64_t sectioned = section_image(r, c, k, runs, n);
 	w->prim_images += sectioned;
 	drawn += sectioned;
@@ -332,7 +336,7 @@ static bool image_runs(const struct render_cpu *r, uint32_t k, struct bin_run *r
 	if (r->marked && !(r->used[k / 8] >> (k % 8) & 1))
 		return false;
 	*n = bin_runs(b, k, runs);
-	if (r->marked || r->grid_count || r->lifted_count || b->point_start[k + 1] != b->point_start[k])
+	if (r->marked || r->grid_count || r->lifted_count || b->mask_count || b->point_start[k + 1] != b->point_start[k])
 		return true;
 	for (unsigned j = 0; j < *n; j++)
 		if (runs[j].begin != runs[j].end)
@@ -477,7 +481,7 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	base->stats.bin_ns += (uint64_t)(binned - start);
 	if (err < 0)
 		return err;
-	base->stats.prims += r->bins.prim_count + r->bins.point_count;
+	base->stats.prims += r->bins.prim_count + r->bins.point_count + r->bins.mask_points;
 	const uint8_t *plain = r->plain ? plain_colour(scene) : NULL;
 	for (unsigned i = 0; i < pool_workers(r->pool); i++) {
 		struct section_canvas c = r->workers[i].canvas; /* bright too */
@@ -491,7 +495,8 @@ static int render_pass(struct render_cpu *r, const struct scene *scene, struct v
 	r->canvas_out = canvas;
 	atomic_store(&r->next_image, 0);
 	r->marked = false;
-	if (!r->grid_count && !r->lifted_count && r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3) {
+	if (!r->grid_count && !r->lifted_count && !r->bins.mask_count &&
+	    r->bins.prim_count + r->bins.point_count <= BIN_SERIAL_VERTICES / 3) {
 		mark_used(r);
 		image_job(r, 0); /* a small scene: worker 0 (this thread) alone */
 	} else {
@@ -795,6 +800,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 		return NULL;
 	}
 	r->bins.prims_scalar = !batch; /* the scalar variant bins one at a time too */
+	r->bins.point_masks = batch;   /* and dense points as records */
 	r->bins.keep = keep;
 	return &r->base;
 }

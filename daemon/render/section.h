@@ -164,6 +164,14 @@ static inline void section_lit_pixel(struct section_canvas *c, uint32_t u, uint3
 	c->lit_rows[t] |= (uint32_t)((r | g | b) != 0) << y;
 }
 
+/* Image k's tiles of a point mask (bits: bin.h's struct bin_point_mask
+ * layout, tile t's rows at bits + VOLUME_TILE t) lit in colour rgb: what
+ * section_lit_pixel() (or, on a canvas kept as bytes, section_pixel())
+ * lights for each set bit, the lit bits through rgb's pattern under each
+ * tile's table (halftone_pattern(), halftoned by fn, cached in p). */
+void section_canvas_mask(struct section_canvas *c, uint32_t k, const uint32_t *bits, const uint8_t rgb[3],
+			 struct halftone_patterns *p, halftone_fn fn);
+
 /* A segment or triangle for section_lanes(): its vertices (x, y, z each,
  * in float as binned) and its colour. */
 struct section_lane {
