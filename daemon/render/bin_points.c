@@ -414,22 +414,27 @@ __attribute__((target("avx2"))) static uint64_t stage_avx2(const struct bin_set 
 #define AVX512_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2")))
 #define AVX512_INLINE AVX512_TARGET static inline __attribute__((always_inline))
 
-/* struct lanes4 for eight lanes (32 vector registers: no constant spilled). */
+/* struct lanes4 for eight lanes (32 vector registers: no constant spilled),
+ * and whether the transform is diagonal (transform8()). */
 struct lanes8 {
 	__m512d m[3][4];
+	bool diagonal;
 	__m512d fltmax, one, halfv, width, height, h, h2, zero;
 	__m256i wmax, hmax, rowlen, lo16, vM, vN, half;
-	__m256 fabsmask, nbuckets, eps, neps;
-	const float *table;
+	__m256 fabsmask, nbuckets, eps, neps, eps_n;
+	const struct slot_bucket8 *table;
 	const double *dir;
 };
 
 AVX512_INLINE void lanes8_init(struct lanes8 *c, const struct bin_set *b, const struct scene_draw *d)
 {
 	const struct geometry *g = &b->geom;
+	c->diagonal = true;
 	for (int r = 0; r < 3; r++)
-		for (int i = 0; i < 4; i++)
+		for (int i = 0; i < 4; i++) {
 			c->m[r][i] = _mm512_set1_pd(d->transform[4 * i + r]);
+			c->diagonal &= i == r || i == 3 || d->transform[4 * i + r] == 0.0f;
+		}
 	c->fltmax = _mm512_set1_pd(FLT_MAX);
 	c->one = _mm512_set1_pd(1.0);
 	c->halfv = _mm512_set1_pd(0.5);
@@ -449,7 +454,8 @@ AVX512_INLINE void lanes8_init(struct lanes8 *c, const struct bin_set *b, const 
 	c->nbuckets = _mm256_set1_ps((float)b->slots.buckets);
 	c->eps = _mm256_set1_ps(1e-5f);
 	c->neps = _mm256_set1_ps(-1e-5f);
-	c->table = (const float *)b->slots.b;
+	c->eps_n = _mm256_set1_ps(1e-5f * (float)b->slots.buckets);
+	c->table = b->slots.b8;
 	c->dir = b->dir;
 }
 
@@ -466,19 +472,33 @@ AVX512_INLINE void load8(const float *p, __m512d *x, __m512d *y, __m512d *z)
 	*z = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iz, c)));
 }
 
-/* transform4() on eight points. */
+/* transform4() on eight points. A diagonal transform's row r is m[r][r]
+ * in times in, plus m[r][3]: where x, y and z are finite, the terms of a
+ * zero left out change at most the sign of a zero result, which no step
+ * after it tells apart (slot8() and index8() compare with 0, column8() and
+ * row8() add to 1 and h), so the records are the same; a lane with an
+ * input not finite is marked not finite, for the scalar rule. */
 AVX512_INLINE __m512d transform8(const struct lanes8 *c, int r, __m512d x, __m512d y, __m512d z, __mmask8 *fin)
 {
 	const __m512d *m = c->m[r];
-	__m512d v = _mm512_add_pd(
-		_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m[0], x), _mm512_mul_pd(m[1], y)), _mm512_mul_pd(m[2], z)),
-		m[3]);
+	__m512d v;
+	if (c->diagonal) {
+		__m512d in = r == 0 ? x : r == 1 ? y : z;
+		v = _mm512_add_pd(_mm512_mul_pd(m[r], in), m[3]);
+		*fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(in), c->fltmax, _CMP_LE_OQ);
+	} else {
+		v = _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m[0], x), _mm512_mul_pd(m[1], y)),
+						_mm512_mul_pd(m[2], z)),
+				  m[3]);
+	}
 	*fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(v), c->fltmax, _CMP_LE_OQ);
 	return v;
 }
 
-/* bucket4() on eight lanes. */
-AVX512_INLINE __m256i bucket8(const struct lanes8 *c, __m256 fx, __m256 fz, __m256 *s, __m256 *exact)
+/* bucket4() on eight lanes: the bucket's index (not times 3), and in
+ * *frac where the slope lies in it (0 .. 1: slope times the bucket count,
+ * a power of two, is exact, and so is its fraction). */
+AVX512_INLINE __m256i bucket8(const struct lanes8 *c, __m256 fx, __m256 fz, __m256 *s, __m256 *exact, __m256 *frac)
 {
 	const __m256 fzero = _mm256_setzero_ps();
 	__m256 ax = _mm256_and_ps(fx, c->fabsmask), az = _mm256_and_ps(fz, c->fabsmask);
@@ -497,28 +517,34 @@ AVX512_INLINE __m256i bucket8(const struct lanes8 *c, __m256 fx, __m256 fz, __m2
 		_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
 				 _mm256_castps_si256(odd)));
 	__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
-	__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, c->rowlen),
-				       _mm256_cvttps_epi32(_mm256_mul_ps(slope, c->nbuckets)));
+	__m256 sn = _mm256_mul_ps(slope, c->nbuckets);
+	__m256i i = _mm256_cvttps_epi32(sn);
+	*frac = _mm256_sub_ps(sn, _mm256_cvtepi32_ps(i));
 	*s = slope;
 	*exact = ex;
-	return _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
+	return _mm256_add_epi32(_mm256_mullo_epi32(octant, c->rowlen), i);
 }
 
-/* slot4() on eight lanes. */
+/* slot4() on eight lanes, from the 8-byte buckets (slot.h, struct
+ * slot_bucket8): one gather. A lane within 1e-5 of the bucket's edge, or
+ * of a border flagged as having the neighbour's edge close, is near. */
 AVX512_INLINE __m256i slot8(const struct lanes8 *c, __m512d X, __m512d Z, __m256 *exact)
 {
-	__m256 s;
-	__m256i idx3 = bucket8(c, _mm512_cvtpd_ps(X), _mm512_cvtpd_ps(Z), &s, exact);
-	__m512i eb = _mm512_i32gather_epi64(idx3, c->table, 4); /* edge | below << 32 | above << 48 */
-	__m256 nearv = _mm256_i32gather_ps(c->table + 2, idx3, 4);
+	__m256 s, frac;
+	__m256i idx = bucket8(c, _mm512_cvtpd_ps(X), _mm512_cvtpd_ps(Z), &s, exact, &frac);
+	__m512i eb = _mm512_i32gather_epi64(idx, c->table, 8); /* edge | below << 32 | above << 48 */
 	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
 	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
-	__m256 dd = _mm256_sub_ps(s, nearv);
-	*exact = _mm256_or_ps(
-		*exact, _mm256_and_ps(_mm256_cmp_ps(dd, c->eps, _CMP_LT_OS), _mm256_cmp_ps(dd, c->neps, _CMP_GT_OS)));
-	return _mm256_castps_si256(
-		_mm256_blendv_ps(_mm256_castsi256_ps(_mm256_and_si256(ba, c->lo16)),
-				 _mm256_castsi256_ps(_mm256_srli_epi32(ba, 16)), _mm256_cmp_ps(s, edge, _CMP_GE_OS)));
+	__m256 dd = _mm256_sub_ps(s, edge);
+	__mmask8 near = _mm256_cmp_ps_mask(dd, c->eps, _CMP_LT_OS) & _mm256_cmp_ps_mask(dd, c->neps, _CMP_GT_OS);
+	near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32(SLOT_NEAR_LOW << 16)) &
+		_mm256_cmp_ps_mask(frac, c->eps_n, _CMP_LT_OS);
+	near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32(SLOT_NEAR_HIGH << 16)) &
+		_mm256_cmp_ps_mask(_mm256_sub_ps(_mm256_set1_ps(1.0f), frac), c->eps_n, _CMP_LT_OS);
+	*exact = _mm256_or_ps(*exact, _mm256_castsi256_ps(_mm256_movm_epi32(near)));
+	__m256i above = _mm256_and_si256(_mm256_srli_epi32(ba, 16), _mm256_set1_epi32(SLOT_ABOVE));
+	return _mm256_mask_blend_epi32(_mm256_cmp_ps_mask(s, edge, _CMP_GE_OS), _mm256_and_si256(ba, c->lo16),
+				       above);
 }
 
 /* lobes4() on eight lanes. */
@@ -611,6 +637,35 @@ static void mask_exact(const struct bin_set *b, const struct scene_draw *d, uint
 			mask_set(b, bits, k[i], r[i].u, r[i].v);
 }
 
+/* mask_avx512()'s points at a time: in three passes over them (slot and
+ * row, then column and bit, then the ORs), each a short chain whose
+ * gathers and stores the next points' work overlaps. */
+#define MASK_GROUPS 32
+struct mask_block {
+	__m512d X[MASK_GROUPS], Z[MASK_GROUPS];
+	__m256i k[MASK_GROUPS], v[MASK_GROUPS];
+	uint32_t word[8 * MASK_GROUPS], bit[8 * MASK_GROUPS];
+	uint8_t ex[MASK_GROUPS];
+};
+
+/* The first pass on group g (points j .. j + 7): transform, front image,
+ * row, and the lanes for the scalar rule. */
+AVX512_INLINE void mask_slots(const struct lanes8 *c, const float *xyz, struct mask_block *m, unsigned g)
+{
+	__m512d x, y, z;
+	load8(xyz, &x, &y, &z);
+	__mmask8 fin = 0xFF;
+	__m512d X = transform8(c, 0, x, y, z, &fin), Y = transform8(c, 1, x, y, z, &fin);
+	__m512d Z = transform8(c, 2, x, y, z, &fin);
+	__m256 exact;
+	__m256i back;
+	m->k[g] = lobes8(c, slot8(c, X, Z, &exact), &back);
+	m->v[g] = row8(c, Y);
+	m->X[g] = X;
+	m->Z[g] = Z;
+	m->ex[g] = (uint8_t)((unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF));
+}
+
 /* stage_avx512()'s fast path with each record's voxel set in a mask
  * instead: the same operations lane for lane, and the lanes it hands to
  * the scalar rule handed to it here. Returns the first point not done. */
@@ -618,36 +673,35 @@ AVX512_TARGET static uint64_t mask_avx512(const struct bin_set *b, const struct 
 					  uint64_t j1, uint32_t *bits)
 {
 	struct lanes8 c;
+	struct mask_block m;
 	lanes8_init(&c, b, d);
-	const uint32_t tiles_x = volume_tiles_across(b->geom.width);
 	const __m256i vtiles = _mm256_set1_epi32((int)volume_geometry_tiles(&b->geom));
-	const __m256i vtx = _mm256_set1_epi32((int)tiles_x), low = _mm256_set1_epi32(VOLUME_TILE - 1);
-	const __m256i seven = _mm256_set1_epi32(7), one = _mm256_set1_epi32(1);
+	const __m256i vtx = _mm256_set1_epi32((int)volume_tiles_across(b->geom.width));
+	const __m256i low = _mm256_set1_epi32(VOLUME_TILE - 1), seven = _mm256_set1_epi32(7);
+	const __m256i one = _mm256_set1_epi32(1);
 	uint64_t j = j0;
-	for (; j + 8 <= j1; j += 8) {
-		__m512d x, y, z;
-		load8(d->xyz + 3 * j, &x, &y, &z);
-		__mmask8 fin = 0xFF;
-		__m512d X = transform8(&c, 0, x, y, z, &fin), Y = transform8(&c, 1, x, y, z, &fin);
-		__m512d Z = transform8(&c, 2, x, y, z, &fin);
-		__m256 exact;
-		__m256i back, k = lobes8(&c, slot8(&c, X, Z, &exact), &back);
-		__m256i u = column8(&c, X, Z, k), v = row8(&c, Y);
-		/* tile (k, v / 32, u / 32), its row v % 32, the bit of column u % 32 */
-		__m256i t = _mm256_add_epi32(_mm256_mullo_epi32(k, vtiles),
-					     _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 5), vtx),
-							      _mm256_srli_epi32(u, 5)));
-		unsigned ex = (unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF);
-		__mmask8 vec = (__mmask8)~ex; /* the others: word 0, no bit */
-		__m256i word = _mm256_maskz_add_epi32(vec, _mm256_slli_epi32(t, 5), _mm256_and_si256(v, low));
-		__m256i bit = _mm256_maskz_sllv_epi32(vec, one, _mm256_xor_si256(_mm256_and_si256(u, low), seven));
-		uint32_t wa[8], ba[8];
-		_mm256_storeu_si256((__m256i *)wa, word);
-		_mm256_storeu_si256((__m256i *)ba, bit);
-		for (unsigned l = 0; l < 8; l++)
-			bits[wa[l]] |= ba[l];
-		for (; ex; ex &= ex - 1)
-			mask_exact(b, d, j + (uint64_t)__builtin_ctz(ex), bits);
+	while (j + 8 <= j1) {
+		unsigned groups = (unsigned)((j1 - j) / 8 < MASK_GROUPS ? (j1 - j) / 8 : MASK_GROUPS);
+		for (unsigned g = 0; g < groups; g++)
+			mask_slots(&c, d->xyz + 3 * (j + 8 * g), &m, g);
+		for (unsigned g = 0; g < groups; g++) {
+			/* tile (k, v / 32, u / 32), its row v % 32, the bit of column u % 32 */
+			__m256i k = m.k[g], u = column8(&c, m.X[g], m.Z[g], k), v = m.v[g];
+			__m256i t = _mm256_add_epi32(_mm256_mullo_epi32(k, vtiles),
+						     _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 5), vtx),
+								      _mm256_srli_epi32(u, 5)));
+			__mmask8 vec = (__mmask8)~m.ex[g]; /* the others: word 0, no bit */
+			__m256i word = _mm256_maskz_add_epi32(vec, _mm256_slli_epi32(t, 5), _mm256_and_si256(v, low));
+			__m256i bit = _mm256_maskz_sllv_epi32(vec, one, _mm256_xor_si256(_mm256_and_si256(u, low), seven));
+			_mm256_storeu_si256((__m256i *)&m.word[8 * g], word);
+			_mm256_storeu_si256((__m256i *)&m.bit[8 * g], bit);
+		}
+		for (unsigned i = 0; i < 8 * groups; i++)
+			bits[m.word[i]] |= m.bit[i];
+		for (unsigned g = 0; g < groups; g++)
+			for (unsigned ex = m.ex[g]; ex; ex &= ex - 1)
+				mask_exact(b, d, j + 8 * g + (uint64_t)__builtin_ctz(ex), bits);
+		j += 8 * groups;
 	}
 	return j;
 }

@@ -68,6 +68,21 @@ static void fill_slots(struct slot_table *t, unsigned o, struct slot_bucket *row
 	}
 }
 
+/* The 8-byte form of the octant's buckets (slot.h): a neighbour's edge
+ * within twice the near test's 1e-5 of the shared border is flagged. */
+static void pack_row(const struct slot_table *t, const struct slot_bucket *row, struct slot_bucket8 *out)
+{
+	const float close = 2e-5f;
+	for (uint32_t i = 0; i <= t->buckets; i++) {
+		float lo = (float)i / (float)t->buckets, hi = (float)(i + 1) / (float)t->buckets;
+		out[i] = (struct slot_bucket8){ row[i].edge, row[i].below, row[i].above };
+		if (i > 0 && row[i - 1].edge != NO_EDGE && row[i - 1].edge > lo - close)
+			out[i].above |= SLOT_NEAR_LOW;
+		if (i < t->buckets && row[i + 1].edge != NO_EDGE && row[i + 1].edge < hi + close)
+			out[i].above |= SLOT_NEAR_HIGH;
+	}
+}
+
 int slot_table_init(struct slot_table *t, uint32_t n)
 {
 	/* Boundaries are at least D apart in angle, so at least D apart in
@@ -78,14 +93,18 @@ int slot_table_init(struct slot_table *t, uint32_t n)
 	t->n = n;
 	t->buckets = buckets;
 	t->b = calloc(8 * (size_t)(buckets + 1), sizeof(*t->b));
-	if (!t->b)
+	t->b8 = calloc(8 * (size_t)(buckets + 1), sizeof(*t->b8));
+	if (!t->b || !t->b8) {
+		slot_table_finish(t);
 		return -ENOMEM;
+	}
 	for (unsigned o = 0; o < 8; o++) {
 		struct slot_bucket *row = &t->b[o * (buckets + 1)];
 		for (uint32_t i = 0; i <= buckets; i++)
 			row[i].edge = NO_EDGE;
 		place_edges(t, o, row);
 		fill_slots(t, o, row);
+		pack_row(t, row, &t->b8[o * (buckets + 1)]);
 	}
 	return 0;
 }
@@ -93,5 +112,7 @@ int slot_table_init(struct slot_table *t, uint32_t n)
 void slot_table_finish(struct slot_table *t)
 {
 	free(t->b);
+	free(t->b8);
 	t->b = NULL;
+	t->b8 = NULL;
 }

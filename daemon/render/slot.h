@@ -24,10 +24,25 @@ struct slot_bucket {
 			  * neighbouring bucket, or 4 */
 };
 
+/* A bucket in 8 bytes, for a gather of one 64-bit word (the eight-lane
+ * point binning): edge, below, and above with two flags (N <= 16384 fits
+ * 14 bits). The near test takes this bucket's edge, and a border of the
+ * bucket where the neighbour beyond it has an edge close to it: a slope
+ * within 1e-5 of a boundary is within 1e-5 of edge or of such a border. */
+#define SLOT_ABOVE 0x3FFFu
+#define SLOT_NEAR_LOW 0x4000u  /* the bucket below has an edge close to this one's lower border */
+#define SLOT_NEAR_HIGH 0x8000u /* the bucket above, close to the upper border */
+struct slot_bucket8 {
+	float edge;
+	uint16_t below;
+	uint16_t above; /* SLOT_ABOVE, and the SLOT_NEAR_ flags */
+};
+
 struct slot_table {
-	uint32_t n;            /* slots per revolution N */
-	uint32_t buckets;      /* per octant; bucket i covers [i, i+1) / buckets */
-	struct slot_bucket *b; /* 8 * (buckets + 1) */
+	uint32_t n;              /* slots per revolution N */
+	uint32_t buckets;        /* per octant, a power of two; bucket i covers [i, i+1) / buckets */
+	struct slot_bucket *b;   /* 8 * (buckets + 1) */
+	struct slot_bucket8 *b8; /* the same buckets */
 };
 
 /* Returns 0 or -ENOMEM. */
