@@ -2,6 +2,8 @@
  * draw of one-pixel points of one colour binned as a bit per voxel. */
 #include "section.h"
 
+#include <string.h>
+
 /* Tile t's mask rows lit as bytes: each set bit a section_pixel(). */
 static void mask_tile_bytes(struct section_canvas *c, uint32_t t, const uint32_t *rows, const uint8_t rgb[3])
 {
@@ -11,27 +13,49 @@ static void mask_tile_bytes(struct section_canvas *c, uint32_t t, const uint32_t
 			section_pixel(c, u0 + ((uint32_t)__builtin_ctz(bits) ^ 7), v0 + y, rgb);
 }
 
+/* Sixteen rows of a tile at once (the compiler's vectors: whatever the
+ * target has). */
+typedef uint32_t rows16 __attribute__((vector_size(64)));
+
+#define LOAD16(v, p) memcpy(&(v), (p), sizeof(rows16))
+
 /* Tile t's mask rows lit as lit bits: ANDed with rgb's pattern under the
  * tile's table, what section_lit_pixel() lights for each of them. */
 static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, const uint32_t *rows,
 			  const uint8_t rgb[3], struct halftone_patterns *p, halftone_fn fn)
 {
-	uint32_t any = 0;
-	for (uint32_t y = 0; y < VOLUME_TILE; y++)
-		any |= rows[y];
-	if (!any)
+	rows16 half[2], any;
+	LOAD16(half[0], rows);
+	LOAD16(half[1], rows + 16);
+	any = half[0] | half[1];
+	uint32_t some = 0;
+	for (int i = 0; i < 16; i++)
+		some |= any[i];
+	if (!some)
 		return;
 	const struct halftone_table *thr = brightness_table(c->lit_tables, k, t % c->tiles_x);
-	const uint32_t(*pat)[16] = (const uint32_t(*)[16])halftone_pattern(p, rgb, thr, fn)->bits;
-	uint32_t *lit = c->lit_bits + (size_t)t * SECTION_LIT_TILE, set = 0;
-	for (uint32_t y = 0; y < VOLUME_TILE; y++) {
-		uint32_t r = rows[y] & pat[0][y % 16], g = rows[y] & pat[1][y % 16], b = rows[y] & pat[2][y % 16];
-		lit[y] |= r;
-		lit[VOLUME_TILE + y] |= g;
-		lit[2 * VOLUME_TILE + y] |= b;
-		set |= (uint32_t)((r | g | b) != 0) << y;
+	const struct halftone_pattern *pat = halftone_pattern(p, rgb, thr, fn);
+	uint32_t *lit = c->lit_bits + (size_t)t * SECTION_LIT_TILE;
+	rows16 set[2] = { 0 };
+	for (int i = 0; i < 3; i++) { /* the pattern's rows are y % 16 */
+		rows16 pl, was;
+		LOAD16(pl, pat->bits[i]);
+		for (int h = 0; h < 2; h++) {
+			rows16 bits = half[h] & pl;
+			LOAD16(was, lit + i * VOLUME_TILE + 16 * h);
+			was |= bits;
+			memcpy(lit + i * VOLUME_TILE + 16 * h, &was, sizeof(was));
+			set[h] |= bits;
+		}
 	}
-	c->lit_rows[t] |= set;
+	/* row y's flag: bit y where it has a bit set */
+	const rows16 weight = { 1u << 0, 1u << 1, 1u << 2,  1u << 3,  1u << 4,  1u << 5,  1u << 6,  1u << 7,
+				1u << 8, 1u << 9, 1u << 10, 1u << 11, 1u << 12, 1u << 13, 1u << 14, 1u << 15 };
+	rows16 flags = ((rows16)(set[0] != 0) & weight) | ((rows16)(set[1] != 0) & (weight << 16));
+	uint32_t f = 0;
+	for (int i = 0; i < 16; i++)
+		f |= flags[i];
+	c->lit_rows[t] |= f;
 }
 
 void section_canvas_mask(struct section_canvas *c, uint32_t k, const uint32_t *bits, const uint8_t rgb[3],
