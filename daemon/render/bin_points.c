@@ -473,19 +473,19 @@ AVX512_INLINE void load8(const float *p, __m512d *x, __m512d *y, __m512d *z)
 }
 
 /* transform4() on eight points. A diagonal transform's row r is m[r][r]
- * in times in, plus m[r][3]: where x, y and z are finite, the terms of a
- * zero left out change at most the sign of a zero result, which no step
- * after it tells apart (slot8() and index8() compare with 0, column8() and
- * row8() add to 1 and h), so the records are the same; a lane with an
- * input not finite is marked not finite, for the scalar rule. */
+ * times its own input, plus m[r][3]: where x, y and z are finite, the
+ * terms of a zero left out change at most the sign of a zero result,
+ * which no step after it tells apart (slot8() and index8() compare with
+ * 0, column8() and row8() add it to 1 and to h), so the records are the
+ * same. An input that is not finite makes its own row not finite too
+ * (m[r][r] times it is infinite or NaN), so such a point still goes to the
+ * scalar rule, which drops it. */
 AVX512_INLINE __m512d transform8(const struct lanes8 *c, int r, __m512d x, __m512d y, __m512d z, __mmask8 *fin)
 {
 	const __m512d *m = c->m[r];
 	__m512d v;
 	if (c->diagonal) {
-		__m512d in = r == 0 ? x : r == 1 ? y : z;
-		v = _mm512_add_pd(_mm512_mul_pd(m[r], in), m[3]);
-		*fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(in), c->fltmax, _CMP_LE_OQ);
+		v = _mm512_add_pd(_mm512_mul_pd(m[r], r == 0 ? x : r == 1 ? y : z), m[3]);
 	} else {
 		v = _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(m[0], x), _mm512_mul_pd(m[1], y)),
 						_mm512_mul_pd(m[2], z)),
@@ -571,6 +571,46 @@ AVX512_INLINE __m256i column8(const struct lanes8 *c, __m512d X, __m512d Z, __m2
 	return index8(c, _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S, c->one), c->halfv), c->width), c->width, c->wmax);
 }
 
+/* The cos and sin of up to 64 images, eight to a register, for
+ * column_few8(). */
+struct few_dirs {
+	__m512d cos[8], sin[8];
+};
+
+AVX512_INLINE void few_dirs_init(struct few_dirs *f, const struct bin_set *b)
+{
+	double cs[2][64] = { { 0 } };
+	for (uint32_t k = 0; k < b->images && k < 64; k++) {
+		cs[0][k] = b->dir[2 * k];
+		cs[1][k] = b->dir[2 * k + 1];
+	}
+	for (int i = 0; i < 8; i++) {
+		f->cos[i] = _mm512_loadu_pd(&cs[0][8 * i]);
+		f->sin[i] = _mm512_loadu_pd(&cs[1][8 * i]);
+	}
+}
+
+/* Entry k (below 64) of a table of eight registers, on eight lanes. */
+AVX512_INLINE __m512d pick64(const __m512d *t, __m512i k, __mmask8 b4, __mmask8 b5)
+{
+	__m512d a = _mm512_permutex2var_pd(t[0], k, t[1]), b = _mm512_permutex2var_pd(t[2], k, t[3]);
+	__m512d c = _mm512_permutex2var_pd(t[4], k, t[5]), d = _mm512_permutex2var_pd(t[6], k, t[7]);
+	return _mm512_mask_blend_pd(b5, _mm512_mask_blend_pd(b4, a, b), _mm512_mask_blend_pd(b4, c, d));
+}
+
+/* column8() for a volume of at most 64 images: the same products, their
+ * cos and sin picked from registers, not gathered. */
+AVX512_INLINE __m256i column_few8(const struct lanes8 *c, const struct few_dirs *f, __m512d X, __m512d Z,
+				  __m256i k)
+{
+	__m512i k64 = _mm512_cvtepu32_epi64(k);
+	__mmask8 b4 = _mm512_test_epi64_mask(k64, _mm512_set1_epi64(16));
+	__mmask8 b5 = _mm512_test_epi64_mask(k64, _mm512_set1_epi64(32));
+	__m512d S = _mm512_add_pd(_mm512_mul_pd(X, pick64(f->cos, k64, b4, b5)),
+				  _mm512_mul_pd(Z, pick64(f->sin, k64, b4, b5)));
+	return index8(c, _mm512_mul_pd(_mm512_mul_pd(_mm512_add_pd(S, c->one), c->halfv), c->width), c->width, c->wmax);
+}
+
 /* row4() on eight lanes. */
 AVX512_INLINE __m256i row8(const struct lanes8 *c, __m512d Y)
 {
@@ -584,7 +624,11 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 					   uint64_t j1, struct bin_point *recs, uint16_t *keys, uint32_t *hist)
 {
 	struct lanes8 c;
+	struct few_dirs few;
 	lanes8_init(&c, b, d);
+	const bool few_images = b->images <= 64;
+	if (few_images)
+		few_dirs_init(&few, b);
 	const bool mirrored = b->geom.mirrored, fast = stage_fast(b, d);
 	const uint32_t turn = bin_draw_turn(b, d), slots = mirrored ? 1 : 2;
 	const uint64_t hi = record_high(d->rgb, point_size(d));
@@ -598,7 +642,8 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 		__m256 exact;
 		__m256i front = slot8(&c, X, Z, &exact);
 		__m256i back, k0 = lobes8(&c, front, &back);
-		__m256i uv0 = _mm256_or_si256(column8(&c, X, Z, k0), _mm256_slli_epi32(row8(&c, Y), 16));
+		__m256i u0 = few_images ? column_few8(&c, &few, X, Z, k0) : column8(&c, X, Z, k0);
+		__m256i uv0 = _mm256_or_si256(u0, _mm256_slli_epi32(row8(&c, Y), 16));
 		unsigned ex = (unsigned)_mm256_movemask_ps(exact) | (~(unsigned)fin & 0xFF);
 		if (fast) {
 			_mm512_storeu_si512(
@@ -612,7 +657,10 @@ AVX512_TARGET static uint64_t stage_avx512(const struct bin_set *b, const struct
 		_mm256_storeu_si256((__m256i *)ka, k0);
 		_mm256_storeu_si256((__m256i *)kb, back);
 		_mm256_storeu_si256((__m256i *)uva, uv0);
-		_mm256_storeu_si256((__m256i *)ub, mirrored ? _mm256_setzero_si256() : column8(&c, X, Z, back));
+		__m256i ub8 = mirrored	 ? _mm256_setzero_si256()
+			      : few_images ? column_few8(&c, &few, X, Z, back)
+					   : column8(&c, X, Z, back);
+		_mm256_storeu_si256((__m256i *)ub, ub8);
 		stage_lanes(b, d, j, 8, ex, ka, kb, uva, ub, hi, turn, recs + slots * (j - j0), keys + slots * (j - j0),
 			    hist);
 	}
@@ -674,7 +722,11 @@ AVX512_TARGET static uint64_t mask_avx512(const struct bin_set *b, const struct 
 {
 	struct lanes8 c;
 	struct mask_block m;
+	struct few_dirs few;
 	lanes8_init(&c, b, d);
+	const bool few_images = b->images <= 64;
+	if (few_images)
+		few_dirs_init(&few, b);
 	const __m256i vtiles = _mm256_set1_epi32((int)volume_geometry_tiles(&b->geom));
 	const __m256i vtx = _mm256_set1_epi32((int)volume_tiles_across(b->geom.width));
 	const __m256i low = _mm256_set1_epi32(VOLUME_TILE - 1), seven = _mm256_set1_epi32(7);
@@ -686,7 +738,8 @@ AVX512_TARGET static uint64_t mask_avx512(const struct bin_set *b, const struct 
 			mask_slots(&c, d->xyz + 3 * (j + 8 * g), &m, g);
 		for (unsigned g = 0; g < groups; g++) {
 			/* tile (k, v / 32, u / 32), its row v % 32, the bit of column u % 32 */
-			__m256i k = m.k[g], u = column8(&c, m.X[g], m.Z[g], k), v = m.v[g];
+			__m256i k = m.k[g], v = m.v[g];
+			__m256i u = few_images ? column_few8(&c, &few, m.X[g], m.Z[g], k) : column8(&c, m.X[g], m.Z[g], k);
 			__m256i t = _mm256_add_epi32(_mm256_mullo_epi32(k, vtiles),
 						     _mm256_add_epi32(_mm256_mullo_epi32(_mm256_srli_epi32(v, 5), vtx),
 								      _mm256_srli_epi32(u, 5)));
