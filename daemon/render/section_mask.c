@@ -17,7 +17,24 @@ static void mask_tile_bytes(struct section_canvas *c, uint32_t t, const uint32_t
  * target has). */
 typedef uint32_t rows16 __attribute__((vector_size(64)));
 
+typedef uint32_t rows8 __attribute__((vector_size(32)));
+typedef uint32_t rows4 __attribute__((vector_size(16)));
+
 #define LOAD16(v, p) memcpy(&(v), (p), sizeof(rows16))
+
+/* The OR of v's sixteen lanes, halving. */
+static inline uint32_t or_lanes(const rows16 *v)
+{
+	rows8 a, b;
+	rows4 c, d;
+	memcpy(&a, v, sizeof(a));
+	memcpy(&b, (const char *)v + sizeof(a), sizeof(b));
+	a |= b;
+	memcpy(&c, &a, sizeof(c));
+	memcpy(&d, (const char *)&a + sizeof(c), sizeof(d));
+	c |= d;
+	return c[0] | c[1] | c[2] | c[3];
+}
 
 /* Tile t's mask rows lit as lit bits: ANDed with rgb's pattern under the
  * tile's table, what section_lit_pixel() lights for each of them. */
@@ -28,10 +45,7 @@ static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, cons
 	LOAD16(half[0], rows);
 	LOAD16(half[1], rows + 16);
 	any = half[0] | half[1];
-	uint32_t some = 0;
-	for (int i = 0; i < 16; i++)
-		some |= any[i];
-	if (!some)
+	if (!or_lanes(&any))
 		return;
 	const struct halftone_table *thr = brightness_table(c->lit_tables, k, t % c->tiles_x);
 	const struct halftone_pattern *pat = halftone_pattern(p, rgb, thr, fn);
@@ -52,10 +66,7 @@ static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, cons
 	const rows16 weight = { 1u << 0, 1u << 1, 1u << 2,  1u << 3,  1u << 4,  1u << 5,  1u << 6,  1u << 7,
 				1u << 8, 1u << 9, 1u << 10, 1u << 11, 1u << 12, 1u << 13, 1u << 14, 1u << 15 };
 	rows16 flags = ((rows16)(set[0] != 0) & weight) | ((rows16)(set[1] != 0) & (weight << 16));
-	uint32_t f = 0;
-	for (int i = 0; i < 16; i++)
-		f |= flags[i];
-	c->lit_rows[t] |= f;
+	c->lit_rows[t] |= or_lanes(&flags);
 }
 
 void section_canvas_mask(struct section_canvas *c, uint32_t k, const uint32_t *bits, const uint8_t rgb[3],
