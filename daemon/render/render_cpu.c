@@ -37,7 +37,7 @@ struct cpu_worker {
 	 * section_canvas_pack_plain(); emptied with the counters each pass. */
 	struct halftone_patterns plain;
 	struct halftone_patterns masks; /* the point masks' colours */
-	uint8_t *mask; /* pack_image()'s image mask (volume mask_bytes) */
+	uint8_t *mask;                  /* pack_image()'s image mask (volume mask_bytes) */
 	int err;
 	uint64_t raster_ns, pack_ns, prim_images, canvas_tiles, tiles;
 } __attribute__((aligned(64)));
@@ -336,7 +336,8 @@ static bool image_runs(const struct render_cpu *r, uint32_t k, struct bin_run *r
 	if (r->marked && !(r->used[k / 8] >> (k % 8) & 1))
 		return false;
 	*n = bin_runs(b, k, runs);
-	if (r->marked || r->grid_count || r->lifted_count || b->mask_count || b->point_start[k + 1] != b->point_start[k])
+	if (r->marked || r->grid_count || r->lifted_count || b->mask_count ||
+	    b->point_start[k + 1] != b->point_start[k])
 		return true;
 	for (unsigned j = 0; j < *n; j++)
 		if (runs[j].begin != runs[j].end)

@@ -38,8 +38,8 @@ static inline uint32_t or_lanes(const rows16 *v)
 
 /* Tile t's mask rows lit as lit bits: ANDed with rgb's pattern under the
  * tile's table, what section_lit_pixel() lights for each of them. */
-static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, const uint32_t *rows,
-			  const uint8_t rgb[3], struct halftone_patterns *p, halftone_fn fn)
+static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, const uint32_t *rows, const uint8_t rgb[3],
+			  struct halftone_patterns *p, halftone_fn fn)
 {
 	rows16 half[2], any;
 	LOAD16(half[0], rows);

@@ -18,8 +18,8 @@
 #include "bin.h"
 #include "check.h"
 #include "pool.h"
-#include "rle.h"
 #include "renderer.h"
+#include "rle.h"
 #include "rtest.h"
 
 #define MASKED 4 /* draws that qualify */
@@ -38,8 +38,9 @@ static const uint8_t colour[MASKED][3] = { { 255, 0, 0 }, { 0, 255, 0 }, { 0, 0,
 static void add_points(const struct geometry *g, struct rtest_mesh *m, uint64_t *seed, uint32_t per)
 {
 	static const double special[][3] = {
-		{ 0, 0, 0 },   { -0.0, 0, -0.0 }, { 0.5, 0, 0 },  { -0.5, 0, -0.0 }, { 1e30, 0, 1 },   { 1, 1e30, 1 },
-		{ 3e38, 0, 3e38 }, { 1e-40, 0, 0 }, { NAN, 0, 0 }, { 0, NAN, 0 }, { 0, 0, INFINITY }, { -INFINITY, 0, 0 },
+		{ 0, 0, 0 },    { -0.0, 0, -0.0 }, { 0.5, 0, 0 },      { -0.5, 0, -0.0 },
+		{ 1e30, 0, 1 }, { 1, 1e30, 1 },    { 3e38, 0, 3e38 },  { 1e-40, 0, 0 },
+		{ NAN, 0, 0 },  { 0, NAN, 0 },     { 0, 0, INFINITY }, { -INFINITY, 0, 0 },
 	};
 	const uint32_t n_special = sizeof(special) / sizeof(special[0]);
 	double d = 2.0 * M_PI / g->images_per_rev;
@@ -89,9 +90,9 @@ static void cloud_make(struct cloud *c, const struct geometry *g, uint32_t per)
 	t[0] = 0.8f, t[1] = 0.3f, t[4] = -0.2f, t[5] = 1.1f, t[9] = 0.25f, t[10] = 0.9f;
 	t = c->draws[3].transform; /* huge: most past the float range */
 	t[0] = t[5] = t[10] = 1e37f;
-	c->draws[4].prim_rgb = c->rgb;                             /* records: per-point colours */
+	c->draws[4].prim_rgb = c->rgb;                            /* records: per-point colours */
 	c->draws[5].turn = (uint16_t)(g->images_per_rev / 3 + 1); /* records: turned */
-	c->draws[6].point_size = 3;                                 /* records: squares */
+	c->draws[6].point_size = 3;                               /* records: squares */
 }
 
 static void cloud_free(struct cloud *c)
