@@ -801,7 +801,7 @@ static struct renderer *cpu_new(const struct geometry *geom, halftone_fn halfton
 		return NULL;
 	}
 	r->bins.prims_scalar = !batch; /* the scalar variant bins one at a time too */
-	r->bins.point_masks = batch;   /* and dense points as records */
+	r->bins.point_masks = batch;   /* and takes dense points as records */
 	r->bins.keep = keep;
 	return &r->base;
 }
