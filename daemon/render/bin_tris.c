@@ -4,6 +4,7 @@
 #include "bin.h"
 
 #include <float.h>
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <string.h>
@@ -127,20 +128,41 @@ TRIS_TARGET static inline __m256 column9(const __m512 r[5], int k)
 	return _mm512_castps512_ps256(lo);
 }
 
-/* Vertex i of eight triangles (r, column9()) through the transform m as
- * bin_transform() groups it, in float (f, and v by coordinate and lane);
- * returns the lanes whose coordinates are all finite floats. */
-TRIS_TARGET static inline __mmask8 vertex8(const float m[16], const __m512 r[5], int i, __m256 f[3], float v[3][8])
+/* Whether transform m is diagonal with no translation of -0: then
+ * coordinate c is m[5c] times its own input plus m[12 + c], bit for bit
+ * what bin_transform() gives where the inputs are finite. The terms left
+ * out are zeros, exact, and the last sum adds a translation that is not
+ * -0, which makes a zero +0 either way. (An input that is not finite makes
+ * its own coordinate not finite too, as there.) */
+static bool transform_diagonal(const float m[16])
 {
-	__m512d x = _mm512_cvtps_pd(column9(r, 3 * i));
-	__m512d y = _mm512_cvtps_pd(column9(r, 3 * i + 1));
-	__m512d z = _mm512_cvtps_pd(column9(r, 3 * i + 2));
+	for (int c = 0; c < 3; c++)
+		for (int i = 0; i < 3; i++)
+			if (i != c && m[4 * i + c] != 0.0f)
+				return false;
+	return !signbit(m[12]) && !signbit(m[13]) && !signbit(m[14]);
+}
+
+/* Vertex i of eight triangles (r, column9()) through the transform m as
+ * bin_transform() groups it (diagonal: by transform_diagonal()), in
+ * float (f, and v by coordinate and lane); returns the lanes whose
+ * coordinates are all finite floats. */
+TRIS_TARGET static inline __mmask8 vertex8(const float m[16], bool diagonal, const __m512 r[5], int i, __m256 f[3],
+					   float v[3][8])
+{
+	__m512d in[3] = { _mm512_cvtps_pd(column9(r, 3 * i)), _mm512_cvtps_pd(column9(r, 3 * i + 1)),
+			  _mm512_cvtps_pd(column9(r, 3 * i + 2)) };
+	__m512d x = in[0], y = in[1], z = in[2];
 	__mmask8 fin = 0xFF;
 	for (int c = 0; c < 3; c++) {
-		__m512d t = _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[c]), x),
-								      _mm512_mul_pd(_mm512_set1_pd(m[4 + c]), y)),
-							_mm512_mul_pd(_mm512_set1_pd(m[8 + c]), z)),
-					  _mm512_set1_pd(m[12 + c]));
+		__m512d t =
+			diagonal
+				? _mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[5 * c]), in[c]),
+						_mm512_set1_pd(m[12 + c]))
+				: _mm512_add_pd(_mm512_add_pd(_mm512_add_pd(_mm512_mul_pd(_mm512_set1_pd(m[c]), x),
+									    _mm512_mul_pd(_mm512_set1_pd(m[4 + c]), y)),
+							      _mm512_mul_pd(_mm512_set1_pd(m[8 + c]), z)),
+						_mm512_set1_pd(m[12 + c]));
 		fin &= _mm512_cmp_pd_mask(_mm512_abs_pd(t), _mm512_set1_pd(FLT_MAX), _CMP_LE_OQ);
 		f[c] = _mm512_cvtpd_ps(t);
 		_mm256_storeu_ps(v[c], f[c]);
@@ -249,6 +271,7 @@ TRIS_TARGET static uint64_t tris8(const struct bin_set *b, const struct scene_dr
 				  struct stage_prim *out, uint32_t *hist)
 {
 	const float *m = d->transform;
+	const bool diagonal = transform_diagonal(m);
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
 		const float *p = d->xyz + 9 * j;
@@ -260,7 +283,7 @@ TRIS_TARGET static uint64_t tris8(const struct bin_set *b, const struct scene_dr
 		__mmask8 fin = 0xFF, near = 0, axis = 0;
 		for (int i = 0; i < 3; i++) {
 			__m256 f[3];
-			fin &= vertex8(m, r, i, f, v[i]);
+			fin &= vertex8(m, diagonal, r, i, f, v[i]);
 			/* Not finite: left to bin_one_prim(), its slope kept in the table */
 			sl[i] = slots8(&b->slots, _mm256_maskz_mov_ps(fin, f[0]), _mm256_maskz_mov_ps(fin, f[2]), &near,
 				       &axis);

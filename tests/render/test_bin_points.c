@@ -4,7 +4,8 @@
  * exactly on slot boundaries, on the axis and on its planes (both signs of
  * zero), next to and past the float range (dropped), NaN and infinite
  * ones, under the identity, a turn about the axis, a tilt and a scale,
- * with turns, even and odd point sizes and per-point colours, on mirrored,
+ * two diagonal ones (one moved by -0), with turns, even and odd point
+ * sizes and per-point colours, on mirrored,
  * plain, odd-N and perspecta geometries, with 1, 2 and 3 workers, and in
  * draws whose lengths are no multiple of four or eight. Likewise the
  * triangles staged eight at a time (bin.c, on mirrored geometries) against
@@ -78,6 +79,12 @@ static void set_transforms(struct scene_draw *d, int kind)
 		d->transform[14] = -0.1f;
 	} else if (kind == 3) { /* huge: most points past the float range */
 		d->transform[0] = d->transform[5] = d->transform[10] = 1e37f;
+	} else if (kind >= 4) { /* diagonal: scaled and moved (the shortcuts) */
+		d->transform[0] = 0.7f;
+		d->transform[5] = 1.2f;
+		d->transform[10] = -0.8f;
+		d->transform[13] = 0.05f;
+		d->transform[12] = kind == 4 ? -0.0f : 0.03f; /* -0: no shortcut for triangles */
 	}
 }
 
@@ -131,7 +138,7 @@ static void check_geometry(const struct geometry *g)
 		draws[i].point_size = (uint8_t)(i % 4 == 0 ? 0 : i % 4 == 1 ? 2 : i % 4 == 2 ? 3 : 20);
 		draws[i].turn = (uint16_t)(i % 3 == 0 ? 0 : i * 37 + 1);
 		draws[i].prim_rgb = i % 2 ? rgbs + 3 * (size_t)first : NULL;
-		set_transforms(&draws[i], i % 4);
+		set_transforms(&draws[i], i % 6);
 		first += len;
 	}
 	struct scene scene = { .draw_count = 8, .draws = draws };
@@ -207,7 +214,7 @@ static void triangle_draws(struct rtest_mesh *m, uint32_t n, uint8_t *rgbs, stru
 		draws[i].count = 3 * len;
 		draws[i].turn = (uint16_t)(i % 3 == 0 ? 0 : i * 37 + 1);
 		draws[i].prim_rgb = i % 2 ? rgbs + 3 * (size_t)first : NULL;
-		set_transforms(&draws[i], i % 4);
+		set_transforms(&draws[i], i % 6);
 		first += len;
 	}
 	for (int i = 6; i < 8; i++) {
