@@ -72,12 +72,14 @@ static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, cons
 void section_canvas_mask(struct section_canvas *c, uint32_t k, const uint32_t *bits, const uint8_t rgb[3],
 			 struct halftone_patterns *p, halftone_fn fn)
 {
-	uint32_t tiles = c->tiles_x * c->tiles_y;
-	for (uint32_t t = 0; t < tiles; t++) {
-		const uint32_t *rows = bits + (size_t)t * VOLUME_TILE;
-		if (c->lit_tables)
-			mask_tile_lit(c, k, t, rows, rgb, p, fn);
-		else
-			mask_tile_bytes(c, t, rows, rgb);
-	}
+	/* A tile column at a time: its tiles share a table (brightness.h),
+	 * so rgb's pattern is made once a column at most. */
+	for (uint32_t tx = 0; tx < c->tiles_x; tx++)
+		for (uint32_t t = tx; t < c->tiles_x * c->tiles_y; t += c->tiles_x) {
+			const uint32_t *rows = bits + (size_t)t * VOLUME_TILE;
+			if (c->lit_tables)
+				mask_tile_lit(c, k, t, rows, rgb, p, fn);
+			else
+				mask_tile_bytes(c, t, rows, rgb);
+		}
 }
