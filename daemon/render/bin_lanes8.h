@@ -1,7 +1,8 @@
 /* The eight-lane point binning's steps (bin_points.c): each the scalar
  * rule's operations lane for lane on AVX-512 (docs/rendering.md,
- * "Points"), as always-inlined functions for bin_points.c's passes, which
- * include this file only where the compiler targets x86. Each is the
+ * "Points"), as always-inlined functions for bin_points.c's passes (and
+ * slot_pick8() for bin_tris.c's), which include this file only where the
+ * compiler targets x86. Each is the
  * four-lane step of the same name in bin_points.c (lanes4, transform4(),
  * ...) on eight lanes, where it has one. */
 #ifndef SPINDLE_BIN_LANES8_H
@@ -23,9 +24,9 @@ struct lanes8 {
 	__m512d m[3][4];
 	bool diagonal;
 	__m512d fltmax, one, halfv, width, height, h, h2, zero;
-	__m256i wmax, hmax, rowlen, lo16, vM, vN, half;
-	__m256 fabsmask, nbuckets, eps, neps, eps_n;
-	const struct slot_bucket8 *table;
+	__m256i wmax, hmax, rowlen, vM, vN, half;
+	__m256 fabsmask, nbuckets;
+	const struct slot_table *slots;
 	const double *dir;
 	/* At most 64 volume images: their cos and sin, eight to a register
 	 * (column8() picks them by permutes: gathers were the pass's
@@ -71,16 +72,12 @@ AVX512_INLINE void lanes8_init(struct lanes8 *c, const struct bin_set *b, const 
 	c->wmax = _mm256_set1_epi32((int)g->width - 1);
 	c->hmax = _mm256_set1_epi32((int)g->height - 1);
 	c->rowlen = _mm256_set1_epi32((int)b->slots.buckets + 1);
-	c->lo16 = _mm256_set1_epi32(0xFFFF);
 	c->vM = _mm256_set1_epi32((int)b->images);
 	c->vN = _mm256_set1_epi32((int)g->images_per_rev);
 	c->half = _mm256_set1_epi32((int)(g->images_per_rev / 2));
 	c->fabsmask = _mm256_castsi256_ps(_mm256_set1_epi32(INT32_MAX));
 	c->nbuckets = _mm256_set1_ps((float)b->slots.buckets);
-	c->eps = _mm256_set1_ps(1e-5f);
-	c->neps = _mm256_set1_ps(-1e-5f);
-	c->eps_n = _mm256_set1_ps(1e-5f * (float)b->slots.buckets);
-	c->table = b->slots.b8;
+	c->slots = &b->slots;
 	c->dir = b->dir;
 	lanes8_few(c, b);
 }
@@ -151,25 +148,37 @@ AVX512_INLINE __m256i bucket8(const struct lanes8 *c, __m256 fx, __m256 fz, __m2
 	return _mm256_add_epi32(_mm256_mullo_epi32(octant, c->rowlen), i);
 }
 
-/* slot4() on eight lanes, from the 8-byte buckets (slot.h, struct
- * slot_bucket8): one gather. A lane within 1e-5 of the bucket's edge, or
- * of a border flagged as having the neighbour's edge close, is near. */
+/* The slots of slopes s in buckets idx of table t (slot.h), s lying at
+ * frac in them: one 64-bit gather a lane. The lanes slot_of() calls near
+ * are added to *near. bin_tris.c's triangles take their vertices' slots
+ * this way too. */
+AVX512_INLINE __m256i slot_pick8(const struct slot_table *t, __m256i idx, __m256 s, __m256 frac, __mmask8 *near)
+{
+	const __m256 width = _mm256_set1_ps(SLOT_NEAR), close = _mm256_set1_ps(SLOT_NEAR * (float)t->buckets);
+	__m512i eb = _mm512_i32gather_epi64(idx, t->b, 8); /* edge | below << 32 | above << 48 */
+	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
+	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
+	__m256 d = _mm256_sub_ps(s, edge);
+	*near |= _mm256_cmp_ps_mask(d, width, _CMP_LT_OS) &
+		 _mm256_cmp_ps_mask(d, _mm256_sub_ps(_mm256_setzero_ps(), width), _CMP_GT_OS);
+	*near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32(SLOT_NEAR_LOW << 16)) &
+		 _mm256_cmp_ps_mask(frac, close, _CMP_LT_OS);
+	*near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32((int)(SLOT_NEAR_HIGH << 16))) &
+		 _mm256_cmp_ps_mask(_mm256_sub_ps(_mm256_set1_ps(1.0f), frac), close, _CMP_LT_OS);
+	__m256i below = _mm256_and_si256(ba, _mm256_set1_epi32(0xFFFF));
+	__m256i above = _mm256_and_si256(_mm256_srli_epi32(ba, 16), _mm256_set1_epi32(SLOT_ABOVE));
+	return _mm256_mask_blend_epi32(_mm256_cmp_ps_mask(s, edge, _CMP_GE_OS), below, above);
+}
+
+/* slot4() on eight lanes (slot_pick8()). */
 AVX512_INLINE __m256i slot8(const struct lanes8 *c, __m512d X, __m512d Z, __m256 *exact)
 {
 	__m256 s, frac;
 	__m256i idx = bucket8(c, _mm512_cvtpd_ps(X), _mm512_cvtpd_ps(Z), &s, exact, &frac);
-	__m512i eb = _mm512_i32gather_epi64(idx, c->table, 8); /* edge | below << 32 | above << 48 */
-	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
-	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
-	__m256 dd = _mm256_sub_ps(s, edge);
-	__mmask8 near = _mm256_cmp_ps_mask(dd, c->eps, _CMP_LT_OS) & _mm256_cmp_ps_mask(dd, c->neps, _CMP_GT_OS);
-	near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32(SLOT_NEAR_LOW << 16)) &
-		_mm256_cmp_ps_mask(frac, c->eps_n, _CMP_LT_OS);
-	near |= _mm256_test_epi32_mask(ba, _mm256_set1_epi32(SLOT_NEAR_HIGH << 16)) &
-		_mm256_cmp_ps_mask(_mm256_sub_ps(_mm256_set1_ps(1.0f), frac), c->eps_n, _CMP_LT_OS);
+	__mmask8 near = 0;
+	__m256i slot = slot_pick8(c->slots, idx, s, frac, &near);
 	*exact = _mm256_or_ps(*exact, _mm256_castsi256_ps(_mm256_movm_epi32(near)));
-	__m256i above = _mm256_and_si256(_mm256_srli_epi32(ba, 16), _mm256_set1_epi32(SLOT_ABOVE));
-	return _mm256_mask_blend_epi32(_mm256_cmp_ps_mask(s, edge, _CMP_GE_OS), _mm256_and_si256(ba, c->lo16), above);
+	return slot;
 }
 
 /* lobes4() on eight lanes. */

@@ -195,9 +195,9 @@ static inline void stage_lanes(const struct bin_set *b, const struct scene_draw 
 _Static_assert(sizeof(struct bin_point) == 8 && offsetof(struct bin_point, v) == 2 &&
 		       offsetof(struct bin_point, rgb) == 4 && offsetof(struct bin_point, size) == 7,
 	       "the vector paths write points as 64-bit words");
-_Static_assert(sizeof(struct slot_bucket) == 12 && offsetof(struct slot_bucket, below) == 4 &&
-		       offsetof(struct slot_bucket, above) == 6 && offsetof(struct slot_bucket, near) == 8,
-	       "the vector paths gather a slot bucket as a 64-bit word (edge, below, above) and a float (near)");
+_Static_assert(sizeof(struct slot_bucket) == 8 && offsetof(struct slot_bucket, below) == 4 &&
+		       offsetof(struct slot_bucket, above) == 6,
+	       "the vector paths gather a slot bucket as a 64-bit word (edge, below, above)");
 
 /* Mirrored, unturned, one colour: the vector paths stage a record and a
  * key a point with no scalar work in their loop, and the records are
@@ -227,9 +227,9 @@ static inline void fast_exact_lanes(const struct bin_set *b, const struct scene_
 struct lanes4 {
 	__m256d m[3][4];
 	__m256d absmask, fltmax, one, halfv, width, height, h, h2, zero;
-	__m128i wmax, hmax, rowlen, lo16, vM, vN, half;
-	__m128 fabsmask, nbuckets, eps, neps;
-	const float *table;
+	__m128i wmax, hmax, rowlen, lo16, vM, vN, half, near_low, near_high, above;
+	__m128 fabsmask, nbuckets, near_width, near_nwidth, close, one_f;
+	const struct slot_bucket *table;
 	const double *dir;
 };
 
@@ -257,9 +257,14 @@ AVX2_INLINE void lanes4_init(struct lanes4 *c, const struct bin_set *b, const st
 	c->half = _mm_set1_epi32((int)(g->images_per_rev / 2));
 	c->fabsmask = _mm_castsi128_ps(_mm_set1_epi32(INT32_MAX));
 	c->nbuckets = _mm_set1_ps((float)b->slots.buckets);
-	c->eps = _mm_set1_ps(1e-5f);
-	c->neps = _mm_set1_ps(-1e-5f);
-	c->table = (const float *)b->slots.b;
+	c->near_low = _mm_set1_epi32(SLOT_NEAR_LOW << 16);
+	c->near_high = _mm_set1_epi32((int)(SLOT_NEAR_HIGH << 16));
+	c->above = _mm_set1_epi32(SLOT_ABOVE);
+	c->near_width = _mm_set1_ps(SLOT_NEAR);
+	c->near_nwidth = _mm_set1_ps(-SLOT_NEAR);
+	c->close = _mm_set1_ps(SLOT_NEAR * (float)b->slots.buckets);
+	c->one_f = _mm_set1_ps(1.0f);
+	c->table = b->slots.b;
 	c->dir = b->dir;
 }
 
@@ -282,12 +287,12 @@ AVX2_INLINE __m256d transform4(const struct lanes4 *c, int r, __m256d x, __m256d
 	return v;
 }
 
-/* slot_of()'s bucket of (fx, fz) on four lanes, times 3 (its index in
- * floats), and the slope *s; *exact gets the lanes slot_of() would not
- * see (not finite) or that have no slot there (on the axis, or a float
- * overflow), whose slope is zeroed so that the gathers stay inside the
- * table. */
-AVX2_INLINE __m128i bucket4(const struct lanes4 *c, __m128 fx, __m128 fz, __m128 *s, __m128 *exact)
+/* slot_of()'s bucket of (fx, fz) on four lanes, the slope *s and where
+ * it lies in the bucket, *frac (slot.h); *exact gets the lanes slot_of()
+ * would not see (not finite) or that have no slot there (on the axis, or
+ * a float overflow), whose slope is zeroed so that the gathers stay
+ * inside the table. */
+AVX2_INLINE __m128i bucket4(const struct lanes4 *c, __m128 fx, __m128 fz, __m128 *s, __m128 *exact, __m128 *frac)
 {
 	const __m128 fzero = _mm_setzero_ps();
 	__m128 ax = _mm_and_ps(fx, c->fabsmask), az = _mm_and_ps(fz, c->fabsmask);
@@ -304,11 +309,12 @@ AVX2_INLINE __m128i bucket4(const struct lanes4 *c, __m128 fx, __m128 fz, __m128
 				  _mm_add_epi32(_mm_add_epi32(_mm_castps_si128(zneg), _mm_castps_si128(zneg)),
 						_mm_castps_si128(odd))); /* 2 zneg + odd */
 	__m128i octant = _mm_sub_epi32(_mm_add_epi32(q, q), _mm_castps_si128(gt));
-	__m128i idx =
-		_mm_add_epi32(_mm_mullo_epi32(octant, c->rowlen), _mm_cvttps_epi32(_mm_mul_ps(slope, c->nbuckets)));
+	__m128 sn = _mm_mul_ps(slope, c->nbuckets);
+	__m128i i = _mm_cvttps_epi32(sn);
+	*frac = _mm_sub_ps(sn, _mm_cvtepi32_ps(i));
 	*s = slope;
 	*exact = ex;
-	return _mm_add_epi32(_mm_add_epi32(idx, idx), idx);
+	return _mm_add_epi32(_mm_mullo_epi32(octant, c->rowlen), i);
 }
 
 /* slot_of((float)X, (float)Z) on four lanes: the front image of each;
@@ -316,18 +322,23 @@ AVX2_INLINE __m128i bucket4(const struct lanes4 *c, __m128 fx, __m128 fz, __m128
  * a slot boundary). */
 AVX2_INLINE __m128i slot4(const struct lanes4 *c, __m256d X, __m256d Z, __m128 *exact)
 {
-	__m128 s;
-	__m128i idx3 = bucket4(c, _mm256_cvtpd_ps(X), _mm256_cvtpd_ps(Z), &s, exact);
-	/* edge | below << 32 | above << 48, and near */
-	__m256i eb = _mm256_i32gather_epi64((const long long *)c->table, idx3, 4);
-	__m128 nearv = _mm_i32gather_ps(c->table + 2, idx3, 4);
+	__m128 s, frac;
+	__m128i idx = bucket4(c, _mm256_cvtpd_ps(X), _mm256_cvtpd_ps(Z), &s, exact, &frac);
+	/* edge | below << 32 | above << 48 */
+	__m256i eb = _mm256_i32gather_epi64((const long long *)c->table, idx, 8);
 	__m256i ebs = _mm256_permutevar8x32_epi32(eb, _mm256_setr_epi32(0, 2, 4, 6, 1, 3, 5, 7));
 	__m128 edge = _mm_castsi128_ps(_mm256_castsi256_si128(ebs));
 	__m128i ba = _mm256_extracti128_si256(ebs, 1);
-	__m128 dd = _mm_sub_ps(s, nearv);
-	*exact = _mm_or_ps(*exact, _mm_and_ps(_mm_cmplt_ps(dd, c->eps), _mm_cmpgt_ps(dd, c->neps)));
-	return _mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(_mm_and_si128(ba, c->lo16)),
-					      _mm_castsi128_ps(_mm_srli_epi32(ba, 16)), _mm_cmpge_ps(s, edge)));
+	__m128 d = _mm_sub_ps(s, edge);
+	__m128 near = _mm_and_ps(_mm_cmplt_ps(d, c->near_width), _mm_cmpgt_ps(d, c->near_nwidth));
+	__m128 low = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(ba, c->near_low), c->near_low));
+	__m128 high = _mm_castsi128_ps(_mm_cmpeq_epi32(_mm_and_si128(ba, c->near_high), c->near_high));
+	near = _mm_or_ps(near, _mm_and_ps(low, _mm_cmplt_ps(frac, c->close)));
+	near = _mm_or_ps(near, _mm_and_ps(high, _mm_cmplt_ps(_mm_sub_ps(c->one_f, frac), c->close)));
+	*exact = _mm_or_ps(*exact, near);
+	__m128i above = _mm_and_si128(_mm_srli_epi32(ba, 16), c->above);
+	return _mm_castps_si128(_mm_blendv_ps(_mm_castsi128_ps(_mm_and_si128(ba, c->lo16)), _mm_castsi128_ps(above),
+					      _mm_cmpge_ps(s, edge)));
 }
 
 /* The volume image of the front lobe of image front, front % M, and the

@@ -15,9 +15,11 @@
 #endif
 
 #ifdef BIN_TRIS_X86
+#include "bin_lanes8.h"
+
 /* The instruction sets of bin_points.c's AVX-512 path, which
  * bin_points_isa_supported(BIN_POINTS_AVX512) checks. */
-#define TRIS_TARGET __attribute__((target("avx512f,avx512vl,avx512dq,avx512bw,avx2")))
+#define TRIS_TARGET AVX512_TARGET
 
 /* slot_of() of eight (x, z), with the same operations: the slots; the
  * lanes it flags near a boundary are added to *near, those on the axis
@@ -41,19 +43,10 @@ TRIS_TARGET static inline __m256i slots8(const struct slot_table *t, __m256 fx, 
 		_mm256_add_epi32(_mm256_add_epi32(_mm256_castps_si256(zneg), _mm256_castps_si256(zneg)),
 				 _mm256_castps_si256(odd))); /* 2 zneg + odd */
 	__m256i octant = _mm256_sub_epi32(_mm256_add_epi32(q, q), _mm256_castps_si256(gt));
-	__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, _mm256_set1_epi32((int)t->buckets + 1)),
-				       _mm256_cvttps_epi32(_mm256_mul_ps(s, _mm256_set1_ps((float)t->buckets))));
-	__m256i idx3 = _mm256_add_epi32(_mm256_add_epi32(idx, idx), idx);
-	const float *table = (const float *)t->b;
-	__m512i eb = _mm512_i32gather_epi64(idx3, table, 4); /* edge | below << 32 | above << 48 */
-	__m256 nearv = _mm256_i32gather_ps(table + 2, idx3, 4);
-	__m256 edge = _mm256_castsi256_ps(_mm512_cvtepi64_epi32(eb));
-	__m256i ba = _mm512_cvtepi64_epi32(_mm512_srli_epi64(eb, 32));
-	__m256 dd = _mm256_sub_ps(s, nearv);
-	*near |= _mm256_cmp_ps_mask(dd, _mm256_set1_ps(1e-5f), _CMP_LT_OS) &
-		 _mm256_cmp_ps_mask(dd, _mm256_set1_ps(-1e-5f), _CMP_GT_OS);
-	return _mm256_mask_blend_epi32(_mm256_cmp_ps_mask(s, edge, _CMP_GE_OS),
-				       _mm256_and_si256(ba, _mm256_set1_epi32(0xFFFF)), _mm256_srli_epi32(ba, 16));
+	__m256 sn = _mm256_mul_ps(s, _mm256_set1_ps((float)t->buckets));
+	__m256i i = _mm256_cvttps_epi32(sn);
+	__m256i idx = _mm256_add_epi32(_mm256_mullo_epi32(octant, _mm256_set1_epi32((int)t->buckets + 1)), i);
+	return slot_pick8(t, idx, s, _mm256_sub_ps(sn, _mm256_cvtepi32_ps(i)), near);
 }
 
 /* prim_arc()'s largest circular gap between the sorted slots of three

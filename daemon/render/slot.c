@@ -52,34 +52,15 @@ static void fill_slots(struct slot_table *t, unsigned o, struct slot_bucket *row
 		row[i].below = slot_at(t->n, a - dir * q);
 		row[i].above = slot_at(t->n, a + dir * q);
 	}
-	/* The near test looks at this bucket's and both neighbours' edges,
-	 * against a slope computed with rounding. */
-	for (uint32_t i = 0; i <= t->buckets; i++) {
-		float best = NO_EDGE, mid = ((float)i + 0.5f) / t->buckets;
-		for (int di = -1; di <= 1; di++) {
-			long long j = (long long)i + di;
-			if (j < 0 || j > t->buckets)
-				continue;
-			float e = row[j].edge;
-			if (e != NO_EDGE && fabsf(e - mid) < fabsf(best - mid))
-				best = e;
-		}
-		row[i].near = best;
-	}
-}
-
-/* The 8-byte form of the octant's buckets (slot.h): a neighbour's edge
- * within twice the near test's 1e-5 of the shared border is flagged. */
-static void pack_row(const struct slot_table *t, const struct slot_bucket *row, struct slot_bucket8 *out)
-{
-	const float close = 2e-5f;
+	/* The near test's flags (slot.h): a neighbour's edge within twice
+	 * its width of the shared border. */
+	const float close = 2.0f * SLOT_NEAR;
 	for (uint32_t i = 0; i <= t->buckets; i++) {
 		float lo = (float)i / (float)t->buckets, hi = (float)(i + 1) / (float)t->buckets;
-		out[i] = (struct slot_bucket8){ row[i].edge, row[i].below, row[i].above };
 		if (i > 0 && row[i - 1].edge != NO_EDGE && row[i - 1].edge > lo - close)
-			out[i].above |= SLOT_NEAR_LOW;
+			row[i].above |= SLOT_NEAR_LOW;
 		if (i < t->buckets && row[i + 1].edge != NO_EDGE && row[i + 1].edge < hi + close)
-			out[i].above |= SLOT_NEAR_HIGH;
+			row[i].above |= SLOT_NEAR_HIGH;
 	}
 }
 
@@ -93,18 +74,14 @@ int slot_table_init(struct slot_table *t, uint32_t n)
 	t->n = n;
 	t->buckets = buckets;
 	t->b = calloc(8 * (size_t)(buckets + 1), sizeof(*t->b));
-	t->b8 = calloc(8 * (size_t)(buckets + 1), sizeof(*t->b8));
-	if (!t->b || !t->b8) {
-		slot_table_finish(t);
+	if (!t->b)
 		return -ENOMEM;
-	}
 	for (unsigned o = 0; o < 8; o++) {
 		struct slot_bucket *row = &t->b[o * (buckets + 1)];
 		for (uint32_t i = 0; i <= buckets; i++)
 			row[i].edge = NO_EDGE;
 		place_edges(t, o, row);
 		fill_slots(t, o, row);
-		pack_row(t, row, &t->b8[o * (buckets + 1)]);
 	}
 	return 0;
 }
@@ -112,7 +89,5 @@ int slot_table_init(struct slot_table *t, uint32_t n)
 void slot_table_finish(struct slot_table *t)
 {
 	free(t->b);
-	free(t->b8);
 	t->b = NULL;
-	t->b8 = NULL;
 }

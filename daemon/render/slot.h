@@ -16,33 +16,27 @@
 
 #define SLOT_AXIS UINT32_MAX /* the point is on the axis: no azimuth */
 
-struct slot_bucket {
-	float edge;     /* slope of the boundary in this bucket, or 4 (none) */
-	uint16_t below; /* slot for slopes < edge */
-	uint16_t above; /* slot for slopes >= edge */
-	float near;     /* slope of the closest boundary in this or a
-			  * neighbouring bucket, or 4 */
-};
-
-/* A bucket in 8 bytes, for a gather of one 64-bit word (the eight-lane
- * point binning): edge, below, and above with two flags (N <= 16384 fits
- * 14 bits). The near test takes this bucket's edge, and a border of the
- * bucket where the neighbour beyond it has an edge close to it: a slope
- * within 1e-5 of a boundary is within 1e-5 of edge or of such a border. */
+/* A bucket, 8 bytes (one 64-bit gather in the vector paths): its edge,
+ * the slots below and above it (N <= 16384 fits 14 bits), and two flags
+ * for the near test. A slope is near when it lies within 1e-5 of the
+ * bucket's edge, or of a border of the bucket whose neighbour beyond it
+ * has its edge within 2e-5 of that border: any boundary within 1e-5 of a
+ * slope is the edge of its bucket or of a neighbour, and then within
+ * 1e-5 of the border between them. */
 #define SLOT_ABOVE 0x3FFFu
 #define SLOT_NEAR_LOW 0x4000u  /* the bucket below has an edge close to this one's lower border */
 #define SLOT_NEAR_HIGH 0x8000u /* the bucket above, close to the upper border */
-struct slot_bucket8 {
-	float edge;
-	uint16_t below;
-	uint16_t above; /* SLOT_ABOVE, and the SLOT_NEAR_ flags */
+#define SLOT_NEAR 1e-5f        /* the near test's width, in slope */
+struct slot_bucket {
+	float edge;     /* slope of the boundary in this bucket, or 4 (none) */
+	uint16_t below; /* slot for slopes < edge */
+	uint16_t above; /* slot for slopes >= edge (SLOT_ABOVE), and the SLOT_NEAR_ flags */
 };
 
 struct slot_table {
-	uint32_t n;              /* slots per revolution N */
-	uint32_t buckets;        /* per octant, a power of two; bucket i covers [i, i+1) / buckets */
-	struct slot_bucket *b;   /* 8 * (buckets + 1) */
-	struct slot_bucket8 *b8; /* the same buckets */
+	uint32_t n;            /* slots per revolution N */
+	uint32_t buckets;      /* per octant, a power of two; bucket i covers [i, i+1) / buckets */
+	struct slot_bucket *b; /* 8 * (buckets + 1) */
 };
 
 /* Returns 0 or -ENOMEM. */
@@ -72,11 +66,15 @@ static inline uint32_t slot_of(const struct slot_table *t, float x, float z, boo
 		octant = 2 * q + 1;
 		s = radial / perp;
 	}
-	const struct slot_bucket *e = &t->b[octant * (t->buckets + 1) + (uint32_t)(s * (float)t->buckets)];
-	float d = s - e->near;
-	if (d < 1e-5f && d > -1e-5f)
+	/* s times the bucket count, a power of two, is exact, and so is
+	 * where s lies in its bucket (frac, 0 .. 1) */
+	float sn = s * (float)t->buckets, frac = sn - (float)(uint32_t)sn, close = SLOT_NEAR * (float)t->buckets;
+	const struct slot_bucket *e = &t->b[octant * (t->buckets + 1) + (uint32_t)sn];
+	float d = s - e->edge;
+	if ((d < SLOT_NEAR && d > -SLOT_NEAR) || ((e->above & SLOT_NEAR_LOW) && frac < close) ||
+	    ((e->above & SLOT_NEAR_HIGH) && 1.0f - frac < close))
 		*near = true;
-	return s >= e->edge ? e->above : e->below;
+	return s >= e->edge ? e->above & SLOT_ABOVE : e->below;
 }
 
 #endif

@@ -6,7 +6,7 @@
  * ones, under the identity, a turn about the axis, a tilt and a scale,
  * two diagonal ones (one moved by -0), with turns, even and odd point
  * sizes and per-point colours, on mirrored,
- * plain, odd-N and perspecta geometries, with 1, 2 and 3 workers, and in
+ * plain, odd-N, coarse (N = 32) and perspecta geometries, with 1, 2 and 3 workers, and in
  * draws whose lengths are no multiple of four or eight. Likewise the
  * triangles staged eight at a time (bin.c, on mirrored geometries) against
  * those staged one at a time (bin_set.prims_scalar): the same bins, records
@@ -47,6 +47,10 @@ static void make_points(const struct geometry *g, struct rtest_mesh *m, uint32_t
 		for (double r = 1e-6; r < 2.0; r *= 7.0)
 			rtest_mesh_add(m, r * cos(a), 0.1 * j / g->images_per_rev, r * sin(a));
 		rtest_mesh_add(m, cos(a) * (1 + 1e-7), 0.0, sin(a) * (1 - 1e-7));
+		for (int i = 0; i < 12; i++) { /* rounding puts these either side */
+			double r = 1.5 * rnd() + 1e-3;
+			rtest_mesh_add(m, r * cos(a), (2.0 * rnd() - 1.0) * g->half_height, r * sin(a));
+		}
 	}
 	const double special[][3] = {
 		{ 0, 0, 0 },        { -0.0, 0, -0.0 }, { 0.5, 0, 0 },      { -0.5, 0, 0 },      { 0, 0, 0.5 },
@@ -265,11 +269,13 @@ int main(void)
 	struct geometry small = rtest_small(), odd = rtest_odd(), perspecta;
 	struct geometry even_plain = { 200, 40, 64, false, 1.25f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
 	struct geometry odd_n = { 96, 64, 45, false, 1.25f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT };
+	struct geometry coarse = { 64, 64, 32, true, 1.0f, 600.0f, GEOMETRY_BRIGHTNESS_EXACT }; /* wide slots */
 	CHECK(geometry_from_profile("perspecta", &perspecta) == 0);
 	check_geometry(&small);
 	check_geometry(&odd);
 	check_geometry(&even_plain);
 	check_geometry(&odd_n);
+	check_geometry(&coarse);
 	check_geometry(&perspecta);
 	check_triangles(&small);
 	check_triangles(&odd);

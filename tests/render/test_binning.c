@@ -27,24 +27,6 @@ static uint32_t exact_slot(uint32_t n, double x, double z)
 	return (uint32_t)(k < 0 ? k + n : k);
 }
 
-/* slot_of() as the eight-lane point binning takes it (bin_points.c,
- * slot8()): the 8-byte buckets, near their edge or a flagged border. */
-static uint32_t slot_of8(const struct slot_table *t, float x, float z, bool *near)
-{
-	float ax = fabsf(x), az = fabsf(z);
-	unsigned q = z < 0.0f ? (x < 0.0f ? 2u : 3u) : (x < 0.0f ? 1u : 0u);
-	float perp = q & 1u ? ax : az, radial = q & 1u ? az : ax;
-	unsigned octant = perp <= radial ? 2 * q : 2 * q + 1;
-	float s = perp <= radial ? perp / radial : radial / perp, sn = s * (float)t->buckets;
-	uint32_t i = (uint32_t)sn;
-	float frac = sn - (float)i, eps_n = 1e-5f * (float)t->buckets;
-	const struct slot_bucket8 *e = &t->b8[octant * (t->buckets + 1) + i];
-	float d = s - e->edge;
-	*near = (d < 1e-5f && d > -1e-5f) || ((e->above & SLOT_NEAR_LOW) && frac < eps_n) ||
-		((e->above & SLOT_NEAR_HIGH) && 1.0f - frac < eps_n);
-	return s >= e->edge ? e->above & SLOT_ABOVE : e->below;
-}
-
 /* Slot s against atan2's: the same where not near, a neighbour at most
  * where near. */
 static void check_slot_is(const struct slot_table *t, double phi, uint32_t s, uint32_t want, bool near,
@@ -61,10 +43,9 @@ static void check_slot_is(const struct slot_table *t, double phi, uint32_t s, ui
 static void check_slot_at(const struct slot_table *t, double phi, double r)
 {
 	float x = (float)(r * cos(phi)), z = (float)(r * sin(phi));
-	bool near = false, near8 = false;
-	uint32_t want = exact_slot(t->n, x, z), s = slot_of(t, x, z, &near), s8 = slot_of8(t, x, z, &near8);
+	bool near = false;
+	uint32_t want = exact_slot(t->n, x, z), s = slot_of(t, x, z, &near);
 	check_slot_is(t, phi, s, want, near, "slot");
-	check_slot_is(t, phi, s8, want, near8, "8-byte bucket slot");
 }
 
 static void check_slots(uint32_t n)
