@@ -36,19 +36,12 @@ static inline uint32_t or_lanes(const rows16 *v)
 	return c[0] | c[1] | c[2] | c[3];
 }
 
-/* Tile t's mask rows lit as lit bits: ANDed with rgb's pattern under the
- * tile's table, what section_lit_pixel() lights for each of them. */
-static void mask_tile_lit(struct section_canvas *c, uint32_t k, uint32_t t, const uint32_t *rows, const uint8_t rgb[3],
-			  struct halftone_patterns *p, halftone_fn fn)
+/* Tile t's mask rows (half[0], half[1]: rows 0..15, 16..31) lit as lit
+ * bits: ANDed with pat, its colour's pattern under the tile's table, what
+ * section_lit_pixel() lights for each of them. */
+static void mask_tile_lit(struct section_canvas *c, uint32_t t, const rows16 half[2],
+			  const struct halftone_pattern *pat)
 {
-	rows16 half[2], any;
-	LOAD16(half[0], rows);
-	LOAD16(half[1], rows + 16);
-	any = half[0] | half[1];
-	if (!or_lanes(&any))
-		return;
-	const struct halftone_table *thr = brightness_table(c->lit_tables, k, t % c->tiles_x);
-	const struct halftone_pattern *pat = halftone_pattern(p, rgb, thr, fn);
 	uint32_t *lit = c->lit_bits + (size_t)t * SECTION_LIT_TILE;
 	rows16 set[2] = { 0 };
 	for (int i = 0; i < 3; i++) { /* the pattern's rows are y % 16 */
@@ -73,13 +66,24 @@ void section_canvas_mask(struct section_canvas *c, uint32_t k, const uint32_t *b
 			 struct halftone_patterns *p, halftone_fn fn)
 {
 	/* A tile column at a time: its tiles share a table (brightness.h),
-	 * so rgb's pattern is made once a column at most. */
-	for (uint32_t tx = 0; tx < c->tiles_x; tx++)
+	 * so rgb's pattern is looked up once a column, where it has bits. */
+	for (uint32_t tx = 0; tx < c->tiles_x; tx++) {
+		const struct halftone_pattern *pat = NULL;
 		for (uint32_t t = tx; t < c->tiles_x * c->tiles_y; t += c->tiles_x) {
 			const uint32_t *rows = bits + (size_t)t * VOLUME_TILE;
-			if (c->lit_tables)
-				mask_tile_lit(c, k, t, rows, rgb, p, fn);
-			else
+			if (!c->lit_tables) {
 				mask_tile_bytes(c, t, rows, rgb);
+				continue;
+			}
+			rows16 half[2], any;
+			LOAD16(half[0], rows);
+			LOAD16(half[1], rows + 16);
+			any = half[0] | half[1];
+			if (!or_lanes(&any))
+				continue;
+			if (!pat)
+				pat = halftone_pattern(p, rgb, brightness_table(c->lit_tables, k, tx), fn);
+			mask_tile_lit(c, t, half, pat);
 		}
+	}
 }
