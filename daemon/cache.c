@@ -44,12 +44,11 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
 	uint32_t tiles = c->prev ? volume_tiles_per_image(c->prev) : 0;
-	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, tiles) == 0;
+	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, tiles) == 0 &&
+		     tile_set_init(&c->since, c->prev->image_count, tiles) == 0;
 	for (unsigned g = 0; marks && g < CHANGED_HISTORY; g++)
 		marks = tile_set_init(&c->changed[g], c->prev->image_count, tiles) == 0;
-	if (c->prev)
-		c->changed_mask = calloc(1, c->prev->mask_bytes);
-	if (!c->compose || !c->prev || !marks || !c->changed_mask || !c->rest_vol || !c->tmp || !c->turned_vol) {
+	if (!c->compose || !c->prev || !marks || !c->rest_vol || !c->tmp || !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -135,7 +134,7 @@ void cache_destroy(struct cache *c)
 	tile_set_finish(&c->dirty);
 	for (unsigned g = 0; g < CHANGED_HISTORY; g++)
 		tile_set_finish(&c->changed[g]);
-	free(c->changed_mask);
+	tile_set_finish(&c->since);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);

@@ -110,7 +110,7 @@ struct cache {
 	 * got and the composition it holds. */
 	uint64_t gen;
 	struct tile_set changed[CHANGED_HISTORY];
-	uint8_t *changed_mask; /* one image's, work space */
+	struct tile_set since; /* work space: what changed since a volume handed out */
 	struct handed {
 		uint64_t origin, gen;
 	} handed[HANDED_VOLUMES];

@@ -179,23 +179,6 @@ static void note_changes(struct cache *c)
 		tile_set_fill(changed);
 }
 
-/* The tiles of image k changed in the compositions after had (up to
- * c->gen, at most CHANGED_HISTORY back), into mask; whether any. */
-static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8_t *mask)
-{
-	bool any = false, cleared = false;
-	for (uint64_t g = had + 1; g <= c->gen; g++) {
-		const struct tile_set *changed = &c->changed[g % CHANGED_HISTORY];
-		if (!changed->images[k])
-			continue;
-		if (!cleared)
-			memset(mask, 0, c->prev->mask_bytes);
-		cleared = true;
-		any |= tile_set_or_image(changed, k, mask);
-	}
-	return any;
-}
-
 /* The images of the composition just made that may have changed (all
  * when it was made whole) get new stamps (volume.h): each then differs
  * from every volume handed out before, and an image that did not change
@@ -203,9 +186,27 @@ static bool changed_since(const struct cache *c, uint64_t had, uint32_t k, uint8
  * upload against one of them skips comparing it (projwire.h). */
 static void stamp_changes(struct cache *c, bool whole)
 {
-	for (uint32_t k = 0; k < c->prev->image_count; k++)
-		if (whole || tile_set_image_any(&c->dirty, k))
-			c->prev->images[k].stamp = volume_new_stamp();
+	for (uint32_t k = 0; whole && k < c->prev->image_count; k++)
+		c->prev->images[k].stamp = volume_new_stamp();
+	for (uint32_t p = 0; !whole && p < c->dirty.listed; p++)
+		if (tile_set_image_any(&c->dirty, c->dirty.list[p]))
+			c->prev->images[c->dirty.list[p]].stamp = volume_new_stamp();
+}
+
+/* The tiles changed in the compositions after had (up to c->gen, at most
+ * CHANGED_HISTORY back) copied from the last into out. */
+static int update_since(struct cache *c, uint64_t had, struct volume *out)
+{
+	for (uint64_t g = had + 1; g <= c->gen; g++)
+		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
+	int err = 0;
+	for (uint32_t p = 0; p < c->since.listed && err == 0; p++) {
+		uint32_t k = c->since.list[p];
+		if (tile_set_image_any(&c->since, k))
+			err = volume_update_image(out, k, c->prev, c->since.mask + (size_t)k * c->since.mask_bytes);
+	}
+	tile_set_clear(&c->since);
+	return err;
 }
 
 /* The composition copied into out: only the images changed since the one
@@ -222,9 +223,7 @@ static int hand_out(struct cache *c, struct volume *out)
 	if (!had || c->gen - had >= CHANGED_HISTORY) {
 		err = volume_copy(out, c->prev);
 	} else {
-		for (uint32_t k = 0; k < out->image_count && err == 0; k++)
-			if (changed_since(c, had, k, c->changed_mask))
-				err = volume_update_image(out, k, c->prev, c->changed_mask);
+		err = update_since(c, had, out);
 		out->seq = c->prev->seq;
 		out->shown_ns = c->prev->shown_ns;
 	}

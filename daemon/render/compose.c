@@ -20,8 +20,8 @@ static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 #define COMPOSE_FEW_TILES 256
 
 struct compose_worker {
-	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, zero between images */
-	uint8_t *touched; /* tiles_per_image flags */
+	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, tile t */
+	uint8_t *touched; /* valid where its flag here is set (tiles_per_image flags, 0 between images) */
 	uint8_t *run;     /* lay_run()'s tiles: tiles_per_image of them */
 	uint8_t *mask;    /* and their presence: mask_bytes */
 	int err;
@@ -37,9 +37,10 @@ struct compose {
 	struct brightness_tables thr; /* per volume image, made once */
 	struct tile_set all_dirty;    /* every tile of every image: compose_volumes() */
 	const struct turned_source *turned;
-	/* Patching: the sources with tiles in image k are img_src[img_first[k]
-	 * .. img_first[k + 1]), each with the mask bytes it lies in there. */
-	uint32_t *img_first;
+	/* Patching: the sources with tiles in image k = dirty->list[p] are
+	 * img_src[img_first[p] .. img_first[p + 1]), each with the mask bytes
+	 * it lies in there; pos[k] is p. */
+	uint32_t *img_first, *pos;
 	struct img_source {
 		uint32_t src;
 		struct rle_span span;
@@ -50,6 +51,7 @@ struct compose {
 	struct volume *out;
 	const struct compose_source *src;
 	unsigned n;
+	uint32_t jobs; /* run_images(): images (or list positions) 0 .. jobs */
 	atomic_uint next_image;
 };
 
@@ -60,7 +62,7 @@ static int workers_create(struct compose *c)
 		return -ENOMEM;
 	for (unsigned i = 0; i < c->workers; i++) {
 		struct compose_worker *w = &c->w[i];
-		w->tiles = calloc(c->tiles_per_image, VOLUME_TILE_BYTES);
+		w->tiles = malloc((size_t)c->tiles_per_image * VOLUME_TILE_BYTES);
 		w->touched = calloc(c->tiles_per_image, 1);
 		w->run = malloc((size_t)c->tiles_per_image * VOLUME_TILE_BYTES);
 		w->mask = calloc(c->mask_bytes, 1);
@@ -121,12 +123,35 @@ void compose_destroy(struct compose *c)
 	brightness_tables_finish(&c->thr);
 	tile_set_finish(&c->all_dirty);
 	free(c->img_first);
+	free(c->pos);
 	free(c->img_src);
 	free(c);
 }
 
+/* Tile t of w's dense image |= src (= src, when not touched yet). */
+static void dense_or(struct compose_worker *w, uint32_t t, const uint8_t *src)
+{
+	uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+	if (w->touched[t]) {
+		volume_tile_or(dst, src);
+		return;
+	}
+	volume_tile_copy(dst, src);
+	w->touched[t] = 1;
+}
+
+/* Tile t of w's dense image, touched (zero, when it was not). */
+static uint8_t *dense_touch(struct compose_worker *w, uint32_t t)
+{
+	uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
+	if (!w->touched[t])
+		volume_tile_zero(dst);
+	w->touched[t] = 1;
+	return dst;
+}
+
 /* The touched tiles of w's dense image, in order, as image k of c->out
- * (count of them), leaving the dense image zero. */
+ * (count of them), leaving none touched. */
 static int emit_image(struct compose *c, struct compose_worker *w, uint32_t k, uint32_t count)
 {
 	if (!count)
@@ -135,10 +160,8 @@ static int emit_image(struct compose *c, struct compose_worker *w, uint32_t k, u
 	for (uint32_t t = 0; t < c->tiles_per_image; t++) {
 		if (!w->touched[t])
 			continue;
-		uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
 		if (err == 0)
-			err = volume_image_append(c->out, k, t, tile);
-		volume_tile_zero(tile);
+			err = volume_image_append(c->out, k, t, w->tiles + (size_t)t * VOLUME_TILE_BYTES);
 		w->touched[t] = 0;
 	}
 	return err;
@@ -158,7 +181,7 @@ static void image_job(void *arg, unsigned index)
 	struct compose_worker *w = &j->c->w[index];
 	for (;;) {
 		uint32_t k = atomic_fetch_add(&j->c->next_image, 1);
-		if (k >= j->c->image_count)
+		if (k >= j->c->jobs)
 			break;
 		int err = j->fn(j->c, w, k);
 		if (err < 0 && w->err == 0)
@@ -166,12 +189,13 @@ static void image_job(void *arg, unsigned index)
 	}
 }
 
-/* fn on every image of c->out, on the pool's workers (on this thread, as
- * worker 0, without a pool). */
-static int run_images(struct compose *c, struct volume *out, image_fn fn)
+/* fn on images (or list positions) 0 .. count of c->out, on the pool's
+ * workers (on this thread, as worker 0, without a pool). */
+static int run_images(struct compose *c, struct volume *out, image_fn fn, uint32_t count)
 {
 	struct image_job j = { c, fn };
 	c->out = out;
+	c->jobs = count;
 	atomic_store(&c->next_image, 0);
 	for (unsigned i = 0; i < c->workers; i++)
 		c->w[i].err = 0;
@@ -251,15 +275,13 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 		for (uint64_t both = m & volume_mask_word(dirty, bytes, x); both; both &= both - 1) {
 			uint32_t bitno = (uint32_t)__builtin_ctzll(both), t = x * 64 + bitno;
 			uint32_t i = base + volume_word_bits(m & ((1ull << bitno) - 1));
-			uint8_t *dst = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-			w->touched[t] = 1;
 			if (tiles) {
-				volume_tile_or(dst, tiles + (size_t)i * VOLUME_TILE_BYTES);
+				dense_or(w, t, tiles + (size_t)i * VOLUME_TILE_BYTES);
 				continue;
 			}
 			uint32_t off;
 			memcpy(&off, img->data + c->mask_bytes + i * sizeof(uint32_t), sizeof(off));
-			if (off >= avail || !or_coded_tile(codes + off, avail - off, dst))
+			if (off >= avail || !or_coded_tile(codes + off, avail - off, dense_touch(w, t)))
 				return -EINVAL;
 		}
 		base += volume_word_bits(m);
@@ -268,7 +290,7 @@ static int gather_dirty(const struct compose *c, struct compose_worker *w, const
 }
 
 /* Writes the gathered (touched) dirty tiles that are still in w's dense
- * image over old's, whose mask holds them, leaving the dense image zero. */
+ * image over old's, whose mask holds them, leaving none touched. */
 static void write_touched(const struct compose *c, struct compose_worker *w, struct volume_image *old,
 			  const uint8_t *dirty)
 {
@@ -280,9 +302,8 @@ static void write_touched(const struct compose *c, struct compose_worker *w, str
 			if (!w->touched[t]) /* spliced in already (lay_run()) */
 				continue;
 			uint32_t i = base + volume_word_bits(m & ((1ull << bitno) - 1));
-			uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-			volume_tile_copy(old->tiles + (size_t)i * VOLUME_TILE_BYTES, tile);
-			volume_tile_zero(tile);
+			volume_tile_copy(old->tiles + (size_t)i * VOLUME_TILE_BYTES,
+					 w->tiles + (size_t)t * VOLUME_TILE_BYTES);
 			w->touched[t] = 0;
 		}
 		base += volume_word_bits(m);
@@ -311,7 +332,7 @@ static bool presence_changes(const struct compose *c, const struct compose_worke
 
 /* Tiles first..last of image old as they are to be, in order in w->run
  * with their presence in w->mask: the gathered tiles where dirty (taken
- * from w's dense image, which is left zero there), else old's stored
+ * from w's dense image, left untouched there), else old's stored
  * ones (from index at on). */
 static void lay_run(const struct compose *c, struct compose_worker *w, const struct volume_image *old,
 		    const uint8_t *dirty, uint32_t first, uint32_t last, uint32_t at)
@@ -323,9 +344,7 @@ static void lay_run(const struct compose *c, struct compose_worker *w, const str
 		if (bit(dirty, t)) {
 			has = w->touched[t];
 			if (has) {
-				uint8_t *tile = w->tiles + (size_t)t * VOLUME_TILE_BYTES;
-				volume_tile_copy(to, tile);
-				volume_tile_zero(tile);
+				volume_tile_copy(to, w->tiles + (size_t)t * VOLUME_TILE_BYTES);
 				w->touched[t] = 0;
 			}
 		} else if (had) {
@@ -358,71 +377,77 @@ static int patch_shifted(const struct compose *c, struct compose_worker *w, uint
 	return 0;
 }
 
-/* Image k of c->out anew: its dirty tiles composed from the sources
- * (gathered into w's dense image first), then patched in place. */
-static int patch_image(struct compose *c, struct compose_worker *w, uint32_t k)
+/* Image k = c->dirty->list[p] of c->out anew: its dirty tiles composed
+ * from the sources (gathered into w's dense image first), then patched
+ * in place. */
+static int patch_image(struct compose *c, struct compose_worker *w, uint32_t p)
 {
+	uint32_t k = c->dirty->list[p];
 	const uint8_t *dirty = c->dirty->mask + (size_t)k * c->mask_bytes;
-	if (!tile_set_image_any(c->dirty, k)) /* most images */
+	if (volume_all_zero(dirty, c->mask_bytes))
 		return 0;
 	c->out->images[k].stamp = 0; /* its tiles change in place below */
 	int err = 0;
-	for (uint32_t i = c->img_first[k]; i < c->img_first[k + 1] && err == 0; i++)
+	for (uint32_t i = c->img_first[p]; i < c->img_first[p + 1] && err == 0; i++)
 		err = gather_dirty(c, w, &c->img_src[i], k, dirty);
 	if (err == 0)
 		err = patch_shifted(c, w, k, dirty);
-	if (err < 0) { /* leave the dense image zero for the next */
-		for (uint32_t t = 0; t < c->tiles_per_image; t++)
-			if (w->touched[t]) {
-				volume_tile_zero(w->tiles + (size_t)t * VOLUME_TILE_BYTES);
-				w->touched[t] = 0;
-			}
-	}
+	if (err < 0) /* leave none touched for the next */
+		memset(w->touched, 0, c->tiles_per_image);
 	return err;
 }
 
-typedef void (*lit_fn)(struct compose *c, unsigned s, uint32_t k, struct rle_span span);
+typedef void (*lit_fn)(struct compose *c, unsigned s, uint32_t p, struct rle_span span);
 
-/* Calls fn(c, s, k, span) for each image k that the patch marks and in
- * which source s has tiles, with the mask bytes they lie in (all, where
- * not known). */
+/* Calls fn(c, s, p, span) for each position p of the patch's list whose
+ * image source s has tiles in, with the mask bytes they lie in (all,
+ * where not known): along the source's list of images with tiles or the
+ * patch's, whichever is shorter. */
 static void for_each_lit(struct compose *c, unsigned s, lit_fn fn)
 {
 	const struct compose_source *src = &c->src[s];
-	const uint8_t *marked = c->dirty->images;
-	if (src->rle && src->rle->lit) {
-		for (uint32_t i = 0; i < src->rle->lit_count; i++)
-			if (marked[src->rle->lit[i]])
-				fn(c, s, src->rle->lit[i], src->rle->lit_span[i]);
+	const struct tile_set *d = c->dirty;
+	const struct rle_volume *r = src->rle;
+	if (r && r->lit && r->lit_count < d->listed) {
+		for (uint32_t i = 0; i < r->lit_count; i++)
+			if (d->images[r->lit[i]])
+				fn(c, s, c->pos[r->lit[i]], r->images[r->lit[i]].span);
 		return;
 	}
-	for (uint32_t k = 0; k < c->image_count; k++)
-		if (marked[k] && source_mask(src, k))
-			fn(c, s, k, (struct rle_span){ 0, c->mask_bytes - 1 });
+	for (uint32_t p = 0; p < d->listed; p++) {
+		uint32_t k = d->list[p];
+		if (source_mask(src, k))
+			fn(c, s, p, r ? r->images[k].span : (struct rle_span){ 0, c->mask_bytes - 1 });
+	}
 }
 
-static void count_lit(struct compose *c, unsigned s, uint32_t k, struct rle_span span)
+static void count_lit(struct compose *c, unsigned s, uint32_t p, struct rle_span span)
 {
-	c->img_first[k + 1]++;
+	c->img_first[p + 1]++;
 }
 
-static void place_lit(struct compose *c, unsigned s, uint32_t k, struct rle_span span)
+static void place_lit(struct compose *c, unsigned s, uint32_t p, struct rle_span span)
 {
-	c->img_src[c->img_first[k]++] = (struct img_source){ s, span };
+	c->img_src[c->img_first[p]++] = (struct img_source){ s, span };
 }
 
 /* The sources of each image the patch marks (img_first, img_src): an
  * object touches a few images, and there may be thousands of objects. */
 static int index_sources(struct compose *c)
 {
+	const uint32_t listed = c->dirty->listed;
 	if (!c->img_first && !(c->img_first = malloc((c->image_count + 1) * sizeof(*c->img_first))))
 		return -ENOMEM;
-	memset(c->img_first, 0, (c->image_count + 1) * sizeof(*c->img_first));
+	if (!c->pos && !(c->pos = malloc(c->image_count * sizeof(*c->pos))))
+		return -ENOMEM;
+	memset(c->img_first, 0, (listed + 1) * sizeof(*c->img_first));
+	for (uint32_t p = 0; p < listed; p++)
+		c->pos[c->dirty->list[p]] = p;
 	for (unsigned s = 0; s < c->n; s++)
 		for_each_lit(c, s, count_lit);
-	for (uint32_t k = 0; k < c->image_count; k++)
-		c->img_first[k + 1] += c->img_first[k];
-	size_t total = c->img_first[c->image_count];
+	for (uint32_t p = 0; p < listed; p++)
+		c->img_first[p + 1] += c->img_first[p];
+	size_t total = c->img_first[listed];
 	if (total > c->img_src_cap) {
 		struct img_source *a = realloc(c->img_src, total * sizeof(*a));
 		if (!a)
@@ -433,8 +458,8 @@ static int index_sources(struct compose *c)
 	/* Placed at their image's start, which moves on to the next's. */
 	for (unsigned s = 0; s < c->n; s++)
 		for_each_lit(c, s, place_lit);
-	for (uint32_t k = c->image_count; k > 0; k--)
-		c->img_first[k] = c->img_first[k - 1];
+	for (uint32_t p = listed; p > 0; p--)
+		c->img_first[p] = c->img_first[p - 1];
 	c->img_first[0] = 0;
 	return 0;
 }
@@ -444,20 +469,18 @@ static int index_sources(struct compose *c)
 static bool few_dirty(const struct tile_set *dirty)
 {
 	uint32_t n = 0;
-	for (uint32_t k = 0; k < dirty->image_count && n <= COMPOSE_FEW_TILES; k++)
-		if (dirty->images[k])
-			n += volume_mask_count(dirty->mask + (size_t)k * dirty->mask_bytes, dirty->mask_bytes);
+	for (uint32_t p = 0; p < dirty->listed && n <= COMPOSE_FEW_TILES; p++)
+		n += volume_mask_count(dirty->mask + (size_t)dirty->list[p] * dirty->mask_bytes, dirty->mask_bytes);
 	return n <= COMPOSE_FEW_TILES;
 }
 
-/* A patch of few tiles, on this thread: the marked images in turn. */
+/* A patch of few tiles, on this thread: the listed images in turn. */
 static int patch_alone(struct compose *c, struct volume *vol)
 {
 	int err = 0;
 	c->out = vol;
-	for (uint32_t k = 0; k < c->image_count && err == 0; k++)
-		if (c->dirty->images[k])
-			err = patch_image(c, &c->w[0], k);
+	for (uint32_t p = 0; p < c->dirty->listed && err == 0; p++)
+		err = patch_image(c, &c->w[0], p);
 	c->out = NULL;
 	return err;
 }
@@ -473,7 +496,7 @@ int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *
 	c->dirty = dirty;
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return few_dirty(dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image);
+	return few_dirty(dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image, dirty->listed);
 }
 
 /* A composition from nothing is a patch of an empty volume where every
@@ -489,17 +512,18 @@ int compose_volumes(struct compose *c, struct volume *out, const struct compose_
 /* Image k of dirty |= mask over bytes first..last. */
 static void mark_image(struct tile_set *dirty, uint32_t k, const uint8_t *mask, uint32_t first, uint32_t last)
 {
-	uint8_t *d = dirty->mask + (size_t)k * dirty->mask_bytes;
+	uint8_t *d = tile_set_flag(dirty, k);
 	for (uint32_t b = first; b <= last; b++)
 		d[b] |= mask[b];
-	dirty->images[k] = 1;
 }
 
 void compose_add_footprint(struct tile_set *dirty, const struct compose_source *src)
 {
 	const struct rle_volume *r = src->rle;
-	for (uint32_t i = 0; r && r->lit && i < r->lit_count; i++)
-		mark_image(dirty, r->lit[i], r->images[r->lit[i]].data, r->lit_span[i].first, r->lit_span[i].last);
+	for (uint32_t i = 0; r && r->lit && i < r->lit_count; i++) {
+		const struct rle_image *img = &r->images[r->lit[i]];
+		mark_image(dirty, r->lit[i], img->data, img->span.first, img->span.last);
+	}
 	if (r && r->lit)
 		return;
 	for (uint32_t k = 0; k < dirty->image_count; k++) {
@@ -519,7 +543,8 @@ int tile_set_init(struct tile_set *s, uint32_t image_count, uint32_t tiles_per_i
 				.mask_bytes = mask_bytes };
 	s->mask = calloc(image_count, mask_bytes);
 	s->images = calloc(image_count, 1);
-	if (s->mask && s->images)
+	s->list = calloc(image_count ? image_count : 1, sizeof(*s->list));
+	if (s->mask && s->images && s->list)
 		return 0;
 	tile_set_finish(s);
 	return -ENOMEM;
@@ -529,6 +554,7 @@ void tile_set_finish(struct tile_set *s)
 {
 	free(s->mask);
 	free(s->images);
+	free(s->list);
 	*s = (struct tile_set){ 0 };
 }
 
@@ -542,53 +568,58 @@ void tile_set_fill(struct tile_set *s)
 			m[full] = (uint8_t)((1u << rest) - 1);
 	}
 	memset(s->images, 1, s->image_count);
+	for (uint32_t k = 0; k < s->image_count; k++)
+		s->list[k] = k;
+	s->listed = s->image_count;
 }
 
 void tile_set_clear(struct tile_set *s)
 {
-	for (uint32_t k = 0; k < s->image_count; k++)
-		if (s->images[k]) {
-			memset(s->mask + (size_t)k * s->mask_bytes, 0, s->mask_bytes);
-			s->images[k] = 0;
+	for (uint32_t p = 0; p < s->listed; p++) {
+		uint32_t k = s->list[p];
+		memset(s->mask + (size_t)k * s->mask_bytes, 0, s->mask_bytes);
+		s->images[k] = 0;
+	}
+	s->listed = 0;
+}
+
+uint8_t *tile_set_flag(struct tile_set *s, uint32_t k)
+{
+	if (!s->images[k]) {
+		s->images[k] = 1;
+		s->list[s->listed++] = k;
+	}
+	return s->mask + (size_t)k * s->mask_bytes;
+}
+
+void tile_set_or(struct tile_set *dst, const struct tile_set *src)
+{
+	for (uint32_t p = 0; p < src->listed; p++) {
+		uint32_t k = src->list[p];
+		const uint8_t *m = src->mask + (size_t)k * src->mask_bytes;
+		uint8_t *d = tile_set_flag(dst, k);
+		uint32_t b = 0;
+		for (; b + 8 <= src->mask_bytes; b += 8) {
+			uint64_t x, y;
+			memcpy(&x, d + b, sizeof(x));
+			memcpy(&y, m + b, sizeof(y));
+			x |= y;
+			memcpy(d + b, &x, sizeof(x));
 		}
+		for (; b < src->mask_bytes; b++)
+			d[b] |= m[b];
+	}
 }
 
 void tile_set_copy(struct tile_set *dst, const struct tile_set *src)
 {
 	tile_set_clear(dst);
-	for (uint32_t k = 0; k < src->image_count; k++)
-		if (src->images[k]) {
-			size_t at = (size_t)k * src->mask_bytes;
-			memcpy(dst->mask + at, src->mask + at, src->mask_bytes);
-			dst->images[k] = 1;
-		}
+	tile_set_or(dst, src);
 }
 
 bool tile_set_image_any(const struct tile_set *s, uint32_t k)
 {
 	return s->images[k] && !volume_all_zero(s->mask + (size_t)k * s->mask_bytes, s->mask_bytes);
-}
-
-bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask)
-{
-	if (!s->images[k])
-		return false;
-	const uint8_t *m = s->mask + (size_t)k * s->mask_bytes;
-	uint64_t any = 0;
-	uint32_t b = 0;
-	for (; b + 8 <= s->mask_bytes; b += 8) {
-		uint64_t x, y;
-		memcpy(&x, mask + b, sizeof(x));
-		memcpy(&y, m + b, sizeof(y));
-		any |= y;
-		x |= y;
-		memcpy(mask + b, &x, sizeof(x));
-	}
-	for (; b < s->mask_bytes; b++) {
-		any |= m[b];
-		mask[b] |= m[b];
-	}
-	return any != 0;
 }
 
 /* ---- turned canvases ---- */
@@ -619,8 +650,7 @@ static void halftone_into(struct compose *c, struct compose_worker *w, uint32_t 
 	memcpy(&rows, tile, sizeof(rows));
 	if (c->halftone(tile + sizeof(rows), rows, brightness_table(&c->thr, k, t % tiles_x), packed)) {
 		*count += !w->touched[t];
-		w->touched[t] = 1;
-		volume_tile_or(w->tiles + (size_t)t * VOLUME_TILE_BYTES, packed);
+		dense_or(w, t, packed);
 	}
 }
 
@@ -691,7 +721,7 @@ int compose_turned(struct compose *c, struct volume *out, const struct turned_so
 	volume_clear(out);
 	c->turned = src;
 	c->n = n;
-	return run_images(c, out, turn_image);
+	return run_images(c, out, turn_image, c->image_count);
 }
 
 unsigned canvas_tile_lift(const uint8_t *src, uint32_t ty, int32_t lift, uint32_t height,

@@ -24,13 +24,15 @@ struct pool;
 
 /* Tiles marked in a volume's tiling: a mask per image (image_count *
  * mask_bytes, bit t of image k's for its tile t) and, per image, whether
- * its mask may have a bit (a zero flag means a zero mask). What walks
- * the marks pays for the images flagged, not for all: a small object
- * marks a few. */
+ * its mask may have a bit (a zero flag means a zero mask); the flagged
+ * images are also listed, in the order they were flagged (list[0 ..
+ * listed)). What walks the marks walks the list, and so pays for the
+ * images flagged, not for all: a small object marks a few. */
 struct tile_set {
 	uint32_t image_count, tiles_per_image, mask_bytes;
 	uint8_t *mask;
 	uint8_t *images;
+	uint32_t *list, listed;
 };
 
 /* Empty, for a volume of image_count images of tiles_per_image tiles
@@ -44,8 +46,10 @@ void tile_set_fill(struct tile_set *s);
 void tile_set_clear(struct tile_set *s);
 /* dst (of the same tiling) becomes src. */
 void tile_set_copy(struct tile_set *dst, const struct tile_set *src);
-/* mask |= image k's marks (mask_bytes); whether it has any. */
-bool tile_set_or_image(const struct tile_set *s, uint32_t k, uint8_t *mask);
+/* dst (of the same tiling) |= src. */
+void tile_set_or(struct tile_set *dst, const struct tile_set *src);
+/* Image k flagged (and listed), its mask left as it is; returns the mask. */
+uint8_t *tile_set_flag(struct tile_set *s, uint32_t k);
 /* Whether image k has a mark (its flag, then its mask). */
 bool tile_set_image_any(const struct tile_set *s, uint32_t k);
 

@@ -83,6 +83,17 @@ struct rle_volume *rle_volume_new(uint32_t image_count, uint32_t mask_bytes, uin
 	return r;
 }
 
+/* The bytes of a non-empty mask between which its set bits lie. */
+static struct rle_span mask_span(const uint8_t *mask, uint32_t bytes)
+{
+	uint32_t first = 0, last = bytes - 1;
+	while (first < last && !mask[first])
+		first++;
+	while (last > first && !mask[last])
+		last--;
+	return (struct rle_span){ first, last };
+}
+
 int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, const uint8_t *tiles, uint32_t count,
 			 struct rle_scratch *s)
 {
@@ -111,19 +122,11 @@ int rle_volume_set_image(struct rle_volume *r, uint32_t k, const uint8_t *mask, 
 	if (!data)
 		return -ENOMEM;
 	memcpy(data, s->buf, len);
-	*img = (struct rle_image){ .tile_count = count, .len = (uint32_t)len, .data = data };
+	*img = (struct rle_image){ .tile_count = count,
+				   .len = (uint32_t)len,
+				   .data = data,
+				   .span = mask_span(mask, r->mask_bytes) };
 	return 0;
-}
-
-/* The bytes of a non-empty mask between which its set bits lie. */
-static struct rle_span mask_span(const uint8_t *mask, uint32_t bytes)
-{
-	uint32_t first = 0, last = bytes - 1;
-	while (first < last && !mask[first])
-		first++;
-	while (last > first && !mask[last])
-		last--;
-	return (struct rle_span){ first, last };
 }
 
 void rle_volume_sum(struct rle_volume *r)
@@ -138,23 +141,14 @@ void rle_volume_sum(struct rle_volume *r)
 	}
 	r->packed_bytes = r->tiles * r->tile_bytes;
 	free(r->lit);
-	free(r->lit_span);
 	r->lit = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit));
-	r->lit_span = malloc((r->lit_count ? r->lit_count : 1) * sizeof(*r->lit_span));
-	if (!r->lit || !r->lit_span) {
-		free(r->lit);
-		free(r->lit_span);
-		r->lit = NULL; /* patching then looks at every image */
-		r->lit_span = NULL;
+	if (!r->lit) /* patching then looks at every image */
 		return;
-	}
 	uint32_t n = 0;
 	for (uint32_t k = 0; k < r->image_count; k++)
-		if (r->images[k].tile_count) {
-			r->lit_span[n] = mask_span(r->images[k].data, r->mask_bytes);
+		if (r->images[k].tile_count)
 			r->lit[n++] = k;
-		}
-	r->bytes += r->lit_count * (sizeof(*r->lit) + sizeof(*r->lit_span));
+	r->bytes += r->lit_count * sizeof(*r->lit);
 }
 
 struct rle_volume *rle_volume_encode(const struct volume *vol)
@@ -186,7 +180,6 @@ void rle_volume_free(struct rle_volume *r)
 		free(r->images[k].data);
 	free(r->images);
 	free(r->lit);
-	free(r->lit_span);
 	free(r);
 }
 

@@ -16,11 +16,18 @@
 
 #include "volume.h"
 
+/* Mask bytes first..last (inclusive): every set bit of an image's mask
+ * lies in them. */
+struct rle_span {
+	uint32_t first, last;
+};
+
 struct rle_image {
 	uint32_t tile_count;
-	uint32_t len;  /* bytes of data */
-	uint8_t *data; /* mask (the volume's mask_bytes), a uint32_t offset per
+	uint32_t len;         /* bytes of data */
+	uint8_t *data;        /* mask (the volume's mask_bytes), a uint32_t offset per
 			* stored tile (from the first code), the coded tiles in order */
+	struct rle_span span; /* of its mask, when it has tiles */
 };
 
 struct rle_volume {
@@ -30,16 +37,8 @@ struct rle_volume {
 	uint64_t bytes;        /* memory held, structures included */
 	uint64_t packed_bytes; /* what the tiles take uncoded (tiles * tile_bytes) */
 	struct rle_image *images;
-	/* The images with tiles, in order (rle_volume_sum()), or NULL; and
-	 * for each, the mask bytes its tiles lie between. */
+	/* The images with tiles, in order (rle_volume_sum()), or NULL. */
 	uint32_t *lit, lit_count;
-	struct rle_span *lit_span;
-};
-
-/* Mask bytes first..last (inclusive): every set bit of an image's mask
- * lies in them. */
-struct rle_span {
-	uint32_t first, last;
 };
 
 /* A tile of a canvas volume: an object rendered before the halftone, as

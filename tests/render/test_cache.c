@@ -440,8 +440,76 @@ static void test_codec(void)
 			destroy(&w.obj[i]);
 }
 
+/* Whether s lists exactly its flagged images, each once, and has no
+ * mark outside them. */
+static bool tile_set_sound(const struct tile_set *s)
+{
+	uint32_t flagged = 0;
+	uint8_t *seen = calloc(s->image_count, 1);
+	bool ok = seen != NULL;
+	for (uint32_t p = 0; ok && p < s->listed; p++) {
+		uint32_t k = s->list[p];
+		ok = k < s->image_count && s->images[k] && !seen[k];
+		if (ok)
+			seen[k] = 1;
+	}
+	for (uint32_t k = 0; ok && k < s->image_count; k++) {
+		flagged += s->images[k] != 0;
+		ok = s->images[k] || volume_all_zero(s->mask + (size_t)k * s->mask_bytes, s->mask_bytes);
+	}
+	free(seen);
+	return ok && flagged == s->listed;
+}
+
+/* Tile sets keep the list of their flagged images through flag, or,
+ * copy, clear and fill, and or/copy give the masks' OR and copy. */
+static void test_tile_sets(void)
+{
+	struct tile_set a, b, c;
+	const uint32_t images = 40, tiles = 100; /* 13 mask bytes: a partial word */
+	CHECK_EQ(tile_set_init(&a, images, tiles), 0);
+	CHECK_EQ(tile_set_init(&b, images, tiles), 0);
+	CHECK_EQ(tile_set_init(&c, images, tiles), 0);
+	uint8_t *want = calloc(images, a.mask_bytes);
+	rng_state = 11;
+	for (int round = 0; round < 20; round++) {
+		tile_set_clear(&a);
+		CHECK(a.listed == 0 && tile_set_sound(&a));
+		tile_set_copy(&b, &a);
+		memset(want, 0, (size_t)images * a.mask_bytes);
+		for (int i = 0; i < 30; i++) { /* some into a, some into b */
+			struct tile_set *s = i % 3 ? &a : &b;
+			uint32_t k = rnd() % images, t = rnd() % tiles;
+			uint8_t *m = tile_set_flag(s, k);
+			if (rnd() % 4) { /* else flagged with no mark */
+				m[t / 8] |= (uint8_t)(1u << (t % 8));
+				want[(size_t)k * a.mask_bytes + t / 8] |= (uint8_t)(1u << (t % 8));
+			}
+		}
+		CHECK(tile_set_sound(&a) && tile_set_sound(&b));
+		tile_set_copy(&c, &a); /* c had the last round's marks */
+		CHECK(tile_set_sound(&c) && c.listed == a.listed);
+		CHECK(!memcmp(c.mask, a.mask, (size_t)images * a.mask_bytes));
+		tile_set_or(&c, &b);
+		CHECK(tile_set_sound(&c));
+		CHECK(!memcmp(c.mask, want, (size_t)images * a.mask_bytes));
+		for (uint32_t k = 0; k < images; k++)
+			CHECK_EQ(tile_set_image_any(&c, k),
+				 !volume_all_zero(want + (size_t)k * a.mask_bytes, a.mask_bytes));
+	}
+	tile_set_fill(&c);
+	CHECK(c.listed == images && tile_set_sound(&c));
+	tile_set_clear(&c);
+	CHECK(c.listed == 0 && tile_set_sound(&c) && volume_all_zero(c.mask, (size_t)images * c.mask_bytes));
+	free(want);
+	tile_set_finish(&a);
+	tile_set_finish(&b);
+	tile_set_finish(&c);
+}
+
 int main(void)
 {
+	test_tile_sets();
 	test_codec();
 	for (size_t i = 0; i < sizeof(grid_values); i++)
 		grid_values[i] = (uint8_t)rnd();
