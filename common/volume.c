@@ -259,55 +259,6 @@ int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t
 	return 0;
 }
 
-/* The first and last tiles whose presence differs between masks a and b;
- * false when none does. */
-static bool presence_differs(const uint8_t *a, const uint8_t *b, uint32_t bytes, uint32_t *first, uint32_t *last)
-{
-	bool any = false;
-	for (uint32_t x = 0; x < volume_mask_words(bytes); x++) {
-		uint64_t d = volume_mask_word(a, bytes, x) ^ volume_mask_word(b, bytes, x);
-		if (!d)
-			continue;
-		if (!any)
-			*first = x * 64 + (uint32_t)__builtin_ctzll(d);
-		*last = x * 64 + 63 - (uint32_t)__builtin_clzll(d);
-		any = true;
-	}
-	return any;
-}
-
-int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src, const uint8_t *changed)
-{
-	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes || k >= src->image_count)
-		return -EINVAL;
-	const struct volume_image *s = &src->images[k];
-	struct volume_image *d = &dst->images[k];
-	const uint32_t bytes = src->mask_bytes;
-	uint32_t first = 0, last = 0;
-	bool moved = presence_differs(s->mask, d->mask, bytes, &first, &last);
-	if (moved) { /* both hold the same tiles before first and after last */
-		const uint8_t *run = s->tiles + (size_t)volume_stored_index(s->mask, first) * VOLUME_TILE_BYTES;
-		int r = volume_image_splice(dst, k, first, last, s->mask, run);
-		if (r < 0)
-			return r;
-	}
-	uint32_t base = 0; /* the stored index of word x's first tile */
-	for (uint32_t x = 0; x < volume_mask_words(bytes); x++) {
-		uint64_t m = volume_mask_word(s->mask, bytes, x);
-		for (uint64_t c = volume_mask_word(changed, bytes, x) & m; c; c &= c - 1) {
-			uint32_t bitno = (uint32_t)__builtin_ctzll(c), t = x * 64 + bitno;
-			if (moved && t >= first && t <= last)
-				continue; /* copied with the run */
-			size_t at = (size_t)(base + volume_word_bits(m & ((1ull << bitno) - 1))) * VOLUME_TILE_BYTES;
-			volume_tile_copy(d->tiles + at, s->tiles + at);
-		}
-		base += volume_word_bits(m);
-	}
-	d->stamp = s->stamp; /* the same contents now */
-	dst->origin = 0;
-	return 0;
-}
-
 int volume_copy(struct volume *dst, const struct volume *src)
 {
 	if (dst->image_count != src->image_count || dst->mask_bytes != src->mask_bytes)

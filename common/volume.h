@@ -32,7 +32,7 @@ struct volume_image {
 	 * (volume_new_stamp()), so that two images with the same stamp, not
 	 * 0, need not be compared (the upload delta, projwire.h): every
 	 * change through the calls below sets it to 0, and a copy of an image
-	 * (volume_copy_image(), volume_update_image(), volume_image_exchange())
+	 * (volume_copy_image(), volume_image_exchange())
 	 * takes the source's. A writer that changes an image's tiles in place
 	 * sets it to 0 first. */
 	uint64_t stamp;
@@ -202,13 +202,6 @@ uint32_t volume_stored_index(const uint8_t *mask, uint32_t t);
  * them and one move, not a copy of the image. 0 or -ENOMEM/-EINVAL. */
 int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t last, const uint8_t *mask,
 			const uint8_t *run);
-
-/* Image k of dst becomes image k of src (same geometry), where the two
- * differ at most in the tiles whose bit is set in changed (mask_bytes):
- * the tiles from the first whose presence differs to the last are spliced
- * in from src (volume_image_splice()), and the other changed tiles are
- * copied in place. 0 or -ENOMEM/-EINVAL. */
-int volume_update_image(struct volume *dst, uint32_t k, const struct volume *src, const uint8_t *changed);
 
 /* Deep copy of src into dst of the same geometry. 0 or -ENOMEM/-EINVAL. */
 int volume_copy(struct volume *dst, const struct volume *src);

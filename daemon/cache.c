@@ -40,15 +40,15 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	c->pool = pool;
 	c->turns = turns && c->compose && compose_can_turn(c->compose);
 	c->turned_vol = volume_create(geom);
-	c->prev = volume_create(geom);
 	c->rest_vol = volume_create(geom);
 	c->tmp = volume_create(geom);
-	uint32_t tiles = c->prev ? volume_tiles_per_image(c->prev) : 0;
-	bool marks = c->prev && tile_set_init(&c->dirty, c->prev->image_count, tiles) == 0 &&
-		     tile_set_init(&c->since, c->prev->image_count, tiles) == 0;
+	uint32_t tiles = c->tmp ? volume_tiles_per_image(c->tmp) : 0, images = c->tmp ? c->tmp->image_count : 0;
+	bool marks = c->tmp && tile_set_init(&c->dirty, images, tiles) == 0 &&
+		     tile_set_init(&c->since, images, tiles) == 0;
 	for (unsigned g = 0; marks && g < CHANGED_HISTORY; g++)
-		marks = tile_set_init(&c->changed[g], c->prev->image_count, tiles) == 0;
-	if (!c->compose || !c->prev || !marks || !c->rest_vol || !c->tmp || !c->turned_vol) {
+		marks = tile_set_init(&c->changed[g], images, tiles) == 0;
+	c->stamps = calloc(images ? images : 1, sizeof(*c->stamps));
+	if (!c->compose || !c->tmp || !marks || !c->stamps || !c->rest_vol || !c->turned_vol) {
 		cache_destroy(c);
 		errno = ENOMEM;
 		return NULL;
@@ -130,11 +130,11 @@ void cache_destroy(struct cache *c)
 	batch_destroy(c->batch);
 	free(c->rest);
 	free(c->sources);
-	volume_destroy(c->prev);
 	tile_set_finish(&c->dirty);
 	for (unsigned g = 0; g < CHANGED_HISTORY; g++)
 		tile_set_finish(&c->changed[g]);
 	tile_set_finish(&c->since);
+	free(c->stamps);
 	volume_destroy(c->rest_vol);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);
@@ -582,6 +582,6 @@ void cache_get_stats(const struct cache *c, struct cache_stats *out)
 		out->cached += c->entries[i]->vol || c->entries[i]->canvas;
 	out->bytes = held(c);
 	out->budget = c->budget;
-	out->working_bytes = volume_held_bytes(c->rest_vol) + volume_held_bytes(c->tmp) + volume_held_bytes(c->prev) +
+	out->working_bytes = volume_held_bytes(c->rest_vol) + volume_held_bytes(c->tmp) +
 			     volume_held_bytes(c->turned_vol) + batch_held(c->batch);
 }

@@ -28,14 +28,15 @@
  *
  * The volume shown is the OR of the cached volumes and the render of every
  * object not composed from the cache (compose.h says why that is exact:
- * bit for bit the renderer's render of the whole scene). The cache keeps
- * its last composition and patches it (compose_patch()): only the tiles
- * where an object left it (changed, hidden, gone, evicted), where the
- * objects rendered this time were last time and are now, and where a
- * cached object comes back are composed anew. A change costs what it
- * touches, plus copying out the images it changed: a volume handed out
- * again (the pipeline passes a few round) is known by its origin mark
- * (volume.h) and gets only the images changed since it last got one.
+ * bit for bit the renderer's render of the whole scene). The cache makes
+ * each composition in the volume it hands out, by patching
+ * (compose_patch()) the composition that volume already holds: a volume
+ * handed out before (the pipeline passes a few round) is known by its
+ * origin mark (volume.h), and it is composed anew only where the
+ * compositions since changed: where an object left (changed, hidden,
+ * gone, evicted), where the objects rendered were and now are, and where
+ * a cached object came back. So a change costs the tiles it touches in
+ * each volume it reaches. An unknown volume is composed whole.
  * Many small objects to cache at once are rendered side by side on the
  * pool's workers (batch.h).
  *

@@ -69,10 +69,11 @@ struct cache {
 	/* Entries, sorted by key. */
 	struct entry **entries;
 	uint32_t count, cap;
-	/* The last composition (what cache_render() last handed out), valid
-	 * or not, and per image the tiles of it that may have changed since:
-	 * where objects left it, where the rest was, where new ones come. */
-	struct volume *prev;
+	/* Whether the last volume cache_render() made was composed (the
+	 * history below then leads up to it), and per image the tiles of that
+	 * composition that may change in the next: where objects left it,
+	 * where the rest was, where new ones come. No volume of it is kept:
+	 * each composition is made in the volume it is handed out in. */
 	bool prev_valid, composed, rest_rendered;
 	struct tile_set dirty;
 	/* The plan, made by cache_plan() for cache_render(). */
@@ -105,12 +106,14 @@ struct cache {
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */
 	/* Handing out: compositions made (gen), the tiles each of the last
-	 * CHANGED_HISTORY changed (changed[gen % CHANGED_HISTORY]), and the
-	 * last volumes handed out, known by the origin mark (volume.h) each
-	 * got and the composition it holds. */
+	 * CHANGED_HISTORY changed (changed[gen % CHANGED_HISTORY]), the
+	 * stamp (volume.h) of each image of the last, and the last volumes
+	 * handed out, known by the origin mark (volume.h) each got and the
+	 * composition it holds. */
 	uint64_t gen;
 	struct tile_set changed[CHANGED_HISTORY];
 	struct tile_set since; /* work space: what changed since a volume handed out */
+	uint64_t *stamps;
 	struct handed {
 		uint64_t origin, gen;
 	} handed[HANDED_VOLUMES];

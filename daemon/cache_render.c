@@ -46,8 +46,8 @@ static int render_turned(struct cache *c, struct renderer *r, const struct scene
 			c->unturned[d].turn = 0;
 			c->unturned[d].lift = 0;
 		}
-		struct rle_volume *cv = rle_volume_new(c->prev->image_count, c->prev->mask_bytes,
-						       volume_tiles_per_image(c->prev), CANVAS_TILE_BYTES);
+		struct rle_volume *cv = rle_volume_new(c->tmp->image_count, c->tmp->mask_bytes,
+						       volume_tiles_per_image(c->tmp), CANVAS_TILE_BYTES);
 		if (!cv)
 			return -ENOMEM;
 		c->made_canvas[i] = cv;
@@ -179,74 +179,73 @@ static void note_changes(struct cache *c)
 		tile_set_fill(changed);
 }
 
-/* The images of the composition just made that may have changed (all
- * when it was made whole) get new stamps (volume.h): each then differs
- * from every volume handed out before, and an image that did not change
+/* The images of the composition about to be made that may change (all
+ * when it is made whole) get new stamps (volume.h): each then differs
+ * from every volume handed out before, and an image that does not change
  * keeps the stamp that the volumes handed out with it have, so that an
  * upload against one of them skips comparing it (projwire.h). */
 static void stamp_changes(struct cache *c, bool whole)
 {
-	for (uint32_t k = 0; whole && k < c->prev->image_count; k++)
-		c->prev->images[k].stamp = volume_new_stamp();
+	for (uint32_t k = 0; whole && k < c->dirty.image_count; k++)
+		c->stamps[k] = volume_new_stamp();
 	for (uint32_t p = 0; !whole && p < c->dirty.listed; p++)
 		if (tile_set_image_any(&c->dirty, c->dirty.list[p]))
-			c->prev->images[c->dirty.list[p]].stamp = volume_new_stamp();
+			c->stamps[c->dirty.list[p]] = volume_new_stamp();
 }
 
-/* The tiles changed in the compositions after had (up to c->gen, at most
- * CHANGED_HISTORY back) copied from the last into out. */
-static int update_since(struct cache *c, uint64_t had, struct volume *out)
+/* The composition out holds: the one it was handed out with, when it is
+ * a volume handed out lately and unchanged since (its origin mark), and
+ * the changes since are all remembered; else 0. */
+static uint64_t held_composition(const struct cache *c, const struct volume *out)
 {
-	for (uint64_t g = had + 1; g <= c->gen; g++)
-		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
-	int err = 0;
-	for (uint32_t p = 0; p < c->since.listed && err == 0; p++) {
-		uint32_t k = c->since.list[p];
-		if (tile_set_image_any(&c->since, k))
-			err = volume_update_image(out, k, c->prev, c->since.mask + (size_t)k * c->since.mask_bytes);
-	}
-	tile_set_clear(&c->since);
-	return err;
-}
-
-/* The composition copied into out: only the images changed since the one
- * out holds, when out is a volume handed out lately and unchanged since
- * (its origin mark), else whole. out is then marked. */
-static int hand_out(struct cache *c, struct volume *out)
-{
-	static atomic_uint_fast64_t origins;
 	uint64_t had = 0;
 	for (unsigned i = 0; out->origin && i < HANDED_VOLUMES; i++)
 		if (c->handed[i].origin == out->origin)
 			had = c->handed[i].gen;
-	int err = 0;
-	if (!had || c->gen - had >= CHANGED_HISTORY) {
-		err = volume_copy(out, c->prev);
+	return had && c->gen - had < CHANGED_HISTORY ? had : 0;
+}
+
+/* Out patched from the n sources where the compositions after had (up
+ * to c->gen) changed, which makes it the last; its patched images take
+ * the last one's stamps. */
+static int patch_since(struct cache *c, uint64_t had, struct volume *out, unsigned n)
+{
+	for (uint64_t g = had + 1; g <= c->gen; g++)
+		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
+	int err = compose_patch(c->compose, out, &c->since, c->sources, n);
+	for (uint32_t p = 0; err == 0 && p < c->since.listed; p++)
+		out->images[c->since.list[p]].stamp = c->stamps[c->since.list[p]];
+	tile_set_clear(&c->since);
+	return err;
+}
+
+/* The composition of the n sources made in out, which is then marked as
+ * holding it: patched where the compositions since the one out holds
+ * changed (handed out lately, unchanged since, and the history leads
+ * here), else composed whole. */
+static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
+{
+	static atomic_uint_fast64_t origins;
+	bool whole = !c->prev_valid;
+	note_changes(c);
+	stamp_changes(c, whole);
+	uint64_t had = whole ? 0 : held_composition(c, out);
+	out->origin = 0; /* not trusted until it is marked again below */
+	int err;
+	if (had) {
+		err = patch_since(c, had, out, n);
 	} else {
-		err = update_since(c, had, out);
-		out->seq = c->prev->seq;
-		out->shown_ns = c->prev->shown_ns;
+		err = compose_volumes(c->compose, out, c->sources, n);
+		for (uint32_t k = 0; err == 0 && k < out->image_count; k++)
+			out->images[k].stamp = c->stamps[k];
 	}
 	if (err < 0)
 		return err;
+	out->seq = 0; /* as a render leaves it */
+	out->shown_ns = 0;
 	out->origin = atomic_fetch_add(&origins, 1) + 1;
 	c->handed[c->handed_next++ % HANDED_VOLUMES] = (struct handed){ out->origin, c->gen };
 	return 0;
-}
-
-/* The last composition, patched where something may have changed (or
- * composed whole when there is none) from the n sources, its changed
- * images stamped, then handed out into out. */
-static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
-{
-	note_changes(c);
-	bool whole = !c->prev_valid;
-	int err = whole ? compose_volumes(c->compose, c->prev, c->sources, n)
-			: compose_patch(c->compose, c->prev, &c->dirty, c->sources, n);
-	if (err < 0)
-		return err;
-	stamp_changes(c, whole);
-	return hand_out(c, out);
 }
 
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)

@@ -178,8 +178,34 @@ static void random_image(struct volume *v, const struct volume *base, const uint
 	}
 }
 
-/* volume_update_image(): an image brought to another that differs in some
- * tiles (present in one only, or both with other bytes), the changed mask
+/* Image 0 of from brought to image 0 of to, which differs at most in the
+ * tiles set in change, as the compositor patches an image in place: the
+ * tiles from the first whose presence differs to the last spliced in
+ * (volume_image_splice()), the other changed ones written over. */
+static void update_image(struct volume *from, const struct volume *to, const uint8_t *change)
+{
+	const struct volume_image *y = &to->images[0];
+	struct volume_image *x = &from->images[0];
+	uint32_t tiles = volume_tiles_per_image(to), first = tiles, last = 0;
+	for (uint32_t t = 0; t < tiles; t++)
+		if (volume_tile_present(x, t) != volume_tile_present(y, t)) {
+			first = first < t ? first : t;
+			last = t;
+		}
+	if (first < tiles) {
+		const uint8_t *run = y->tiles + (size_t)volume_stored_index(y->mask, first) * VOLUME_TILE_BYTES;
+		CHECK(volume_image_splice(from, 0, first, last, y->mask, run) == 0);
+	}
+	for (uint32_t t = 0; t < tiles; t++) {
+		if (!((change[t / 8] >> (t % 8)) & 1) || !volume_tile_present(y, t) || (t >= first && t <= last))
+			continue;
+		size_t at = (size_t)volume_stored_index(y->mask, t) * VOLUME_TILE_BYTES;
+		memcpy(x->tiles + at, y->tiles + at, VOLUME_TILE_BYTES);
+	}
+}
+
+/* Splicing: an image brought to another that differs in some tiles
+ * (present in one only, or both with other bytes), the changed mask
  * holding those and some others, is that image: mask, count, next tile,
  * bytes. */
 static void check_update(const struct geometry *g)
@@ -205,7 +231,7 @@ static void check_update(const struct geometry *g)
 				change[t / 8] |= (uint8_t)(1u << (t % 8));
 		for (uint32_t b = 0; round % 5 && b < from->mask_bytes; b++)
 			change[b] &= (uint8_t)((1u << (tiles - b * 8 < 8 ? tiles - b * 8 : 8)) - 1);
-		CHECK(volume_update_image(from, 0, to, change) == 0);
+		update_image(from, to, change);
 		const struct volume_image *x = &from->images[0], *y = &to->images[0];
 		CHECK(x->tile_count == y->tile_count && x->next_tile == y->next_tile);
 		CHECK(memcmp(x->mask, y->mask, from->mask_bytes) == 0);
