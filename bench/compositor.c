@@ -3,8 +3,8 @@
  * around the CPU renderer), at perspecta, against full renders of the
  * same scenes in the same run. See bench/README.md.
  *
- *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--only dragon|beside|s4]
- *                                   [--bunny BUNNY.ply] DRAGON.ply */
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--round R]
+ *                                   [--only dragon|beside|s4] [--bunny BUNNY.ply] DRAGON.ply */
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -62,8 +62,24 @@ static void bscene_free(struct bscene *b)
 		vdata_unref(b->data[i]);
 }
 
+/* Volumes a series renders into in turn (--round; the default as the
+ * daemon's pipeline passes its own round: with the simulated perspecta
+ * device's three buffers each comes back to be rendered into three
+ * volumes after it was handed out, counted in spindled beside the dragon
+ * under bench/beside). The cache then patches a volume where the last R
+ * compositions changed (cache.h). 1: as the pipeline renders into one
+ * volume when the calibration moves the axis (and moves each render). */
+#define ROUND_DEFAULT 3
+#define ROUND_MAX 8
+
+/* The series of a small object beside the dragon measure at least this
+ * many volumes (within --seconds): their volumes take well under a
+ * millisecond, and --volumes' 100 would be over before the state the
+ * dragon's full renders leave the machine in has passed. */
+#define BESIDE_MIN_VOLUMES 2000
+
 struct opts {
-	unsigned volumes;
+	unsigned volumes, round;
 	double seconds;
 	const char *profile, *dragon, *bunny;
 	const char *only; /* NULL, "dragon", "beside" (its objects beside it) or "s4": the rows to run */
@@ -92,11 +108,13 @@ struct series {
 	struct bscene *b;
 	animate_fn fn;
 	void *arg;
-	struct volume *out; /* its own: the cache knows its last composition in it */
+	struct volume *out[ROUND_MAX]; /* its own, passed round (volume n into out[n % round]) */
+	unsigned round;
 	double *ms, *rms, *cms, sum_ms;
 };
 
-/* Volume number frame of s into out; recorded as the nth when warm. */
+/* Volume number frame of s into its out[frame % round]; recorded as the
+ * nth when warm. */
 static void one_volume(struct renderer *r, struct series *s, uint64_t frame, unsigned n, bool warm)
 {
 	int64_t t0 = now_ns();
@@ -106,10 +124,10 @@ static void one_volume(struct renderer *r, struct series *s, uint64_t frame, uns
 	if (s->cache) {
 		if (cache_plan(s->cache, &s->b->snap) < 0)
 			abort();
-		err = cache_render(s->cache, r, &s->b->snap.scene, s->out);
+		err = cache_render(s->cache, r, &s->b->snap.scene, s->out[frame % s->round]);
 		cache_done(s->cache, err);
 	} else {
-		err = render_volume(r, &s->b->snap.scene, s->out);
+		err = render_volume(r, &s->b->snap.scene, s->out[frame % s->round]);
 	}
 	if (err < 0) {
 		fprintf(stderr, "render failed: %s\n", strerror(-err));
@@ -152,12 +170,15 @@ static void measure_series(struct renderer *r, struct series *s, unsigned count,
 			   struct result *res)
 {
 	for (unsigned i = 0; i < count; i++) {
-		s[i].out = volume_create(&r->geom);
+		s[i].round = o->round;
+		for (unsigned v = 0; v < o->round; v++)
+			if (!(s[i].out[v] = volume_create(&r->geom)))
+				abort();
 		s[i].ms = calloc(o->volumes, sizeof(double));
 		s[i].rms = calloc(o->volumes, sizeof(double));
 		s[i].cms = calloc(o->volumes, sizeof(double));
 		s[i].sum_ms = 0;
-		if (!s[i].out || !s[i].ms || !s[i].rms || !s[i].cms)
+		if (!s[i].ms || !s[i].rms || !s[i].cms)
 			abort();
 	}
 	unsigned n = 0;
@@ -177,7 +198,8 @@ static void measure_series(struct renderer *r, struct series *s, unsigned count,
 		free(s[i].ms);
 		free(s[i].rms);
 		free(s[i].cms);
-		volume_destroy(s[i].out);
+		for (unsigned v = 0; v < s[i].round; v++)
+			volume_destroy(s[i].out[v]);
 	}
 }
 
@@ -347,7 +369,9 @@ static void beside_dragon(struct bench *be, const char *what, const struct scene
 	};
 	if (!s[0].cache || !s[1].cache)
 		abort();
-	measure_series(be->r, s, 2, &be->o, cached);
+	struct opts many = be->o;
+	many.volumes = many.volumes > BESIDE_MIN_VOLUMES ? many.volumes : BESIDE_MIN_VOLUMES;
+	measure_series(be->r, s, 2, &many, cached);
 	row(alone, "cache", &cached[0], "the daemon's path; a volume each in turn with the next row");
 	snprintf(note, sizeof(note), "%.0f%% of the %s's solo rate through the cache, %.0f%% of its full render",
 		 100 * cached[1].vol_s / cached[0].vol_s, what, 100 * cached[1].vol_s / whole[0].vol_s);
@@ -452,13 +476,24 @@ static void bench_s4(struct bench *be)
 	reset_scene(be);
 }
 
+static int usage(const char *argv0)
+{
+	fprintf(stderr,
+		"usage: %s [--volumes N] [--seconds S] [--profile P] [--round R] [--only dragon|beside|s4] "
+		"[--bunny PLY] [DRAGON.ply]\n",
+		argv0);
+	return 2;
+}
+
 /* 0, or the exit status for a bad command line. */
 static int parse(int argc, char **argv, struct opts *o)
 {
-	*o = (struct opts){ .volumes = 100, .seconds = 4, .profile = "perspecta" };
+	*o = (struct opts){ .volumes = 100, .round = ROUND_DEFAULT, .seconds = 4, .profile = "perspecta" };
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--volumes") && i + 1 < argc)
 			o->volumes = (unsigned)atoi(argv[++i]);
+		else if (!strcmp(argv[i], "--round") && i + 1 < argc)
+			o->round = (unsigned)atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--seconds") && i + 1 < argc)
 			o->seconds = atof(argv[++i]);
 		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
@@ -471,15 +506,11 @@ static int parse(int argc, char **argv, struct opts *o)
 			o->only = argv[++i];
 		else if (argv[i][0] != '-')
 			o->dragon = argv[i];
-		else {
-			fprintf(stderr,
-				"usage: %s [--volumes N] [--seconds S] [--profile P] [--only dragon|beside|s4] "
-				"[--bunny PLY] "
-				"[DRAGON.ply]\n",
-				argv[0]);
-			return 2;
-		}
+		else
+			return usage(argv[0]);
 	}
+	if (o->round < 1 || o->round > ROUND_MAX)
+		return usage(argv[0]);
 	if (o->volumes < 1)
 		o->volumes = 1;
 	return 0;
@@ -488,12 +519,14 @@ static int parse(int argc, char **argv, struct opts *o)
 static void header(const struct bench *be)
 {
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
-	       "warm-up volumes, then up to %u volumes or %.0f s; ms per volume (plan + render + compose, animation "
+	       "warm-up volumes, then up to %u volumes (%u beside the dragon) or %.0f s, into %u volumes in turn (as "
+	       "the daemon's pipeline passes them round); ms per volume (plan + render + compose, animation "
 	       "included), median and p99; vol/s: the volumes over the time they took; render / compose: the cache's "
 	       "split, medians; hits / misses: objects, "
 	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
 	       be->o.profile, be->g.width, be->g.height, be->g.images_per_rev, be->g.mirrored ? ", mirrored" : "",
-	       be->r->stats.threads, be->o.volumes, be->o.seconds);
+	       be->r->stats.threads, be->o.volumes,
+	       be->o.volumes > BESIDE_MIN_VOLUMES ? be->o.volumes : BESIDE_MIN_VOLUMES, be->o.seconds, be->o.round);
 	printf("| scene | how | volumes | vol/s | median ms | p99 ms | render ms | compose ms | hits / misses | cache "
 	       "MB | |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
 }
