@@ -3,7 +3,7 @@
  * around the CPU renderer), at perspecta, against full renders of the
  * same scenes in the same run. See bench/README.md.
  *
- *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--round R]
+ *   build/bench/spindle-bench-cache [--volumes N] [--seconds S] [--profile P] [--round R] [--gap US]
  *                                   [--only dragon|beside|s4] [--bunny BUNNY.ply] DRAGON.ply */
 #include <errno.h>
 #include <math.h>
@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "cache.h"
 #include "draw.h"
@@ -78,8 +79,14 @@ static void bscene_free(struct bscene *b)
  * dragon's full renders leave the machine in has passed. */
 #define BESIDE_MIN_VOLUMES 2000
 
+/* A pause after each volume (--gap), in microseconds: the daemon renders a
+ * volume a display period, so its workers are asleep when each starts
+ * (pool.h), and a volume measured right after another one would find them
+ * awake or not as the other left them. */
+#define GAP_DEFAULT_US 1000
+
 struct opts {
-	unsigned volumes, round;
+	unsigned volumes, round, gap_us;
 	double seconds;
 	const char *profile, *dragon, *bunny;
 	const char *only; /* NULL, "dragon", "beside" (its objects beside it) or "s4": the rows to run */
@@ -189,8 +196,11 @@ static void measure_series(struct renderer *r, struct series *s, unsigned count,
 			start = now_ns();
 		if (warm && (n == o->volumes || (double)(now_ns() - start) / 1e9 > o->seconds))
 			break;
-		for (unsigned i = 0; i < count; i++)
+		for (unsigned i = 0; i < count; i++) {
 			one_volume(r, &s[i], frame, n, warm);
+			if (o->gap_us)
+				usleep(o->gap_us);
+		}
 		n += warm;
 	}
 	for (unsigned i = 0; i < count; i++) {
@@ -479,7 +489,7 @@ static void bench_s4(struct bench *be)
 static int usage(const char *argv0)
 {
 	fprintf(stderr,
-		"usage: %s [--volumes N] [--seconds S] [--profile P] [--round R] [--only dragon|beside|s4] "
+		"usage: %s [--volumes N] [--seconds S] [--profile P] [--round R] [--gap US] [--only dragon|beside|s4] "
 		"[--bunny PLY] [DRAGON.ply]\n",
 		argv0);
 	return 2;
@@ -488,12 +498,18 @@ static int usage(const char *argv0)
 /* 0, or the exit status for a bad command line. */
 static int parse(int argc, char **argv, struct opts *o)
 {
-	*o = (struct opts){ .volumes = 100, .round = ROUND_DEFAULT, .seconds = 4, .profile = "perspecta" };
+	*o = (struct opts){ .volumes = 100,
+			    .round = ROUND_DEFAULT,
+			    .gap_us = GAP_DEFAULT_US,
+			    .seconds = 4,
+			    .profile = "perspecta" };
 	for (int i = 1; i < argc; i++) {
 		if (!strcmp(argv[i], "--volumes") && i + 1 < argc)
 			o->volumes = (unsigned)atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--round") && i + 1 < argc)
 			o->round = (unsigned)atoi(argv[++i]);
+		else if (!strcmp(argv[i], "--gap") && i + 1 < argc)
+			o->gap_us = (unsigned)atoi(argv[++i]);
 		else if (!strcmp(argv[i], "--seconds") && i + 1 < argc)
 			o->seconds = atof(argv[++i]);
 		else if (!strcmp(argv[i], "--profile") && i + 1 < argc)
@@ -520,13 +536,15 @@ static void header(const struct bench *be)
 {
 	printf("Object cache, %s (%ux%u, N = %u%s), CPU renderer on %u threads; cache budget 256 MiB. Each row: 3 "
 	       "warm-up volumes, then up to %u volumes (%u beside the dragon) or %.0f s, into %u volumes in turn (as "
-	       "the daemon's pipeline passes them round); ms per volume (plan + render + compose, animation "
+	       "the daemon's pipeline passes them round), %u us apart; ms per volume (plan + render + compose, "
+	       "animation "
 	       "included), median and p99; vol/s: the volumes over the time they took; render / compose: the cache's "
 	       "split, medians; hits / misses: objects, "
 	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
 	       be->o.profile, be->g.width, be->g.height, be->g.images_per_rev, be->g.mirrored ? ", mirrored" : "",
 	       be->r->stats.threads, be->o.volumes,
-	       be->o.volumes > BESIDE_MIN_VOLUMES ? be->o.volumes : BESIDE_MIN_VOLUMES, be->o.seconds, be->o.round);
+	       be->o.volumes > BESIDE_MIN_VOLUMES ? be->o.volumes : BESIDE_MIN_VOLUMES, be->o.seconds, be->o.round,
+	       be->o.gap_us);
 	printf("| scene | how | volumes | vol/s | median ms | p99 ms | render ms | compose ms | hits / misses | cache "
 	       "MB | |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");
 }

@@ -273,7 +273,14 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	if (p.mixed)
 		return render_whole(c, r, scene, out, t0);
 	c->engine = p.engine;
+	/* On the renderer's workers, which have just rendered, where it has
+	 * some: another pool's would have to be woken, and the two pools'
+	 * workers would look for work on the same cores. Back on the cache's
+	 * own after, so that nothing holds the renderer's. */
+	bool borrowed = compose_use_pool(c->compose, r->pool, true);
 	err = compose_hand_out(c, out, p.n);
+	if (borrowed)
+		compose_use_pool(c->compose, c->pool, false);
 	c->composed = err == 0;
 	c->render_us = (uint32_t)((t1 - t0) / 1000);
 	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);

@@ -16,8 +16,15 @@ static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 	return rle_or_coded(in, avail, dst, VOLUME_TILE_BYTES);
 }
 
-/* Patches of at most this many dirty tiles run on the calling thread. */
-#define COMPOSE_FEW_TILES 256
+/* Patches of at most this many dirty tiles run on the calling thread:
+ * waking the pool's workers costs tens of microseconds on some machines
+ * (pool.h), less when they have just worked (compose_use_pool()), and a
+ * patch's work per image is mostly waiting for memory, which two workers
+ * on neighbouring images share badly. Measured with spindle-bench-cache at
+ * perspecta: the bunny beside the dragon (about 400 tiles a patch) is
+ * patched faster alone; S4 with a tenth moving (thousands) on both. */
+#define COMPOSE_FEW_TILES 2048
+#define COMPOSE_FEW_TILES_AWAKE 512
 
 struct compose_worker {
 	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, tile t */
@@ -30,6 +37,8 @@ struct compose_worker {
 struct compose {
 	struct pool *pool;
 	unsigned workers;
+	bool awake;                   /* its pool's workers have just worked */
+	uint32_t few_cold, few_awake; /* patches run on this thread up to these many tiles */
 	uint32_t tiles_per_image, mask_bytes, image_count;
 	struct compose_worker *w;
 	struct geometry geom;
@@ -83,6 +92,8 @@ struct compose *compose_create(const struct geometry *geom, struct pool *pool)
 		return NULL;
 	}
 	c->pool = pool;
+	c->few_cold = COMPOSE_FEW_TILES;
+	c->few_awake = COMPOSE_FEW_TILES_AWAKE;
 	c->geom = *geom;
 	c->halftone = halftone_pick(NULL);
 	c->workers = pool ? pool_workers(pool) : 1;
@@ -208,6 +219,21 @@ static int run_images(struct compose *c, struct volume *out, image_fn fn, uint32
 		err = c->w[i].err;
 	c->out = NULL;
 	return err;
+}
+
+bool compose_use_pool(struct compose *c, struct pool *pool, bool awake)
+{
+	if (!pool || !c->pool || pool_workers(pool) != c->workers)
+		return false;
+	c->pool = pool;
+	c->awake = awake;
+	return true;
+}
+
+void compose_set_few_tiles(struct compose *c, uint32_t cold, uint32_t awake)
+{
+	c->few_cold = cold;
+	c->few_awake = awake;
 }
 
 static int check_sources(const struct compose *c, const struct volume *out, const struct tile_set *dirty,
@@ -466,12 +492,12 @@ static int index_sources(struct compose *c)
 
 /* Whether so few tiles are dirty (a small object moving) that waking the
  * pool's workers would cost more than patching them on this thread. */
-static bool few_dirty(const struct tile_set *dirty)
+static bool few_dirty(const struct compose *c, const struct tile_set *dirty)
 {
-	uint32_t n = 0;
-	for (uint32_t p = 0; p < dirty->listed && n <= COMPOSE_FEW_TILES; p++)
+	uint32_t n = 0, few = c->awake ? c->few_awake : c->few_cold;
+	for (uint32_t p = 0; p < dirty->listed && n <= few; p++)
 		n += volume_mask_count(dirty->mask + (size_t)dirty->list[p] * dirty->mask_bytes, dirty->mask_bytes);
-	return n <= COMPOSE_FEW_TILES;
+	return n <= few;
 }
 
 /* A patch of few tiles, on this thread: the listed images in turn. */
@@ -496,7 +522,7 @@ int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *
 	c->dirty = dirty;
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return few_dirty(dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image, dirty->listed);
+	return few_dirty(c, dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image, dirty->listed);
 }
 
 /* A composition from nothing is a patch of an empty volume where every

@@ -73,6 +73,15 @@ void compose_destroy(struct compose *c);
  * cleared first and must not be one of them). 0 or -ENOMEM/-EINVAL. */
 int compose_volumes(struct compose *c, struct volume *out, const struct compose_source *src, unsigned n);
 
+/* Runs c's work on pool from now on, when it has as many workers as the
+ * pool c was made with (compose_create()); whether it does. awake: its
+ * workers have just worked (pool.h: they look for work a while before they
+ * sleep), so that smaller patches are worth handing them. */
+bool compose_use_pool(struct compose *c, struct pool *pool, bool awake);
+/* Patches of at most this many dirty tiles run on the calling thread,
+ * the workers asleep or awake (defaults in compose.c; 0: every patch on
+ * the pool, as tests ask). */
+void compose_set_few_tiles(struct compose *c, uint32_t cold, uint32_t awake);
 /* Patches the composition vol: the tiles marked in dirty (of vol's
  * tiling) become the OR of the n sources' tiles there; the others stay.
  * Images with no dirty tile are not touched, so the cost is that of the

@@ -776,6 +776,7 @@ static int cpu_init(struct render_cpu *r, const struct geometry *geom, unsigned 
 	r->pool = pool_create(n);
 	if (!r->pool)
 		return -ENOMEM;
+	r->base.pool = r->pool;
 	r->base.stats.threads = n;
 	return 0;
 }

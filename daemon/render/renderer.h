@@ -101,6 +101,10 @@ struct renderer {
 	 * another engine (a GL renderer's CPU fallback); 0: no limit. */
 	uint64_t native_prims;
 	struct render_stats stats; /* of the last render */
+	/* Its workers, or NULL: its caller may run jobs of its own on them
+	 * between renders (they are still looking for work right after one:
+	 * pool.h). */
+	struct pool *pool;
 };
 
 static inline int render_volume(struct renderer *r, const struct scene *s, struct volume *out)

@@ -389,6 +389,39 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	volume_destroy(full);
 }
 
+/* Patches on a pool's workers (every one, however few its tiles): the
+ * composition of sources 0-2 patched where sources 3-5 light is the render
+ * of all six, all, and patched back where they light without them, the
+ * composition of 0-2 again. */
+static void patch_on_pool(const struct geometry *g, const struct volume *all, const struct compose_source src[6])
+{
+	struct pool *pool = pool_create(2);
+	struct compose *par = compose_create(g, pool), *ser = compose_create(g, NULL);
+	struct volume *out = volume_create(g), *three = volume_create(g);
+	struct tile_set dirty;
+	CHECK(pool && par && ser && out && three);
+	CHECK_EQ(tile_set_init(&dirty, out->image_count, volume_tiles_per_image(out)), 0);
+	compose_set_few_tiles(par, 0, 0);
+	CHECK_EQ(compose_volumes(par, out, src, 6), 0);
+	CHECK(rtest_same(all, out));
+	CHECK_EQ(compose_volumes(ser, three, src, 3), 0);
+	CHECK_EQ(compose_volumes(par, out, src, 3), 0);
+	CHECK(rtest_same(three, out));
+	for (int i = 3; i < 6; i++)
+		compose_add_footprint(&dirty, &src[i]);
+	CHECK(dirty.listed > 0);
+	CHECK_EQ(compose_patch(par, out, &dirty, src, 6), 0);
+	CHECK(rtest_same(all, out));
+	CHECK_EQ(compose_patch(par, out, &dirty, src, 3), 0);
+	CHECK(rtest_same(three, out));
+	tile_set_finish(&dirty);
+	volume_destroy(three);
+	volume_destroy(out);
+	compose_destroy(ser);
+	compose_destroy(par);
+	pool_destroy(pool);
+}
+
 /* The run-length code round trip, and composing volumes by OR. */
 static void test_codec(void)
 {
@@ -426,6 +459,7 @@ static void test_codec(void)
 	CHECK(rtest_same(v, back));
 	src[6] = (struct compose_source){ .vol = back };
 	CHECK(compose_volumes(cmp, back, src, 7) < 0); /* out among the sources */
+	patch_on_pool(&g, v, src);
 	for (int i = 0; i < 6; i++) {
 		if (i % 2 == 0)
 			rle_volume_free((struct rle_volume *)src[i].rle);
