@@ -248,6 +248,28 @@ static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
 	return 0;
 }
 
+/* The parts rendered, then composed into out (or the scene rendered whole
+ * when the parts' engines differ). */
+static int render_compose(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out,
+			  int64_t t0)
+{
+	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
+	int err = render_parts(c, r, scene, &p);
+	if (err < 0)
+		return err;
+	int64_t t1 = now_ns();
+	for (uint32_t i = 0; i < c->use_count; i++)
+		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
+	if (p.mixed)
+		return render_whole(c, r, scene, out, t0);
+	c->engine = p.engine;
+	err = compose_hand_out(c, out, p.n);
+	c->composed = err == 0;
+	c->render_us = (uint32_t)((t1 - t0) / 1000);
+	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);
+	return err;
+}
+
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
 	if (!c->planned)
@@ -263,26 +285,13 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	    (r->native_prims && scene_prims(scene) > r->native_prims) ||
 	    (!r->impl->render_canvas && scene_has_turn(scene->draws, scene->draw_count)))
 		return render_whole(c, r, scene, out, t0);
-	struct parts p = { .engine = c->prev_valid ? c->engine : 0 };
-	int err = render_parts(c, r, scene, &p);
-	if (err < 0)
-		return err;
-	int64_t t1 = now_ns();
-	for (uint32_t i = 0; i < c->use_count; i++)
-		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
-	if (p.mixed)
-		return render_whole(c, r, scene, out, t0);
-	c->engine = p.engine;
-	/* On the renderer's workers, which have just rendered, where it has
-	 * some: another pool's would have to be woken, and the two pools'
-	 * workers would look for work on the same cores. Back on the cache's
-	 * own after, so that nothing holds the renderer's. */
+	/* Composed on the renderer's workers, where it has some, as they come
+	 * from rendering the parts: another pool's would have to be woken,
+	 * and the two pools' workers would look for work on the same cores.
+	 * Back on the cache's own after, so that nothing holds the renderer's. */
 	bool borrowed = compose_use_pool(c->compose, r->pool, true);
-	err = compose_hand_out(c, out, p.n);
+	int err = render_compose(c, r, scene, out, t0);
 	if (borrowed)
 		compose_use_pool(c->compose, c->pool, false);
-	c->composed = err == 0;
-	c->render_us = (uint32_t)((t1 - t0) / 1000);
-	c->compose_us = (uint32_t)((now_ns() - t1) / 1000);
 	return err;
 }
