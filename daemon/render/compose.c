@@ -27,8 +27,8 @@ static size_t or_coded_tile(const uint8_t *in, size_t avail, uint8_t *dst)
 #define COMPOSE_FEW_TILES_AWAKE 512
 
 struct compose_worker {
-	uint8_t *tiles;   /* one dense image: tiles_per_image * VOLUME_TILE_BYTES, tile t */
-	uint8_t *touched; /* valid where its flag here is set (tiles_per_image flags, 0 between images) */
+	uint8_t *tiles;   /* one dense image (tiles_per_image * VOLUME_TILE_BYTES): tile t gathered where touched[t] */
+	uint8_t *touched; /* tiles_per_image flags, all 0 between images */
 	uint8_t *run;     /* lay_run()'s tiles: tiles_per_image of them */
 	uint8_t *mask;    /* and their presence: mask_bytes */
 	int err;
