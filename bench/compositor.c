@@ -346,6 +346,15 @@ static void reset_scene(struct bench *be)
 	memset(&be->b, 0, sizeof(be->b));
 }
 
+/* o for the series of a small object beside the dragon. */
+static struct opts beside_opts(const struct opts *o)
+{
+	struct opts many = *o;
+	if (many.volumes < BESIDE_MIN_VOLUMES)
+		many.volumes = BESIDE_MIN_VOLUMES;
+	return many;
+}
+
 /* An object moving on the first orbit, alone and beside the static dragon
  * (the scene's object 0, the dragon its object 1), each rendered whole
  * and then through a cache of its own, the two cached ones a volume each
@@ -379,8 +388,7 @@ static void beside_dragon(struct bench *be, const char *what, const struct scene
 	};
 	if (!s[0].cache || !s[1].cache)
 		abort();
-	struct opts many = be->o;
-	many.volumes = many.volumes > BESIDE_MIN_VOLUMES ? many.volumes : BESIDE_MIN_VOLUMES;
+	struct opts many = beside_opts(&be->o);
 	measure_series(be->r, s, 2, &many, cached);
 	row(alone, "cache", &cached[0], "the daemon's path; a volume each in turn with the next row");
 	snprintf(note, sizeof(note), "%.0f%% of the %s's solo rate through the cache, %.0f%% of its full render",
@@ -542,8 +550,7 @@ static void header(const struct bench *be)
 	       "split, medians; hits / misses: objects, "
 	       "summed over the measured volumes; MB: what the cache holds at the end.\n\n",
 	       be->o.profile, be->g.width, be->g.height, be->g.images_per_rev, be->g.mirrored ? ", mirrored" : "",
-	       be->r->stats.threads, be->o.volumes,
-	       be->o.volumes > BESIDE_MIN_VOLUMES ? be->o.volumes : BESIDE_MIN_VOLUMES, be->o.seconds, be->o.round,
+	       be->r->stats.threads, be->o.volumes, beside_opts(&be->o).volumes, be->o.seconds, be->o.round,
 	       be->o.gap_us);
 	printf("| scene | how | volumes | vol/s | median ms | p99 ms | render ms | compose ms | hits / misses | cache "
 	       "MB | |\n|---|---|--:|--:|--:|--:|--:|--:|--:|--:|---|\n");

@@ -501,9 +501,8 @@ static void test_tile_sets(void)
 {
 	struct tile_set a, b, c;
 	const uint32_t images = 40, tiles = 100; /* 13 mask bytes: a partial word */
-	CHECK_EQ(tile_set_init(&a, images, tiles), 0);
-	CHECK_EQ(tile_set_init(&b, images, tiles), 0);
-	CHECK_EQ(tile_set_init(&c, images, tiles), 0);
+	CHECK(tile_set_init(&a, images, tiles) == 0 && tile_set_init(&b, images, tiles) == 0 &&
+	      tile_set_init(&c, images, tiles) == 0);
 	uint8_t *want = calloc(images, a.mask_bytes);
 	rng_state = 11;
 	for (int round = 0; round < 20; round++) {
