@@ -232,14 +232,30 @@ static uint32_t last_tile(const uint8_t *mask, uint32_t bytes)
 	return b * 8 + 31 - (uint32_t)__builtin_clz(mask[b]);
 }
 
+/* The bits of mask byte b that lie in tiles first..last. */
+static uint8_t range_bits(uint32_t b, uint32_t first, uint32_t last)
+{
+	uint32_t lo = b * 8 < first ? first - b * 8 : 0, hi = b * 8 + 7 > last ? last - b * 8 : 7;
+	return (uint8_t)(((2u << hi) - 1) & ~((1u << lo) - 1));
+}
+
+/* How many of tiles first..last mask holds. */
+static uint32_t range_count(const uint8_t *mask, uint32_t first, uint32_t last)
+{
+	uint32_t n = 0;
+	for (uint32_t b = first / 8; b <= last / 8; b++)
+		n += volume_mask_bits(mask[b] & range_bits(b, first, last));
+	return n;
+}
+
 int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t last, const uint8_t *mask,
 			const uint8_t *run)
 {
 	if (k >= vol->image_count || first > last || last >= volume_tiles_per_image(vol))
 		return -EINVAL;
 	struct volume_image *img = &vol->images[k];
-	uint32_t at = volume_stored_index(img->mask, first), end = volume_stored_index(img->mask, last + 1);
-	uint32_t n = volume_stored_index(mask, last + 1) - volume_stored_index(mask, first);
+	uint32_t at = volume_stored_index(img->mask, first), end = at + range_count(img->mask, first, last);
+	uint32_t n = range_count(mask, first, last);
 	uint32_t count = img->tile_count - (end - at) + n;
 	int r = volume_image_reserve(vol, k, count);
 	if (r < 0)
@@ -248,9 +264,9 @@ int volume_image_splice(struct volume *vol, uint32_t k, uint32_t first, uint32_t
 	memmove(place + (size_t)n * VOLUME_TILE_BYTES, img->tiles + (size_t)end * VOLUME_TILE_BYTES,
 		(size_t)(img->tile_count - end) * VOLUME_TILE_BYTES);
 	memcpy(place, run, (size_t)n * VOLUME_TILE_BYTES);
-	for (uint32_t t = first; t <= last; t++) {
-		uint8_t bit = (uint8_t)(1u << (t % 8));
-		img->mask[t / 8] = (uint8_t)((img->mask[t / 8] & ~bit) | (mask[t / 8] & bit));
+	for (uint32_t b = first / 8; b <= last / 8; b++) {
+		uint8_t m = range_bits(b, first, last);
+		img->mask[b] = (uint8_t)((img->mask[b] & ~m) | (mask[b] & m));
 	}
 	img->tile_count = count;
 	img->next_tile = count ? last_tile(img->mask, vol->mask_bytes) + 1 : 0;
