@@ -202,6 +202,21 @@ static inline bool bin_transform(const float m[16], const float *xyz, double out
 	return true;
 }
 
+/* Whether transform m is diagonal with no translation of -0: then
+ * bin_transform()'s coordinate c of a finite point is m[5c] times its own
+ * input plus m[12 + c], bit for bit. The terms left out are zeros, exact,
+ * and the last sum adds a translation that is not -0, which makes a zero
+ * +0 either way. (An input that is not finite makes its own coordinate
+ * not finite too, as there.) The vector paths take the shorter sum. */
+static inline bool bin_transform_diagonal(const float m[16])
+{
+	for (int c = 0; c < 3; c++)
+		for (int i = 0; i < 3; i++)
+			if (i != c && m[4 * i + c] != 0.0f)
+				return false;
+	return !signbit(m[12]) && !signbit(m[13]) && !signbit(m[14]);
+}
+
 static inline uint32_t bin_draw_turn(const struct bin_set *b, const struct scene_draw *d)
 {
 	return d->turn ? d->turn % b->geom.images_per_rev : 0;

@@ -55,12 +55,10 @@ AVX512_INLINE void lanes8_few(struct lanes8 *c, const struct bin_set *b)
 AVX512_INLINE void lanes8_init(struct lanes8 *c, const struct bin_set *b, const struct scene_draw *d)
 {
 	const struct geometry *g = &b->geom;
-	c->diagonal = true;
+	c->diagonal = bin_transform_diagonal(d->transform);
 	for (int r = 0; r < 3; r++)
-		for (int i = 0; i < 4; i++) {
+		for (int i = 0; i < 4; i++)
 			c->m[r][i] = _mm512_set1_pd(d->transform[4 * i + r]);
-			c->diagonal &= i == r || i == 3 || d->transform[4 * i + r] == 0.0f;
-		}
 	c->fltmax = _mm512_set1_pd(FLT_MAX);
 	c->one = _mm512_set1_pd(1.0);
 	c->halfv = _mm512_set1_pd(0.5);
@@ -95,14 +93,9 @@ AVX512_INLINE void load8(const float *p, __m512d *x, __m512d *y, __m512d *z)
 	*z = _mm512_cvtps_pd(_mm512_castps512_ps256(_mm512_permutex2var_ps(a, iz, c)));
 }
 
-/* transform4() on eight points. A diagonal transform's row r is m[r][r]
- * times its own input, plus m[r][3]: where x, y and z are finite, the
- * terms of a zero left out change at most the sign of a zero result,
- * which no step after it tells apart (slot8() and index8() compare with
- * 0, column8() and row8() add it to 1 and to h), so the records are the
- * same. An input that is not finite makes its own row not finite too
- * (m[r][r] times it is infinite or NaN), so such a point still goes to the
- * scalar rule, which drops it. */
+/* transform4() on eight points; of a diagonal transform
+ * (bin_transform_diagonal()), row r is m[r][r] times its own input, plus
+ * m[r][3]. */
 AVX512_INLINE __m512d transform8(const struct lanes8 *c, int r, __m512d x, __m512d y, __m512d z, __mmask8 *fin)
 {
 	const __m512d *m = c->m[r];

@@ -4,7 +4,6 @@
 #include "bin.h"
 
 #include <float.h>
-#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <string.h>
@@ -121,23 +120,8 @@ TRIS_TARGET static inline __m256 column9(const __m512 r[5], int k)
 	return _mm512_castps512_ps256(lo);
 }
 
-/* Whether transform m is diagonal with no translation of -0: then
- * coordinate c is m[5c] times its own input plus m[12 + c], bit for bit
- * what bin_transform() gives where the inputs are finite. The terms left
- * out are zeros, exact, and the last sum adds a translation that is not
- * -0, which makes a zero +0 either way. (An input that is not finite makes
- * its own coordinate not finite too, as there.) */
-static bool transform_diagonal(const float m[16])
-{
-	for (int c = 0; c < 3; c++)
-		for (int i = 0; i < 3; i++)
-			if (i != c && m[4 * i + c] != 0.0f)
-				return false;
-	return !signbit(m[12]) && !signbit(m[13]) && !signbit(m[14]);
-}
-
 /* Vertex i of eight triangles (r, column9()) through the transform m as
- * bin_transform() groups it (diagonal: by transform_diagonal()), in
+ * bin_transform() groups it (diagonal: bin_transform_diagonal()), in
  * float (f, and v by coordinate and lane); returns the lanes whose
  * coordinates are all finite floats. */
 TRIS_TARGET static inline __mmask8 vertex8(const float m[16], bool diagonal, const __m512 r[5], int i, __m256 f[3],
@@ -264,7 +248,7 @@ TRIS_TARGET static uint64_t tris8(const struct bin_set *b, const struct scene_dr
 				  struct stage_prim *out, uint32_t *hist)
 {
 	const float *m = d->transform;
-	const bool diagonal = transform_diagonal(m);
+	const bool diagonal = bin_transform_diagonal(m);
 	uint64_t j = j0;
 	for (; j + 8 <= j1; j += 8) {
 		const float *p = d->xyz + 9 * j;
