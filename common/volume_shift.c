@@ -1,6 +1,9 @@
 /* volume_shift(): a volume moved by whole pixels (calibration.h's axis
  * offset), tile by tile: each tile of the result takes its rows from at
- * most four tiles of the source, two across and two down. */
+ * most four tiles of the source, two across and two down, and only the
+ * result tiles some stored source tile reaches are made, so that a shift
+ * costs the source's tiles. volume_shift_update(): the same into volumes
+ * passed round, leaving the images one already holds (their stamps). */
 #include <errno.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -112,6 +115,13 @@ struct shift_image {
 	shift_plane_fn plane;
 	const struct volume *src;
 	const uint8_t **tile; /* per tile number: its bytes in the source, or NULL */
+	uint64_t *reach;      /* the result tiles a stored source tile reaches (volume_mask_word()'s words) */
+	uint16_t *col, *row;  /* per tile number: its tile column and row (geometry.h bounds the size) */
+	/* A source tile at (x, y) reaches the result tiles x + ox[i], y + oy[j]
+	 * (i < nx, j < ny) that lie in the image: two across where the shift
+	 * is not whole tiles, else one; the same down. */
+	int32_t ox[2], oy[2];
+	unsigned nx, ny;
 	int64_t du, dv;
 };
 
@@ -163,51 +173,229 @@ static bool shift_tile(const struct shift_image *s, uint32_t tx, uint32_t ty, ui
 	return any != 0;
 }
 
+/* The tiles (1 or 2) that a tile's pixels reach across a row (or down a
+ * column) moved by d pixels, as offsets from its own: o[0 .. *n). */
+static void reach_offsets(int64_t d, int32_t o[2], unsigned *n)
+{
+	o[0] = (int32_t)tile_of(d);
+	o[1] = (int32_t)tile_of(d + VOLUME_TILE - 1);
+	*n = o[1] == o[0] ? 1 : 2;
+}
+
+/* Marks in s->reach the result tiles that tile t of the source reaches. */
+static void mark_reach(struct shift_image *s, uint32_t t)
+{
+	const struct volume *src = s->src;
+	for (unsigned j = 0; j < s->ny; j++) {
+		int64_t y = (int64_t)s->row[t] + s->oy[j];
+		if (y < 0 || y >= src->tiles_y)
+			continue;
+		for (unsigned i = 0; i < s->nx; i++) {
+			int64_t x = (int64_t)s->col[t] + s->ox[i];
+			if (x < 0 || x >= src->tiles_x)
+				continue;
+			uint32_t r = (uint32_t)y * src->tiles_x + (uint32_t)x;
+			s->reach[r / 64] |= 1ull << (r % 64);
+		}
+	}
+}
+
+/* Points s->tile at image k's stored tiles and marks in s->reach the
+ * result tiles each reaches; with clear, undoes both instead. */
+static void index_image(struct shift_image *s, const struct volume_image *img, bool clear)
+{
+	const struct volume *src = s->src;
+	const uint8_t *next = img->tiles;
+	for (uint32_t x = 0; x < volume_mask_words(src->mask_bytes); x++) {
+		if (clear)
+			s->reach[x] = 0;
+		for (uint64_t m = volume_mask_word(img->mask, src->mask_bytes, x); m; m &= m - 1) {
+			uint32_t t = 64 * x + (uint32_t)__builtin_ctzll(m);
+			s->tile[t] = clear ? NULL : next;
+			next += VOLUME_TILE_BYTES;
+			if (!clear)
+				mark_reach(s, t);
+		}
+	}
+}
+
+/* Image k of dst becomes image k of s->src shifted: only the result tiles
+ * a stored source tile reaches are made, so that the cost is the
+ * source's tiles, not the image's. */
+static int shift_image(struct volume *dst, uint32_t k, struct shift_image *s)
+{
+	const struct volume *src = s->src;
+	const struct volume_image *img = &src->images[k];
+	volume_image_clear(dst, k);
+	if (!img->tile_count)
+		return 0;
+	index_image(s, img, false);
+	int r = 0;
+	for (uint32_t x = 0; x < volume_mask_words(src->mask_bytes) && !r; x++)
+		for (uint64_t m = s->reach[x]; m && !r; m &= m - 1) {
+			uint32_t t = 64 * x + (uint32_t)__builtin_ctzll(m);
+			uint8_t *out = volume_image_next(dst, k);
+			if (!out)
+				r = -ENOMEM;
+			else if (shift_tile(s, s->col[t], s->row[t], out))
+				r = volume_image_push(dst, k, t);
+		}
+	index_image(s, img, true);
+	return r;
+}
+
+static bool same_tiling(const struct volume *dst, const struct volume *src)
+{
+	return dst != src && dst->image_count == src->image_count && dst->tiles_x == src->tiles_x &&
+	       dst->tiles_y == src->tiles_y && dst->geom.width == src->geom.width &&
+	       dst->geom.height == src->geom.height;
+}
+
+static void shift_end(struct shift_image *s)
+{
+	free(s->tile);
+	free(s->reach);
+	free(s->col);
+	free(s->row);
+}
+
+static int shift_begin(struct shift_image *s, const struct volume *src, int32_t du, int32_t dv, shift_plane_fn plane)
+{
+	const uint32_t tiles = volume_tiles_per_image(src);
+	*s = (struct shift_image){ .src = src, .du = du, .dv = dv, .plane = plane };
+	s->tile = calloc(tiles, sizeof(*s->tile));
+	s->reach = calloc(volume_mask_words(src->mask_bytes), sizeof(*s->reach));
+	s->col = malloc(tiles * sizeof(*s->col));
+	s->row = malloc(tiles * sizeof(*s->row));
+	if (!s->tile || !s->reach || !s->col || !s->row) {
+		shift_end(s);
+		return -ENOMEM;
+	}
+	for (uint32_t t = 0; t < tiles; t++) {
+		s->col[t] = (uint16_t)(t % src->tiles_x);
+		s->row[t] = (uint16_t)(t / src->tiles_x);
+	}
+	reach_offsets(du, s->ox, &s->nx);
+	reach_offsets(dv, s->oy, &s->ny);
+	return 0;
+}
+
+static shift_plane_fn best_plane(void)
+{
+#ifdef SHIFT_AVX2
+	__builtin_cpu_init();
+	if (__builtin_cpu_supports("avx2"))
+		return shift_plane_avx2;
+#endif
+	return shift_plane_scalar;
+}
+
 static int shift_with(struct volume *dst, const struct volume *src, int32_t du, int32_t dv, shift_plane_fn plane)
 {
-	if (dst == src || dst->image_count != src->image_count || dst->tiles_x != src->tiles_x ||
-	    dst->tiles_y != src->tiles_y || dst->geom.width != src->geom.width || dst->geom.height != src->geom.height)
+	if (!same_tiling(dst, src))
 		return -EINVAL;
-	volume_clear(dst);
-	uint32_t tiles = volume_tiles_per_image(src);
-	struct shift_image
-		s = { .src = src, .tile = malloc(tiles * sizeof(*s.tile)), .du = du, .dv = dv, .plane = plane };
-	if (!s.tile)
-		return -ENOMEM;
-	int r = 0;
-	for (uint32_t k = 0; k < src->image_count && !r; k++) {
-		const struct volume_image *img = &src->images[k];
-		const uint8_t *next = img->tiles;
-		for (uint32_t t = 0; t < tiles; t++) {
-			s.tile[t] = volume_tile_present(img, t) ? next : NULL;
-			next += s.tile[t] ? VOLUME_TILE_BYTES : 0;
-		}
-		for (uint32_t ty = 0; ty < src->tiles_y && !r; ty++)
-			for (uint32_t tx = 0; tx < src->tiles_x && !r; tx++) {
-				uint8_t *out = volume_image_next(dst, k);
-				if (!out)
-					r = -ENOMEM;
-				else if (shift_tile(&s, tx, ty, out))
-					r = volume_image_push(dst, k, ty * src->tiles_x + tx);
-			}
-	}
-	free(s.tile);
+	struct shift_image s;
+	int r = shift_begin(&s, src, du, dv, plane);
+	if (r < 0)
+		return r;
+	for (uint32_t k = 0; k < src->image_count && !r; k++)
+		r = shift_image(dst, k, &s);
+	shift_end(&s);
 	dst->seq = src->seq;
 	dst->shown_ns = src->shown_ns;
+	dst->origin = 0;
 	return r;
 }
 
 int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
 {
-#ifdef SHIFT_AVX2
-	__builtin_cpu_init();
-	if (__builtin_cpu_supports("avx2"))
-		return shift_with(dst, src, du, dv, shift_plane_avx2);
-#endif
-	return shift_with(dst, src, du, dv, shift_plane_scalar);
+	return shift_with(dst, src, du, dv, best_plane());
 }
 
 int volume_shift_scalar(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
 {
 	return shift_with(dst, src, du, dv, shift_plane_scalar);
+}
+
+/* Per image: the stamp of the source image last shifted (0: none known),
+ * and the stamp its result was given; the offset they were shifted by. */
+struct volume_shift_memo {
+	uint32_t image_count;
+	int32_t du, dv;
+	uint64_t *src, *out;
+};
+
+struct volume_shift_memo *volume_shift_memo_create(uint32_t image_count)
+{
+	struct volume_shift_memo *m = calloc(1, sizeof(*m));
+	if (!m)
+		return NULL;
+	m->image_count = image_count;
+	m->src = calloc(image_count ? image_count : 1, sizeof(*m->src));
+	m->out = calloc(image_count ? image_count : 1, sizeof(*m->out));
+	if (!m->src || !m->out) {
+		volume_shift_memo_destroy(m);
+		return NULL;
+	}
+	return m;
+}
+
+void volume_shift_memo_destroy(struct volume_shift_memo *m)
+{
+	if (!m)
+		return;
+	free(m->src);
+	free(m->out);
+	free(m);
+}
+
+/* Whether image k of dst is the shift of image k of src that m knows:
+ * the same source (its stamp), and the result m stamped. */
+static bool memo_holds(const struct volume_shift_memo *m, uint32_t k, const struct volume *dst,
+		       const struct volume *src)
+{
+	uint64_t from = src->images[k].stamp;
+	return from && m->src[k] == from && dst->images[k].stamp == m->out[k];
+}
+
+/* The stamp of image k's new shift: the one m gave the shift of the same
+ * source (the same contents), else a new one; 0 when the source has none. */
+static uint64_t memo_stamp(struct volume_shift_memo *m, uint32_t k, uint64_t from)
+{
+	if (!from || m->src[k] != from) {
+		m->src[k] = from;
+		m->out[k] = from ? volume_new_stamp() : 0;
+	}
+	return m->out[k];
+}
+
+int volume_shift_update(struct volume *dst, const struct volume *src, int32_t du, int32_t dv,
+			struct volume_shift_memo *m)
+{
+	if (!same_tiling(dst, src) || m->image_count != src->image_count)
+		return -EINVAL;
+	if (m->du != du || m->dv != dv) { /* what it knows was shifted otherwise */
+		memset(m->src, 0, m->image_count * sizeof(*m->src));
+		m->du = du;
+		m->dv = dv;
+	}
+	struct shift_image s;
+	int r = shift_begin(&s, src, du, dv, best_plane());
+	if (r < 0)
+		return r;
+	int shifted = 0;
+	for (uint32_t k = 0; k < src->image_count && r == 0; k++) {
+		if (memo_holds(m, k, dst, src))
+			continue;
+		r = shift_image(dst, k, &s);
+		dst->images[k].stamp = r == 0 ? memo_stamp(m, k, src->images[k].stamp) : 0;
+		shifted++;
+	}
+	shift_end(&s);
+	dst->seq = src->seq;
+	dst->shown_ns = src->shown_ns;
+	dst->origin = 0;
+	if (r < 0) /* what it knows of this image may no longer hold */
+		memset(m->src, 0, m->image_count * sizeof(*m->src));
+	return r < 0 ? r : shifted;
 }

@@ -75,6 +75,10 @@ struct pipeline {
 	struct calibration calibration, building_cal, last_cal;
 	int32_t job_u, job_v;
 	struct volume *unshifted;
+	/* What the shifts into the volumes passed round made of the images
+	 * of unshifted (volume_shift_update()): an image the cache left as
+	 * it was is not shifted again into a volume that has it. */
+	struct volume_shift_memo *shifts;
 };
 
 /* The scene rendered into p->work, moved by the calibration's axis
@@ -84,8 +88,10 @@ static int render_job(struct pipeline *p, const struct scene *scene, int32_t du,
 {
 	struct volume *to = du || dv ? p->unshifted : p->work;
 	int r = p->cache ? cache_render(p->cache, p->renderer, scene, to) : render_volume(p->renderer, scene, to);
-	if (r == 0 && to != p->work)
-		r = volume_shift(p->work, to, du, dv);
+	if (r == 0 && to != p->work) {
+		r = volume_shift_update(p->work, to, du, dv, p->shifts);
+		r = r < 0 ? r : 0;
+	}
 	return r;
 }
 
@@ -480,7 +486,8 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 {
 	p->work = volume_create(g);
 	p->unshifted = volume_create(g);
-	if (!p->work || !p->unshifted)
+	p->shifts = p->unshifted ? volume_shift_memo_create(p->unshifted->image_count) : NULL;
+	if (!p->work || !p->unshifted || !p->shifts)
 		return -ENOMEM;
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++) {
 		p->content[b] = volume_create(g);
@@ -568,6 +575,7 @@ void pipeline_destroy(struct pipeline *p)
 		volume_destroy(p->content[b]);
 	volume_destroy(p->work);
 	volume_destroy(p->unshifted);
+	volume_shift_memo_destroy(p->shifts);
 	cache_destroy(p->cache);
 	pool_destroy(p->pool);
 	render_destroy(p->renderer);

@@ -1,9 +1,11 @@
 /* Calibration (calibration.h): keys, ranges and text; the transform's
  * turn and scale; and volume_shift() against a pixel-by-pixel shift of
  * random sparse volumes, at sizes with partial edge tiles and offsets of
- * whole tiles, parts of tiles and past the image. */
+ * whole tiles, parts of tiles and past the image; volume_shift_update()
+ * into volumes passed round while the source changes. */
 #include <errno.h>
 #include <math.h>
+#include <stdbool.h>
 #include <string.h>
 
 #include "calibration.h"
@@ -83,61 +85,72 @@ static uint32_t next(void)
 	return rng >> 8;
 }
 
-/* A volume with sparse random pixels, some tiles full, some empty. */
-static struct volume *random_volume(const struct geometry *g)
+/* Image k of v anew, random: tiles empty, of sparse pixels or full; with
+ * few, one tile in 16 stored, else three in four. */
+static void fill_image(struct volume *v, uint32_t k, bool few)
+{
+	const struct geometry *g = &v->geom;
+	uint8_t tile[VOLUME_TILE_BYTES];
+	volume_image_clear(v, k);
+	for (uint32_t t = 0; t < volume_tiles_per_image(v); t++) {
+		uint32_t kind = few ? (next() % 16 ? 0 : 1 + next() % 3) : next() % 4; /* empty, sparse, sparse, full */
+		for (int i = 0; i < VOLUME_TILE_BYTES; i++)
+			tile[i] = kind == 0 ? 0 : kind == 3 ? 0xff : (uint8_t)(next() % 7 == 0 ? next() : 0);
+		/* Keep the padding past W and H dark. */
+		uint32_t tx = t % v->tiles_x, ty = t / v->tiles_x;
+		for (int c = 0; c < 3; c++)
+			for (uint32_t j = 0; j < VOLUME_TILE; j++)
+				for (uint32_t i = 0; i < VOLUME_TILE; i++)
+					if (tx * VOLUME_TILE + i >= g->width || ty * VOLUME_TILE + j >= g->height)
+						tile[c * VOLUME_TILE_PLANE_BYTES + j * 4 + i / 8] &=
+							(uint8_t) ~(0x80u >> (i % 8));
+		CHECK(volume_image_append(v, k, t, tile) == 0);
+	}
+}
+
+static struct volume *random_volume(const struct geometry *g, bool few)
 {
 	struct volume *v = volume_create(g);
 	CHECK(v != NULL);
-	uint32_t per = volume_tiles_per_image(v);
-	uint8_t tile[VOLUME_TILE_BYTES];
 	for (uint32_t k = 0; k < v->image_count; k++)
-		for (uint32_t t = 0; t < per; t++) {
-			uint32_t kind = next() % 4; /* empty, sparse, sparse, full */
-			for (int i = 0; i < VOLUME_TILE_BYTES; i++)
-				tile[i] = kind == 0 ? 0 : kind == 3 ? 0xff : (uint8_t)(next() % 7 == 0 ? next() : 0);
-			/* Keep the padding past W and H dark. */
-			uint32_t tx = t % v->tiles_x, ty = t / v->tiles_x;
-			for (int c = 0; c < 3; c++)
-				for (uint32_t j = 0; j < VOLUME_TILE; j++)
-					for (uint32_t i = 0; i < VOLUME_TILE; i++)
-						if (tx * VOLUME_TILE + i >= g->width ||
-						    ty * VOLUME_TILE + j >= g->height)
-							tile[c * VOLUME_TILE_PLANE_BYTES + j * 4 + i / 8] &=
-								(uint8_t) ~(0x80u >> (i % 8));
-			CHECK(volume_image_append(v, k, t, tile) == 0);
-		}
+		fill_image(v, k, few);
 	return v;
+}
+
+/* Image k of dst is image k of src moved by (du, dv), pixel by pixel. */
+static void check_image_shifted(const struct volume *dst, const struct volume *src, uint32_t k, int du, int dv)
+{
+	const struct geometry *g = &src->geom;
+	for (uint32_t v = 0; v < g->height; v++)
+		for (uint32_t u = 0; u < g->width; u++)
+			for (int c = 0; c < 3; c++) {
+				int64_t su = (int64_t)u - du, sv = (int64_t)v - dv;
+				int want = su >= 0 && sv >= 0 && su < g->width && sv < g->height
+						   ? volume_pixel(src, k, (uint32_t)su, (uint32_t)sv, c)
+						   : 0;
+				CHECK_MSG(volume_pixel(dst, k, u, v, c) == want, "shift %d,%d image %u (%u,%u)", du, dv,
+					  k, u, v);
+			}
+	/* Only tiles with something lit are stored; the padding stays dark. */
+	const struct volume_image *img = &dst->images[k];
+	for (uint32_t i = 0; i < img->tile_count; i++) {
+		bool any = false;
+		for (int b = 0; b < VOLUME_TILE_BYTES; b++)
+			any |= img->tiles[(size_t)i * VOLUME_TILE_BYTES + b] != 0;
+		CHECK(any);
+	}
 }
 
 typedef int (*shift_fn)(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
 
-static void check_shift_with(shift_fn shift, const struct geometry *g, int du, int dv)
+static void check_shift_with(shift_fn shift, const struct geometry *g, int du, int dv, bool few)
 {
-	struct volume *src = random_volume(g), *dst = volume_create(g);
+	struct volume *src = random_volume(g, few), *dst = volume_create(g);
 	src->seq = 77;
 	CHECK(shift(dst, src, du, dv) == 0);
 	CHECK_EQ(dst->seq, 77);
 	for (uint32_t k = 0; k < src->image_count; k++)
-		for (uint32_t v = 0; v < g->height; v++)
-			for (uint32_t u = 0; u < g->width; u++)
-				for (int c = 0; c < 3; c++) {
-					int64_t su = (int64_t)u - du, sv = (int64_t)v - dv;
-					int want = su >= 0 && sv >= 0 && su < g->width && sv < g->height
-							   ? volume_pixel(src, k, (uint32_t)su, (uint32_t)sv, c)
-							   : 0;
-					CHECK_MSG(volume_pixel(dst, k, u, v, c) == want, "shift %d,%d image %u (%u,%u)",
-						  du, dv, k, u, v);
-				}
-	/* Only tiles with something lit are stored; the padding stays dark. */
-	for (uint32_t k = 0; k < dst->image_count; k++) {
-		const struct volume_image *img = &dst->images[k];
-		for (uint32_t i = 0; i < img->tile_count; i++) {
-			bool any = false;
-			for (int b = 0; b < VOLUME_TILE_BYTES; b++)
-				any |= img->tiles[(size_t)i * VOLUME_TILE_BYTES + b] != 0;
-			CHECK(any);
-		}
-	}
+		check_image_shifted(dst, src, k, du, dv);
 	volume_destroy(src);
 	volume_destroy(dst);
 }
@@ -145,8 +158,11 @@ static void check_shift_with(shift_fn shift, const struct geometry *g, int du, i
 /* volume_shift() (AVX2 where the CPU has it) and the scalar one. */
 static void check_shift(const struct geometry *g, int du, int dv)
 {
-	check_shift_with(volume_shift, g, du, dv);
-	check_shift_with(volume_shift_scalar, g, du, dv);
+	check_shift_with(volume_shift, g, du, dv, false);
+	check_shift_with(volume_shift_scalar, g, du, dv, false);
+	/* A few tiles each, so that a result tile no stored one reaches
+	 * would be missed (the shift makes only those some tile reaches). */
+	check_shift_with(volume_shift, g, du, dv, true);
 }
 
 static void test_shift(void)
@@ -170,10 +186,82 @@ static void test_shift(void)
 	volume_destroy(b);
 }
 
+/* Whether image k of a and of b hold the same tiles. */
+static bool same_image(const struct volume *a, const struct volume *b, uint32_t k)
+{
+	const struct volume_image *x = &a->images[k], *y = &b->images[k];
+	return x->tile_count == y->tile_count && !memcmp(x->mask, y->mask, a->mask_bytes) &&
+	       !memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES);
+}
+
+#define UPDATE_DSTS 3
+
+/* What the update test knows of each volume passed round: the version of
+ * each source image it holds, and the offset epoch it was shifted in. */
+struct held {
+	struct volume *vol;
+	uint32_t ver[8], epoch;
+};
+
+/* volume_shift_update() into volumes passed round, as the pipeline does,
+ * while the source's images change (new stamps, or none) and the offset
+ * moves now and then: each result is the source shifted, just the images
+ * not already there are shifted, and equal stamps mean equal images. */
+static void test_shift_update(void)
+{
+	struct geometry g = { .width = 100, .height = 72, .images_per_rev = 8, .half_height = 1, .rpm = 600 };
+	struct volume *src = random_volume(&g, false);
+	struct volume_shift_memo *m = volume_shift_memo_create(src->image_count);
+	CHECK(m != NULL && src->image_count == 8);
+	uint32_t ver[8] = { 0 }, epoch = 1;
+	for (uint32_t k = 0; k < 8; k++)
+		src->images[k].stamp = volume_new_stamp();
+	struct held d[UPDATE_DSTS];
+	for (unsigned i = 0; i < UPDATE_DSTS; i++)
+		d[i] = (struct held){ .vol = volume_create(&g) };
+	int du = 3, dv = -2;
+	for (unsigned round = 0; round < 60; round++) {
+		if (round % 17 == 16) { /* the calibration moves */
+			du = (int)(next() % 80) - 40, dv = (int)(next() % 80) - 40;
+			epoch++;
+		}
+		for (unsigned n = next() % 3; n > 0; n--) {
+			uint32_t k = next() % 8;
+			fill_image(src, k, next() % 2);
+			src->images[k].stamp = next() % 5 ? volume_new_stamp() : 0; /* 0: not known */
+			ver[k]++;
+		}
+		struct held *h = &d[round % UPDATE_DSTS];
+		int want = 0;
+		for (uint32_t k = 0; k < 8; k++)
+			want += !src->images[k].stamp || h->ver[k] != ver[k] || h->epoch != epoch;
+		int got = volume_shift_update(h->vol, src, du, dv, m);
+		CHECK_MSG(got == want, "round %u: %d images shifted, %d changed", round, got, want);
+		memcpy(h->ver, ver, sizeof(ver));
+		h->epoch = epoch;
+		for (uint32_t k = 0; k < 8; k++) {
+			check_image_shifted(h->vol, src, k, du, dv);
+			CHECK((h->vol->images[k].stamp != 0) == (src->images[k].stamp != 0));
+			for (unsigned i = 0; i < UPDATE_DSTS; i++)
+				if (h->vol->images[k].stamp && d[i].vol->images[k].stamp == h->vol->images[k].stamp)
+					CHECK_MSG(same_image(h->vol, d[i].vol, k), "round %u image %u", round, k);
+		}
+	}
+	struct volume_shift_memo *other = volume_shift_memo_create(4);
+	CHECK(volume_shift_update(d[0].vol, src, 1, 1, other) == -EINVAL);
+	CHECK(volume_shift_update(src, src, 1, 1, m) == -EINVAL);
+	volume_shift_memo_destroy(other);
+	volume_shift_memo_destroy(m);
+	for (unsigned i = 0; i < UPDATE_DSTS; i++)
+		volume_destroy(d[i].vol);
+	volume_destroy(src);
+}
+
 int main(void)
 {
 	test_keys();
 	test_transform();
 	test_shift();
+	test_shift_update();
 	return check_done();
 }
