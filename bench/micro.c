@@ -114,36 +114,19 @@ static struct volume *random_fill(const struct geometry *g, double fill)
 	return src;
 }
 
-/* Call i of the update series: image i of src changed (a new stamp),
- * shifted into dst[i % 3]. */
-static int update_one(struct volume **dst, struct volume *src, int32_t du, int32_t dv, struct volume_shift_memo *m,
-		      int i)
+double micro_shift_ms(const struct geometry *g, double fill, int32_t du, int32_t dv, int runs, uint64_t *tiles)
 {
-	src->images[(uint32_t)i % src->image_count].stamp = volume_new_stamp();
-	return volume_shift_update(dst[i % 3], src, du, dv, m) < 0;
-}
-
-double micro_shift_ms(const struct geometry *g, double fill, int32_t du, int32_t dv, int runs, bool one_changed,
-		      uint64_t *tiles)
-{
-	struct volume *src = random_fill(g, fill), *dst[3] = { volume_create(g), volume_create(g), volume_create(g) };
-	struct volume_shift_memo *m = src ? volume_shift_memo_create(src->image_count) : NULL;
-	int err = !src || !dst[0] || !dst[1] || !dst[2] || !m || runs < 1 || runs > MAX_RUNS;
-	for (uint32_t k = 0; !err && k < src->image_count; k++)
-		src->images[k].stamp = volume_new_stamp();
-	for (int i = 0; one_changed && !err && i < 3; i++) /* each of them filled */
-		err = update_one(dst, src, du, dv, m, i);
+	struct volume *src = random_fill(g, fill), *dst = volume_create(g);
+	int err = !src || !dst || runs < 1 || runs > MAX_RUNS;
 	double ms[MAX_RUNS];
 	for (int i = 0; !err && i < runs; i++) {
 		int64_t t0 = now_ns();
-		err = one_changed ? update_one(dst, src, du, dv, m, i + 3) : volume_shift(dst[0], src, du, dv) < 0;
+		err = volume_shift(dst, src, du, dv) < 0;
 		ms[i] = (double)(now_ns() - t0) / 1e6;
 	}
 	if (!err)
 		*tiles = volume_tile_count(src);
-	volume_shift_memo_destroy(m);
 	volume_destroy(src);
-	for (int i = 0; i < 3; i++)
-		volume_destroy(dst[i]);
+	volume_destroy(dst);
 	return err ? -1 : median(ms, runs);
 }

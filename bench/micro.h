@@ -5,7 +5,6 @@
 #ifndef SPINDLE_BENCH_MICRO_H
 #define SPINDLE_BENCH_MICRO_H
 
-#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -24,12 +23,8 @@ double micro_halftone_gbps(halftone_fn fn, uint32_t tiles, int runs);
 /* volume_shift() (the calibration's axis offset) of a volume of geometry g
  * whose images each hold every tile with probability fill (random bits),
  * by (du, dv); median of runs, in ms per volume, and the volume's stored
- * tiles in *tiles. With one_changed, volume_shift_update() instead, into
- * three volumes passed round, after a stamp of one image of the source
- * changes (as the pipeline's calibrated path shifts the object cache's
- * compositions). Negative when out of memory. */
+ * tiles in *tiles. Negative when out of memory. */
 struct geometry;
-double micro_shift_ms(const struct geometry *g, double fill, int32_t du, int32_t dv, int runs, bool one_changed,
-		      uint64_t *tiles);
+double micro_shift_ms(const struct geometry *g, double fill, int32_t du, int32_t dv, int runs, uint64_t *tiles);
 
 #endif

@@ -218,26 +218,6 @@ int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32
  * bit for bit: for tests and benchmarks. */
 int volume_shift_scalar(struct volume *dst, const struct volume *src, int32_t du, int32_t dv);
 
-/* What volume_shift_update() remembers from one call to the next, for
- * volumes of image_count images: per image, the stamp of the source image
- * it last shifted and the stamp it gave the result. NULL + errno. */
-struct volume_shift_memo;
-struct volume_shift_memo *volume_shift_memo_create(uint32_t image_count);
-/* Accepts NULL. */
-void volume_shift_memo_destroy(struct volume_shift_memo *m);
-/* volume_shift() for a source whose images carry stamps (the object
- * cache's compositions: an image keeps its stamp while it is unchanged),
- * into one of volumes passed round: an image of dst that already holds
- * the shift of src's image (its stamp is the one m gave that shift, of
- * the same source stamp by the same offset) is left as it is; the others
- * are shifted and take the stamp m gives the shift of their source, the
- * same in every dst, so that an upload against another of them skips
- * comparing them (projwire.h). Images of src with stamp 0 are always
- * shifted, and their results have stamp 0. The images shifted, or
- * -ENOMEM/-EINVAL (m then forgets what it knew). */
-int volume_shift_update(struct volume *dst, const struct volume *src, int32_t du, int32_t dv,
-			struct volume_shift_memo *m);
-
 /* Bytes of image k if stored dense: 3 planes of H rows of ceil(W/8). */
 size_t volume_dense_image_bytes(const struct volume *vol);
 

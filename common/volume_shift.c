@@ -2,8 +2,7 @@
  * offset), tile by tile: each tile of the result takes its rows from at
  * most four tiles of the source, two across and two down, and only the
  * result tiles some stored source tile reaches are made, so that a shift
- * costs the source's tiles. volume_shift_update(): the same into volumes
- * passed round, leaving the images one already holds (their stamps). */
+ * costs the source's tiles. */
 #include <errno.h>
 #include <stdbool.h>
 #include <stdlib.h>
@@ -315,87 +314,4 @@ int volume_shift(struct volume *dst, const struct volume *src, int32_t du, int32
 int volume_shift_scalar(struct volume *dst, const struct volume *src, int32_t du, int32_t dv)
 {
 	return shift_with(dst, src, du, dv, shift_plane_scalar);
-}
-
-/* Per image: the stamp of the source image last shifted (0: none known),
- * and the stamp its result was given; the offset they were shifted by. */
-struct volume_shift_memo {
-	uint32_t image_count;
-	int32_t du, dv;
-	uint64_t *src, *out;
-};
-
-struct volume_shift_memo *volume_shift_memo_create(uint32_t image_count)
-{
-	struct volume_shift_memo *m = calloc(1, sizeof(*m));
-	if (!m)
-		return NULL;
-	m->image_count = image_count;
-	m->src = calloc(image_count ? image_count : 1, sizeof(*m->src));
-	m->out = calloc(image_count ? image_count : 1, sizeof(*m->out));
-	if (!m->src || !m->out) {
-		volume_shift_memo_destroy(m);
-		return NULL;
-	}
-	return m;
-}
-
-void volume_shift_memo_destroy(struct volume_shift_memo *m)
-{
-	if (!m)
-		return;
-	free(m->src);
-	free(m->out);
-	free(m);
-}
-
-/* Whether image k of dst is the shift of image k of src that m knows:
- * the same source (its stamp), and the result m stamped. */
-static bool memo_holds(const struct volume_shift_memo *m, uint32_t k, const struct volume *dst,
-		       const struct volume *src)
-{
-	uint64_t from = src->images[k].stamp;
-	return from && m->src[k] == from && dst->images[k].stamp == m->out[k];
-}
-
-/* The stamp of image k's new shift: the one m gave the shift of the same
- * source (the same contents), else a new one; 0 when the source has none. */
-static uint64_t memo_stamp(struct volume_shift_memo *m, uint32_t k, uint64_t from)
-{
-	if (!from || m->src[k] != from) {
-		m->src[k] = from;
-		m->out[k] = from ? volume_new_stamp() : 0;
-	}
-	return m->out[k];
-}
-
-int volume_shift_update(struct volume *dst, const struct volume *src, int32_t du, int32_t dv,
-			struct volume_shift_memo *m)
-{
-	if (!same_tiling(dst, src) || m->image_count != src->image_count)
-		return -EINVAL;
-	if (m->du != du || m->dv != dv) { /* what it knows was shifted otherwise */
-		memset(m->src, 0, m->image_count * sizeof(*m->src));
-		m->du = du;
-		m->dv = dv;
-	}
-	struct shift_image s;
-	int r = shift_begin(&s, src, du, dv, best_plane());
-	if (r < 0)
-		return r;
-	int shifted = 0;
-	for (uint32_t k = 0; k < src->image_count && r == 0; k++) {
-		if (memo_holds(m, k, dst, src))
-			continue;
-		r = shift_image(dst, k, &s);
-		dst->images[k].stamp = r == 0 ? memo_stamp(m, k, src->images[k].stamp) : 0;
-		shifted++;
-	}
-	shift_end(&s);
-	dst->seq = src->seq;
-	dst->shown_ns = src->shown_ns;
-	dst->origin = 0;
-	if (r < 0) /* what it knows of this image may no longer hold */
-		memset(m->src, 0, m->image_count * sizeof(*m->src));
-	return r < 0 ? r : shifted;
 }

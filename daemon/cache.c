@@ -136,6 +136,7 @@ void cache_destroy(struct cache *c)
 	tile_set_finish(&c->since);
 	free(c->stamps);
 	volume_destroy(c->rest_vol);
+	volume_destroy(c->moved);
 	volume_destroy(c->tmp);
 	compose_destroy(c->compose);
 	free(c);
@@ -568,6 +569,16 @@ void cache_forget_orphans(struct cache *c)
 	}
 }
 
+void cache_set_offset(struct cache *c, int32_t du, int32_t dv)
+{
+	if (du == c->du && dv == c->dv)
+		return;
+	c->du = du;
+	c->dv = dv;
+	for (uint32_t i = 0; i < c->count; i++)
+		drop_volume(c, c->entries[i]); /* composed anew where it was */
+}
+
 void cache_set_budget(struct cache *c, uint64_t bytes)
 {
 	c->budget = bytes;
@@ -582,6 +593,7 @@ void cache_get_stats(const struct cache *c, struct cache_stats *out)
 		out->cached += c->entries[i]->vol || c->entries[i]->canvas;
 	out->bytes = held(c);
 	out->budget = c->budget;
-	out->working_bytes = volume_held_bytes(c->rest_vol) + volume_held_bytes(c->tmp) +
-			     volume_held_bytes(c->turned_vol) + batch_held(c->batch);
+	out->working_bytes =
+		volume_held_bytes(c->rest_vol) + volume_held_bytes(c->tmp) + volume_held_bytes(c->turned_vol) +
+		batch_held(c->batch) + (c->moved ? volume_held_bytes(c->moved) : 0);
 }

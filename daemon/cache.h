@@ -40,6 +40,14 @@
  * Many small objects to cache at once are rendered side by side on the
  * pool's workers (batch.h).
  *
+ * A calibration's axis offset (cache_set_offset()) moves every volume by
+ * whole pixels after the halftone (volume_shift()). Moving commutes with
+ * the OR, so the cache moves each part it renders (the rest, a new
+ * entry's volume, the turned objects) and keeps its entries moved: the
+ * compositions are made and patched moved, as without one, and a volume
+ * rendered whole is moved after. A new offset drops the entries' volumes
+ * (their canvases, unmoved, stay).
+ *
  * Entries stay within a byte budget (cache_set_budget()): past it the
  * least recently used entries lose their volumes and canvases. The cache
  * never composes volumes of two engines (render_stats.engine): a scene a
@@ -75,6 +83,13 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 /* Accepts NULL. */
 void cache_destroy(struct cache *c);
 
+/* The axis offset (calibration.h) every volume is to be moved by, from
+ * the next plan on (the loop's thread, before cache_plan()): du columns
+ * and dv rows, as volume_shift() moves. A change drops every entry's
+ * volume (made moved by the last), as a change of the object would: the
+ * next composition renders them and composes anew where they were and
+ * where they now are. */
+void cache_set_offset(struct cache *c, int32_t du, int32_t dv);
 /* Before a render (the loop's thread): decides, object by object of snap,
  * whether it is composed from its entry, rendered into a new one, or
  * rendered with the rest. Takes references to the vertex data of the

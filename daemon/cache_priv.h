@@ -102,6 +102,11 @@ struct cache {
 	bool whole;                     /* the last volume was rendered whole, not composed */
 	enum render_engine engine;      /* of the last composition, or of the whole render */
 	struct volume *rest_vol, *tmp;
+	/* The axis offset the parts and entries are moved by (cache_set_offset()),
+	 * and the volume a part is moved into, then exchanged with it (made
+	 * when first needed). */
+	int32_t du, dv;
+	struct volume *moved;
 	struct compose_source *sources;
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */

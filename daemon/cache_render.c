@@ -25,6 +25,49 @@ static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 	return (struct scene){ .draw_count = n, .draws = draws };
 }
 
+/* *v (one of the cache's volumes) moved by the axis offset, when there
+ * is one: shifted into c->moved, which it then exchanges with. */
+static int move_part(struct cache *c, struct volume **v)
+{
+	if (!c->du && !c->dv)
+		return 0;
+	if (!c->moved && !(c->moved = volume_create(&c->geom)))
+		return -ENOMEM;
+	int err = volume_shift(c->moved, *v, c->du, c->dv);
+	if (err < 0)
+		return err;
+	struct volume *t = *v;
+	*v = c->moved;
+	c->moved = t;
+	return 0;
+}
+
+/* The scene rendered into out, moved by the axis offset. */
+static int render_moved(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
+{
+	if (!c->du && !c->dv)
+		return render_volume(r, scene, out);
+	int err = render_volume(r, scene, c->tmp);
+	return err < 0 ? err : volume_shift(out, c->tmp, c->du, c->dv);
+}
+
+/* New entry i's volume (rendered side by side, coded) moved by the axis
+ * offset, when there is one. */
+static int move_created(struct cache *c, uint32_t i)
+{
+	if (!c->du && !c->dv)
+		return 0;
+	int err = rle_volume_decode(c->created[i], c->tmp);
+	if (err == 0)
+		err = move_part(c, &c->tmp);
+	struct rle_volume *moved = err == 0 ? rle_volume_encode(c->tmp) : NULL;
+	if (!moved)
+		return err < 0 ? err : -ENOMEM;
+	rle_volume_free(c->created[i]);
+	c->created[i] = moved;
+	return 0;
+}
+
 /* The canvases to make (each object's draws with turn and lift 0, rendered
  * up to the halftone), then every turned object composed at its turn and lift into
  * c->turned_vol (the CPU renderer's halftone: RENDER_ENGINE_CPU). */
@@ -62,6 +105,8 @@ static int render_turned(struct cache *c, struct renderer *r, const struct scene
 		c->turned_src[n++] = (struct turned_source){ .canvas = e->canvas, .turn = e->turn, .lift = e->lift };
 	}
 	int err = compose_turned(c->compose, c->turned_vol, c->turned_src, n);
+	if (err == 0)
+		err = move_part(c, &c->turned_vol);
 	c->turned_rendered = err == 0;
 	return err;
 }
@@ -80,7 +125,7 @@ static uint64_t scene_prims(const struct scene *s)
  * another engine made. */
 static int render_whole(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out, int64_t t0)
 {
-	int err = render_volume(r, scene, out);
+	int err = render_moved(c, r, scene, out);
 	c->whole = true;
 	c->engine = r->stats.engine;
 	c->render_us = (uint32_t)((now_ns() - t0) / 1000);
@@ -142,7 +187,7 @@ static int render_parts(struct cache *c, struct renderer *r, const struct scene 
 	c->rest_rendered = false;
 	if (c->rest_count) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
-		if ((err = render_volume(r, &rest, c->rest_vol)) < 0)
+		if ((err = render_volume(r, &rest, c->rest_vol)) < 0 || (err = move_part(c, &c->rest_vol)) < 0)
 			return err;
 		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, true);
 		c->rest_rendered = true;
@@ -154,10 +199,12 @@ static int render_parts(struct cache *c, struct renderer *r, const struct scene 
 	for (uint32_t i = 0; i < c->create_count; i++) {
 		const struct entry *e = c->creates[i];
 		struct scene one = sub_scene(scene->draws + e->first_draw, e->draw_count);
-		if (i >= n && (err = render_volume(r, &one, c->tmp)) < 0)
+		if (i >= n && ((err = render_volume(r, &one, c->tmp)) < 0 || (err = move_part(c, &c->tmp)) < 0))
 			return err;
 		if (i >= n && !(c->created[i] = rle_volume_encode(c->tmp)))
 			return -ENOMEM;
+		if (i < n && (err = move_created(c, i)) < 0)
+			return err;
 		c->created_by[i] = i < n ? batch_engine(c->batch) : r->stats.engine;
 		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, c->created_by[i], true);
 	}
@@ -273,7 +320,7 @@ static int render_compose(struct cache *c, struct renderer *r, const struct scen
 int cache_render(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
 	if (!c->planned)
-		return render_volume(r, scene, out);
+		return render_moved(c, r, scene, out);
 	int64_t t0 = now_ns();
 	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
 	/* Nothing from the cache; or a scene the renderer would hand to

@@ -65,33 +65,30 @@ struct pipeline {
 	struct cache *cache;
 	struct pool *pool;
 	/* The calibration (calibration.h): its transform goes into each
-	 * scene built; a render to be moved by the job's offset (job_u,
-	 * job_v, the render thread's copy) is made in unshifted and moved
-	 * into work, so unshifted keeps the render as it came (the object
-	 * cache then finds its last composition there, and hands out only
-	 * what changed). A scene is the last one rendered only under the
-	 * same calibration: building_cal is the one of building, last_cal of
-	 * last. */
+	 * scene built; its axis offset moves each volume. The object cache
+	 * moves what it renders itself (cache_set_offset()), so that it
+	 * composes and hands out moved volumes as it does unmoved ones;
+	 * without it, a render to be moved by the job's offset (job_u, job_v,
+	 * the render thread's copy) is made in unshifted and moved into work.
+	 * A scene is the last one rendered only under the same calibration:
+	 * building_cal is the one of building, last_cal of last. */
 	struct calibration calibration, building_cal, last_cal;
 	int32_t job_u, job_v;
 	struct volume *unshifted;
-	/* What the shifts into the volumes passed round made of the images
-	 * of unshifted (volume_shift_update()): an image the cache left as
-	 * it was is not shifted again into a volume that has it. */
-	struct volume_shift_memo *shifts;
 };
 
 /* The scene rendered into p->work, moved by the calibration's axis
- * offset (du, dv) when there is one (rendered into p->unshifted first).
- * On the render thread. */
+ * offset (du, dv) when there is one: by the cache (given the offset with
+ * the plan), else rendered into p->unshifted first. On the render
+ * thread. */
 static int render_job(struct pipeline *p, const struct scene *scene, int32_t du, int32_t dv)
 {
+	if (p->cache)
+		return cache_render(p->cache, p->renderer, scene, p->work);
 	struct volume *to = du || dv ? p->unshifted : p->work;
-	int r = p->cache ? cache_render(p->cache, p->renderer, scene, to) : render_volume(p->renderer, scene, to);
-	if (r == 0 && to != p->work) {
-		r = volume_shift_update(p->work, to, du, dv, p->shifts);
-		r = r < 0 ? r : 0;
-	}
+	int r = render_volume(p->renderer, scene, to);
+	if (r == 0 && to != p->work)
+		r = volume_shift(p->work, to, du, dv);
 	return r;
 }
 
@@ -219,6 +216,8 @@ static void start_render(struct pipeline *p)
 		skip_unchanged(p);
 		return;
 	}
+	if (p->cache)
+		cache_set_offset(p->cache, p->building_cal.axis_u, p->building_cal.axis_v);
 	if (p->cache && cache_plan(p->cache, p->building) < 0)
 		log_warn("object cache: out of memory planning volume %llu; rendering it whole",
 			 (unsigned long long)p->next_seq);
@@ -486,8 +485,7 @@ static int create_volumes(struct pipeline *p, const struct geometry *g)
 {
 	p->work = volume_create(g);
 	p->unshifted = volume_create(g);
-	p->shifts = p->unshifted ? volume_shift_memo_create(p->unshifted->image_count) : NULL;
-	if (!p->work || !p->unshifted || !p->shifts)
+	if (!p->work || !p->unshifted)
 		return -ENOMEM;
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++) {
 		p->content[b] = volume_create(g);
@@ -575,7 +573,6 @@ void pipeline_destroy(struct pipeline *p)
 		volume_destroy(p->content[b]);
 	volume_destroy(p->work);
 	volume_destroy(p->unshifted);
-	volume_shift_memo_destroy(p->shifts);
 	cache_destroy(p->cache);
 	pool_destroy(p->pool);
 	render_destroy(p->renderer);

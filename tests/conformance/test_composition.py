@@ -91,10 +91,10 @@ def composition_exact():
 
 @case
 def composition_exact_calibrated():
-    """With an axis offset the pipeline renders into a volume that keeps
-    the render unshifted, and moves it into the one it uploads: the cache
-    then patches its last composition there volume after volume, and what
-    is shown is still the volume rendered whole and moved, bit for bit."""
+    """With an axis offset the cache moves each part it renders and keeps
+    its entries moved (cache_set_offset()), so that it composes and patches
+    moved volumes as it does unmoved ones: what is shown is still the
+    volume rendered whole and moved, bit for bit."""
     cap_on, comp, cap_off, _ = on_and_off('axis-offset-u=3', 'axis-offset-v=-2')
     check(lit(cap_on) > 0, 'the scene lights voxels')
     check(cap_on == cap_off, 'calibrated: the composed volume is the volume rendered whole, bit for bit')

@@ -8,7 +8,9 @@
  * no deleted object once it is done (cache_forget_orphans()). One draw in
  * eight is a grid (scene.h, SCENE_GRID). The CPU renderer at two geometries; the GL
  * renderers, each against its own full render, when they run here (grids
- * drawn from their 3-D textures, objects composed as any others). */
+ * drawn from their 3-D textures, objects composed as any others). And
+ * with a calibration's axis offset that changes now and then
+ * (cache_set_offset()): every volume against the full render moved. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -302,6 +304,26 @@ static void print_totals(const struct renderer *r, uint64_t budget, const struct
 	       (unsigned long long)t->st.evictions, (unsigned long long)t->st.expired, t->stamped);
 }
 
+/* The axis offsets run() gives the cache in turn when axis_moves (a new
+ * one every AXIS_STEPS volumes): none, parts of a tile, past one, whole
+ * tiles. */
+static bool axis_moves;
+#define AXIS_STEPS 23
+static const int32_t axis_offsets[][2] = { { 3, -2 }, { 0, 0 }, { -17, 33 }, { 32, -5 } };
+
+/* The scene of w rendered whole by r into full, moved by (du, dv) through
+ * raw. */
+static void render_full(struct renderer *r, const struct world *w, struct volume *full, struct volume *raw,
+			const int32_t off[2])
+{
+	if (!off[0] && !off[1]) {
+		CHECK_EQ(render_volume(r, &w->snap.scene, full), 0);
+		return;
+	}
+	CHECK_EQ(render_volume(r, &w->snap.scene, raw), 0);
+	CHECK_EQ(volume_shift(full, raw, off[0], off[1]), 0);
+}
+
 /* steps volumes of random changes through a cache of budget bytes on r,
  * composing on pool (or on this thread: NULL), as the daemon's pipeline
  * does; each composed volume against r's full render. */
@@ -318,7 +340,9 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	 * and then one is swapped with the full render's, whose contents the
 	 * cache did not make. */
 	struct volume *outs[3] = { volume_create(g), volume_create(g), volume_create(g) }, *full = volume_create(g);
-	CHECK(outs[0] && outs[1] && outs[2] && full);
+	struct volume *raw = volume_create(g);
+	CHECK(outs[0] && outs[1] && outs[2] && full && raw);
+	static const int32_t none[2] = { 0, 0 };
 	/* What the projector's buffers hold: copies of the last volumes
 	 * handed out (stamps and all), the bases of the pipeline's uploads. */
 	struct volume *sent[4];
@@ -342,6 +366,8 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 		if (w.turns && w.obj[1].alive)
 			w.obj[1].lift = (int16_t)(abs((int)(s % 24) - 12) - 6);
 		build(&w);
+		const int32_t *off = axis_moves ? axis_offsets[s / AXIS_STEPS % 4] : none;
+		cache_set_offset(c, off[0], off[1]);
 		CHECK_EQ(cache_plan(c, &w.snap), 0);
 		struct volume *composed = outs[s % 3];
 		int err = cache_render(c, r, &w.snap.scene, composed);
@@ -359,7 +385,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 			  alive);
 		lies += stamps_against(composed, outs, sent, &same);
 		CHECK_EQ(volume_copy(sent[s % 4], composed), 0);
-		CHECK_EQ(render_volume(r, &w.snap.scene, full), 0);
+		render_full(r, &w, full, raw, off);
 		if (!rtest_same(composed, full)) {
 			if (bad++ < 5)
 				printf("  %s: step %u (%s): composed volume differs from the full render\n",
@@ -387,6 +413,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	for (int i = 0; i < 4; i++)
 		volume_destroy(sent[i]);
 	volume_destroy(full);
+	volume_destroy(raw);
 }
 
 /* Patches on a pool's workers (every one, however few its tiles): the
@@ -564,6 +591,10 @@ int main(void)
 	run(cpu, NULL, 0, 40, 3, &t); /* nothing may be cached */
 	CHECK_EQ(t.st.batched, 0);
 	CHECK_EQ(t.st.creates, 0);
+	axis_moves = true; /* composed moved, entries dropped when it changes */
+	run(cpu, pool, 64u << 20, 120, 13, &t);
+	CHECK(t.st.hits > 0 && t.st.turned > 0 && t.st.batched > 0);
+	axis_moves = false;
 	render_destroy(cpu);
 	cpu = render_cpu_create(&odd, 1);
 	CHECK(cpu != NULL);

@@ -1,8 +1,8 @@
 /* Calibration (calibration.h): keys, ranges and text; the transform's
  * turn and scale; and volume_shift() against a pixel-by-pixel shift of
  * random sparse volumes, at sizes with partial edge tiles and offsets of
- * whole tiles, parts of tiles and past the image; volume_shift_update()
- * into volumes passed round while the source changes. */
+ * whole tiles, parts of tiles and past the image, for sources with
+ * tiles everywhere and with a few. */
 #include <errno.h>
 #include <math.h>
 #include <stdbool.h>
@@ -186,82 +186,10 @@ static void test_shift(void)
 	volume_destroy(b);
 }
 
-/* Whether image k of a and of b hold the same tiles. */
-static bool same_image(const struct volume *a, const struct volume *b, uint32_t k)
-{
-	const struct volume_image *x = &a->images[k], *y = &b->images[k];
-	return x->tile_count == y->tile_count && !memcmp(x->mask, y->mask, a->mask_bytes) &&
-	       !memcmp(x->tiles, y->tiles, (size_t)x->tile_count * VOLUME_TILE_BYTES);
-}
-
-#define UPDATE_DSTS 3
-
-/* What the update test knows of each volume passed round: the version of
- * each source image it holds, and the offset epoch it was shifted in. */
-struct held {
-	struct volume *vol;
-	uint32_t ver[8], epoch;
-};
-
-/* volume_shift_update() into volumes passed round, as the pipeline does,
- * while the source's images change (new stamps, or none) and the offset
- * moves now and then: each result is the source shifted, just the images
- * not already there are shifted, and equal stamps mean equal images. */
-static void test_shift_update(void)
-{
-	struct geometry g = { .width = 100, .height = 72, .images_per_rev = 8, .half_height = 1, .rpm = 600 };
-	struct volume *src = random_volume(&g, false);
-	struct volume_shift_memo *m = volume_shift_memo_create(src->image_count);
-	CHECK(m != NULL && src->image_count == 8);
-	uint32_t ver[8] = { 0 }, epoch = 1;
-	for (uint32_t k = 0; k < 8; k++)
-		src->images[k].stamp = volume_new_stamp();
-	struct held d[UPDATE_DSTS];
-	for (unsigned i = 0; i < UPDATE_DSTS; i++)
-		d[i] = (struct held){ .vol = volume_create(&g) };
-	int du = 3, dv = -2;
-	for (unsigned round = 0; round < 60; round++) {
-		if (round % 17 == 16) { /* the calibration moves */
-			du = (int)(next() % 80) - 40, dv = (int)(next() % 80) - 40;
-			epoch++;
-		}
-		for (unsigned n = next() % 3; n > 0; n--) {
-			uint32_t k = next() % 8;
-			fill_image(src, k, next() % 2);
-			src->images[k].stamp = next() % 5 ? volume_new_stamp() : 0; /* 0: not known */
-			ver[k]++;
-		}
-		struct held *h = &d[round % UPDATE_DSTS];
-		int want = 0;
-		for (uint32_t k = 0; k < 8; k++)
-			want += !src->images[k].stamp || h->ver[k] != ver[k] || h->epoch != epoch;
-		int got = volume_shift_update(h->vol, src, du, dv, m);
-		CHECK_MSG(got == want, "round %u: %d images shifted, %d changed", round, got, want);
-		memcpy(h->ver, ver, sizeof(ver));
-		h->epoch = epoch;
-		for (uint32_t k = 0; k < 8; k++) {
-			check_image_shifted(h->vol, src, k, du, dv);
-			CHECK((h->vol->images[k].stamp != 0) == (src->images[k].stamp != 0));
-			for (unsigned i = 0; i < UPDATE_DSTS; i++)
-				if (h->vol->images[k].stamp && d[i].vol->images[k].stamp == h->vol->images[k].stamp)
-					CHECK_MSG(same_image(h->vol, d[i].vol, k), "round %u image %u", round, k);
-		}
-	}
-	struct volume_shift_memo *other = volume_shift_memo_create(4);
-	CHECK(volume_shift_update(d[0].vol, src, 1, 1, other) == -EINVAL);
-	CHECK(volume_shift_update(src, src, 1, 1, m) == -EINVAL);
-	volume_shift_memo_destroy(other);
-	volume_shift_memo_destroy(m);
-	for (unsigned i = 0; i < UPDATE_DSTS; i++)
-		volume_destroy(d[i].vol);
-	volume_destroy(src);
-}
-
 int main(void)
 {
 	test_keys();
 	test_transform();
 	test_shift();
-	test_shift_update();
 	return check_done();
 }
