@@ -305,8 +305,8 @@ static void print_totals(const struct renderer *r, uint64_t budget, const struct
 }
 
 /* The axis offsets run() gives the cache in turn when axis_moves (a new
- * one every AXIS_STEPS volumes): none, parts of a tile, past one, whole
- * tiles. */
+ * one every AXIS_STEPS volumes): parts of a tile, none, past a tile, a
+ * whole tile across. */
 static bool axis_moves;
 #define AXIS_STEPS 23
 static const int32_t axis_offsets[][2] = { { 3, -2 }, { 0, 0 }, { -17, 33 }, { 32, -5 } };
@@ -623,6 +623,12 @@ int main(void)
 		}
 		run(r, pool, 64u << 20, 60, 5 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0);
+		if (i == 0) { /* GL renders, the cache moves on the CPU */
+			axis_moves = true;
+			run(r, pool, 64u << 20, 50, 15, &t);
+			CHECK(t.st.hits > 0);
+			axis_moves = false;
+		}
 		render_destroy(r);
 		/* In the even model too: GL weights and thresholds depend on
 		 * the primitive and the image only, so composing stays exact. */
