@@ -68,8 +68,8 @@ static void bscene_free(struct bscene *b)
  * device's three buffers each comes back to be rendered into three
  * volumes after it was handed out, counted in spindled beside the dragon
  * under bench/beside). The cache then patches a volume where the last R
- * compositions changed (cache.h). 1: as the pipeline renders into one
- * volume when the calibration moves the axis (and moves each render). */
+ * compositions changed (cache.h). 1: one volume, patched where the last
+ * composition changed. */
 #define ROUND_DEFAULT 3
 #define ROUND_MAX 8
 

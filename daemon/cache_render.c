@@ -25,11 +25,17 @@ static struct scene sub_scene(const struct scene_draw *draws, uint32_t n)
 	return (struct scene){ .draw_count = n, .draws = draws };
 }
 
+/* Whether what the cache renders is moved (cache_set_offset()). */
+static bool moving(const struct cache *c)
+{
+	return c->du || c->dv;
+}
+
 /* *v (one of the cache's volumes) moved by the axis offset, when there
  * is one: shifted into c->moved, which it then exchanges with. */
 static int move_part(struct cache *c, struct volume **v)
 {
-	if (!c->du && !c->dv)
+	if (!moving(c))
 		return 0;
 	if (!c->moved && !(c->moved = volume_create(&c->geom)))
 		return -ENOMEM;
@@ -45,7 +51,7 @@ static int move_part(struct cache *c, struct volume **v)
 /* The scene rendered into out, moved by the axis offset. */
 static int render_moved(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
-	if (!c->du && !c->dv)
+	if (!moving(c))
 		return render_volume(r, scene, out);
 	int err = render_volume(r, scene, c->tmp);
 	return err < 0 ? err : volume_shift(out, c->tmp, c->du, c->dv);
@@ -55,7 +61,7 @@ static int render_moved(struct cache *c, struct renderer *r, const struct scene 
  * offset, when there is one. */
 static int move_created(struct cache *c, uint32_t i)
 {
-	if (!c->du && !c->dv)
+	if (!moving(c))
 		return 0;
 	int err = rle_volume_decode(c->created[i], c->tmp);
 	if (err == 0)

@@ -69,7 +69,8 @@ struct pipeline {
 	 * moves what it renders itself (cache_set_offset()), so that it
 	 * composes and hands out moved volumes as it does unmoved ones;
 	 * without it, a render to be moved by the job's offset (job_u, job_v,
-	 * the render thread's copy) is made in unshifted and moved into work.
+	 * the render thread's copy) is made in unshifted (NULL with the
+	 * cache) and moved into work.
 	 * A scene is the last one rendered only under the same calibration:
 	 * building_cal is the one of building, last_cal of last. */
 	struct calibration calibration, building_cal, last_cal;
@@ -484,8 +485,9 @@ static int create_cache(struct pipeline *p, const struct geometry *g)
 static int create_volumes(struct pipeline *p, const struct geometry *g)
 {
 	p->work = volume_create(g);
-	p->unshifted = volume_create(g);
-	if (!p->work || !p->unshifted)
+	/* With the cache, it moves what it renders itself (render_job()). */
+	p->unshifted = p->cfg.cache ? NULL : volume_create(g);
+	if (!p->work || (!p->cfg.cache && !p->unshifted))
 		return -ENOMEM;
 	for (uint32_t b = 0; b < MAX_BUFFERS; b++) {
 		p->content[b] = volume_create(g);

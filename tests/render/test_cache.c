@@ -324,77 +324,104 @@ static void render_full(struct renderer *r, const struct world *w, struct volume
 	CHECK_EQ(volume_shift(full, raw, off[0], off[1]), 0);
 }
 
+/* The volumes a run passes round: handed out in turn, as the pipeline
+ * passes its own (the cache patches into one only what changed since it
+ * last had it), now and then one swapped with the full render's, whose
+ * contents the cache did not make; the full render (moved through raw
+ * when there is an axis offset); and what the projector's buffers hold,
+ * copies of the last volumes handed out (stamps and all), the bases of
+ * the pipeline's uploads. */
+struct run_vols {
+	struct volume *outs[3], *full, *raw, *sent[4];
+};
+
+static void vols_create(struct run_vols *v, const struct geometry *g)
+{
+	struct volume **all[] = { &v->outs[0], &v->outs[1], &v->outs[2], &v->full,   &v->raw,
+				  &v->sent[0], &v->sent[1], &v->sent[2], &v->sent[3] };
+	for (size_t i = 0; i < sizeof(all) / sizeof(all[0]); i++)
+		CHECK((*all[i] = volume_create(g)) != NULL);
+}
+
+static void vols_destroy(struct run_vols *v)
+{
+	for (int i = 0; i < 3; i++)
+		volume_destroy(v->outs[i]);
+	for (int i = 0; i < 4; i++)
+		volume_destroy(v->sent[i]);
+	volume_destroy(v->full);
+	volume_destroy(v->raw);
+}
+
+/* Volume s's changes to w: often none (that is what gets cached),
+ * sometimes several; a turntable (the first object turns a step every
+ * volume) and a bobber (the second moves up and down a row at a time).
+ * What changed last, for messages. */
+static const char *change(struct world *w, unsigned s)
+{
+	unsigned changes = rnd() % 3 == 0 ? 1 + rnd() % 3 : 0;
+	const char *what = "unchanged";
+	for (unsigned i = 0; i < changes; i++)
+		what = mutate(w);
+	if (w->turns && w->obj[0].alive)
+		w->obj[0].turn = (uint16_t)((w->obj[0].turn + 1) % w->geom->images_per_rev);
+	if (w->turns && w->obj[1].alive)
+		w->obj[1].lift = (int16_t)(abs((int)(s % 24) - 12) - 6);
+	build(w);
+	return what;
+}
+
+/* The cache follows no more objects than w has: the world's scene holds
+ * no references, so a deleted object's data is the cache's alone, and its
+ * entry goes now. */
+static void check_followed(struct cache *c, const struct world *w, unsigned s, const char *what)
+{
+	cache_forget_orphans(c);
+	struct cache_stats now;
+	cache_get_stats(c, &now);
+	unsigned alive = 0;
+	for (int i = 0; i < MAX_OBJECTS; i++)
+		alive += w->obj[i].alive;
+	CHECK_MSG(now.objects <= alive, "step %u (%s): %u objects followed, %u alive", s, what, now.objects, alive);
+}
+
 /* steps volumes of random changes through a cache of budget bytes on r,
  * composing on pool (or on this thread: NULL), as the daemon's pipeline
  * does; each composed volume against r's full render. */
 static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned steps, uint64_t seed,
 		struct run_totals *out)
 {
+	static const int32_t none[2] = { 0, 0 };
 	const struct geometry *g = &r->geom;
 	rng_state = seed;
 	struct world w = { .geom = g, .turns = r->impl->render_canvas != NULL };
 	struct cache *c = cache_create(g, budget, pool, r->impl->render_canvas != NULL);
 	CHECK(c != NULL);
-	/* Handed out in turn, as the pipeline passes its volumes round (the
-	 * cache copies into one only what changed since it last had it); now
-	 * and then one is swapped with the full render's, whose contents the
-	 * cache did not make. */
-	struct volume *outs[3] = { volume_create(g), volume_create(g), volume_create(g) }, *full = volume_create(g);
-	struct volume *raw = volume_create(g);
-	CHECK(outs[0] && outs[1] && outs[2] && full && raw);
-	static const int32_t none[2] = { 0, 0 };
-	/* What the projector's buffers hold: copies of the last volumes
-	 * handed out (stamps and all), the bases of the pipeline's uploads. */
-	struct volume *sent[4];
-	for (int i = 0; i < 4; i++)
-		CHECK((sent[i] = volume_create(g)) != NULL);
-	unsigned lies = 0, same = 0;
+	struct run_vols v;
+	vols_create(&v, g);
+	unsigned lies = 0, same = 0, bad = 0;
 	for (int i = 0; i < MAX_OBJECTS / 2; i++)
 		create(&w, &w.obj[i]);
-	unsigned bad = 0;
 	for (unsigned s = 0; s < steps; s++) {
-		/* Often nothing changes (that is what gets cached), sometimes
-		 * several things do. */
-		unsigned changes = rnd() % 3 == 0 ? 1 + rnd() % 3 : 0;
-		const char *what = "unchanged";
-		for (unsigned i = 0; i < changes; i++)
-			what = mutate(&w);
-		/* A turntable: the first object turns a step every volume;
-		 * the second bobs up and down a row at a time. */
-		if (w.turns && w.obj[0].alive)
-			w.obj[0].turn = (uint16_t)((w.obj[0].turn + 1) % g->images_per_rev);
-		if (w.turns && w.obj[1].alive)
-			w.obj[1].lift = (int16_t)(abs((int)(s % 24) - 12) - 6);
-		build(&w);
+		const char *what = change(&w, s);
 		const int32_t *off = axis_moves ? axis_offsets[s / AXIS_STEPS % 4] : none;
 		cache_set_offset(c, off[0], off[1]);
 		CHECK_EQ(cache_plan(c, &w.snap), 0);
-		struct volume *composed = outs[s % 3];
+		struct volume *composed = v.outs[s % 3];
 		int err = cache_render(c, r, &w.snap.scene, composed);
 		cache_done(c, err);
 		CHECK_EQ(err, 0);
-		/* The world's scene holds no references: a deleted object's data
-		 * is the cache's alone, and its entry goes now. */
-		cache_forget_orphans(c);
-		struct cache_stats now;
-		cache_get_stats(c, &now);
-		unsigned alive = 0;
-		for (int i = 0; i < MAX_OBJECTS; i++)
-			alive += w.obj[i].alive;
-		CHECK_MSG(now.objects <= alive, "step %u (%s): %u objects followed, %u alive", s, what, now.objects,
-			  alive);
-		lies += stamps_against(composed, outs, sent, &same);
-		CHECK_EQ(volume_copy(sent[s % 4], composed), 0);
-		render_full(r, &w, full, raw, off);
-		if (!rtest_same(composed, full)) {
-			if (bad++ < 5)
-				printf("  %s: step %u (%s): composed volume differs from the full render\n",
-				       r->impl->name, s, what);
-		}
+		check_followed(c, &w, s, what);
+		lies += stamps_against(composed, v.outs, v.sent, &same);
+		CHECK_EQ(volume_copy(v.sent[s % 4], composed), 0);
+		render_full(r, &w, v.full, v.raw, off);
+		if (!rtest_same(composed, v.full) && bad++ < 5)
+			printf("  %s: step %u (%s): composed volume differs from the full render\n", r->impl->name, s,
+			       what);
 		if (s % 7 == 3) {
-			struct volume *next = outs[(s + 1) % 3];
-			outs[(s + 1) % 3] = full;
-			full = next;
+			struct volume *next = v.outs[(s + 1) % 3];
+			v.outs[(s + 1) % 3] = v.full;
+			v.full = next;
 		}
 	}
 	CHECK_EQ(bad, 0);
@@ -408,12 +435,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 	for (int i = 0; i < MAX_OBJECTS; i++)
 		if (w.obj[i].alive)
 			destroy(&w.obj[i]);
-	for (int i = 0; i < 3; i++)
-		volume_destroy(outs[i]);
-	for (int i = 0; i < 4; i++)
-		volume_destroy(sent[i]);
-	volume_destroy(full);
-	volume_destroy(raw);
+	vols_destroy(&v);
 }
 
 /* Patches on a pool's workers (every one, however few its tiles): the
