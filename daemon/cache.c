@@ -46,7 +46,8 @@ struct cache *cache_create(const struct geometry *geom, uint64_t budget, struct 
 	bool marks = c->tmp && tile_set_init(&c->dirty, images, tiles) == 0 &&
 		     tile_set_init(&c->since, images, tiles) == 0;
 	for (unsigned g = 0; marks && g < CHANGED_HISTORY; g++)
-		marks = tile_set_init(&c->changed[g], images, tiles) == 0;
+		marks = tile_set_init(&c->changed[g], images, tiles) == 0 &&
+			tile_set_init(&c->lit[g], images, tiles) == 0;
 	c->stamps = calloc(images ? images : 1, sizeof(*c->stamps));
 	if (!c->compose || !c->tmp || !marks || !c->stamps || !c->rest_vol || !c->turned_vol) {
 		cache_destroy(c);
@@ -131,8 +132,10 @@ void cache_destroy(struct cache *c)
 	free(c->rest);
 	free(c->sources);
 	tile_set_finish(&c->dirty);
-	for (unsigned g = 0; g < CHANGED_HISTORY; g++)
+	for (unsigned g = 0; g < CHANGED_HISTORY; g++) {
 		tile_set_finish(&c->changed[g]);
+		tile_set_finish(&c->lit[g]);
+	}
 	tile_set_finish(&c->since);
 	free(c->stamps);
 	volume_destroy(c->rest_vol);
@@ -502,18 +505,14 @@ static void keep_made(struct cache *c, bool discard)
 	}
 }
 
-/* What the new composition holds; what was rendered with the rest or
- * turned is composed anew next time wherever it was. */
+/* What the new composition holds (where the rest and the turned lit in it
+ * is remembered with it: c->lit). */
 static void mark_composition(struct cache *c)
 {
 	for (uint32_t i = 0; i < c->use_count; i++)
 		c->uses[i]->in_prev = true;
 	for (uint32_t i = 0; i < c->create_count; i++)
 		c->creates[i]->in_prev = true;
-	if (c->rest_rendered)
-		cache_add_footprint(c, &(struct compose_source){ .vol = c->rest_vol });
-	if (c->turned_rendered)
-		cache_add_footprint(c, &(struct compose_source){ .vol = c->turned_vol });
 }
 
 void cache_done(struct cache *c, int result)

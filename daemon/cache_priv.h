@@ -71,10 +71,11 @@ struct cache {
 	uint32_t count, cap;
 	/* Whether the last volume cache_render() made was composed (the
 	 * history below then leads up to it), and per image the tiles of that
-	 * composition that may change in the next: where objects left it,
-	 * where the rest was, where new ones come. No volume of it is kept:
-	 * each composition is made in the volume it is handed out in. */
-	bool prev_valid, composed, rest_rendered;
+	 * composition where entries change in the next: where they leave it,
+	 * where they come (back or new). The parts rendered anew each time (the
+	 * rest, the turned) are marked apart (lit below). No volume of a
+	 * composition is kept: each is made in the volume it is handed out in. */
+	bool prev_valid, composed;
 	struct tile_set dirty;
 	/* The plan, made by cache_plan() for cache_render(). */
 	bool planned;
@@ -110,13 +111,18 @@ struct cache {
 	struct compose_source *sources;
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */
-	/* Handing out: compositions made (gen), the tiles each of the last
-	 * CHANGED_HISTORY changed (changed[gen % CHANGED_HISTORY]), the
-	 * stamp (volume.h) of each image of the last, and the last volumes
-	 * handed out, known by the origin mark (volume.h) each got and the
-	 * composition it holds. */
+	/* Handing out: compositions made (gen); for each of the last
+	 * CHANGED_HISTORY (at gen % CHANGED_HISTORY), the tiles where its
+	 * entries changed (changed: the dirty marks above, or all when it was
+	 * made whole) and those its parts rendered anew lit (lit: the rest's
+	 * and the turned's); the stamp (volume.h) of each image of the last;
+	 * and the last volumes handed out, known by the origin mark (volume.h)
+	 * each got and the composition it holds. Composition b differs from an
+	 * earlier a only where entries changed after a up to b, or where a's
+	 * or b's rendered parts lit: what passed between them does not count
+	 * (patch_since()). */
 	uint64_t gen;
-	struct tile_set changed[CHANGED_HISTORY];
+	struct tile_set changed[CHANGED_HISTORY], lit[CHANGED_HISTORY];
 	struct tile_set since; /* work space: what changed since a volume handed out */
 	uint64_t *stamps;
 	struct handed {

@@ -149,13 +149,13 @@ struct parts {
 };
 
 static void add_part(struct cache *c, struct parts *p, struct compose_source src, enum render_engine engine,
-		     bool footprint)
+		     struct tile_set *marks)
 {
 	p->mixed |= p->engine && engine != p->engine;
 	p->engine = engine;
 	c->sources[p->n] = src;
-	if (footprint) /* new in the composition */
-		cache_add_footprint(c, &c->sources[p->n]);
+	if (marks) /* new in the composition */
+		compose_add_footprint(marks, &c->sources[p->n]);
 	p->n++;
 }
 
@@ -186,17 +186,25 @@ static uint32_t batch_creates(struct cache *c, struct renderer *r, const struct 
 	return n;
 }
 
+/* The tiles the parts rendered anew each time light in the composition
+ * about to be made (numbered c->gen + 1 by note_changes()). No volume
+ * handed out holds that one's predecessor by CHANGED_HISTORY - 1
+ * (held_composition()), whose marks these were. */
+static struct tile_set *next_lit(struct cache *c)
+{
+	return &c->lit[(c->gen + 1) % CHANGED_HISTORY];
+}
+
 /* What is rendered this time: the rest, the new entries, the turned. */
 static int render_parts(struct cache *c, struct renderer *r, const struct scene *scene, struct parts *p)
 {
 	int err;
-	c->rest_rendered = false;
+	tile_set_clear(next_lit(c));
 	if (c->rest_count) {
 		struct scene rest = sub_scene(c->rest, c->rest_count);
 		if ((err = render_volume(r, &rest, c->rest_vol)) < 0 || (err = move_part(c, &c->rest_vol)) < 0)
 			return err;
-		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, true);
-		c->rest_rendered = true;
+		add_part(c, p, (struct compose_source){ .vol = c->rest_vol }, r->stats.engine, next_lit(c));
 	}
 	uint32_t n = batch_creates(c, r, scene);
 	if (n && (err = batch_render(c->batch, c->batched, n, c->created)) < 0)
@@ -212,17 +220,18 @@ static int render_parts(struct cache *c, struct renderer *r, const struct scene 
 		if (i < n && (err = move_created(c, i)) < 0)
 			return err;
 		c->created_by[i] = i < n ? batch_engine(c->batch) : r->stats.engine;
-		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, c->created_by[i], true);
+		add_part(c, p, (struct compose_source){ .rle = c->created[i] }, c->created_by[i], &c->dirty);
 	}
 	if ((err = render_turned(c, r, scene)) < 0)
 		return err;
 	if (c->turned_rendered) /* halftoned as the CPU renderer does */
-		add_part(c, p, (struct compose_source){ .vol = c->turned_vol }, RENDER_ENGINE_CPU, true);
+		add_part(c, p, (struct compose_source){ .vol = c->turned_vol }, RENDER_ENGINE_CPU, next_lit(c));
 	return 0;
 }
 
-/* The tiles the composition about to be made may change (c->gen's
- * masks): the dirty ones, or all when it is made whole. */
+/* The composition about to be made numbered, and the tiles where its
+ * entries change noted (c->gen's marks): the dirty ones, or all when it
+ * is made whole. */
 static void note_changes(struct cache *c)
 {
 	struct tile_set *changed = &c->changed[++c->gen % CHANGED_HISTORY];
@@ -241,9 +250,14 @@ static void stamp_changes(struct cache *c, bool whole)
 {
 	for (uint32_t k = 0; whole && k < c->dirty.image_count; k++)
 		c->stamps[k] = volume_new_stamp();
-	for (uint32_t p = 0; !whole && p < c->dirty.listed; p++)
-		if (tile_set_image_any(&c->dirty, c->dirty.list[p]))
-			c->stamps[c->dirty.list[p]] = volume_new_stamp();
+	if (whole)
+		return;
+	const struct tile_set *marks[3] = { &c->dirty, &c->lit[(c->gen - 1) % CHANGED_HISTORY],
+					    &c->lit[c->gen % CHANGED_HISTORY] };
+	for (unsigned i = 0; i < 3; i++)
+		for (uint32_t p = 0; p < marks[i]->listed; p++)
+			if (tile_set_image_any(marks[i], marks[i]->list[p]))
+				c->stamps[marks[i]->list[p]] = volume_new_stamp();
 }
 
 /* The composition out holds: the one it was handed out with, when it is
@@ -258,16 +272,34 @@ static uint64_t held_composition(const struct cache *c, const struct volume *out
 	return had && c->gen - had < CHANGED_HISTORY ? had : 0;
 }
 
-/* Out patched from the n sources where the compositions after had (up
- * to c->gen) changed, which makes it the last; its patched images take
- * the last one's stamps. */
+/* Out's images stamped anew after composition had, which out holds (by
+ * stamp_changes(): where entries changed after it, and where its and the
+ * later ones' rendered parts lit), take the last composition's stamps:
+ * out now holds that one in every image. */
+static void take_stamps(const struct cache *c, uint64_t had, struct volume *out)
+{
+	for (uint64_t g = had; g <= c->gen; g++)
+		for (unsigned i = g == had; i < 2; i++) {
+			const struct tile_set *m = i ? &c->lit[g % CHANGED_HISTORY] : &c->changed[g % CHANGED_HISTORY];
+			for (uint32_t p = 0; p < m->listed; p++)
+				out->images[m->list[p]].stamp = c->stamps[m->list[p]];
+		}
+}
+
+/* Out patched from the n sources where the last composition (c->gen)
+ * may differ from composition had, which out holds: where entries changed
+ * after had, and where had's and the last's rendered parts lit (a small
+ * object moving every volume so costs two places, not one a composition
+ * between: a tile it lit and left in between is as it was). */
 static int patch_since(struct cache *c, uint64_t had, struct volume *out, unsigned n)
 {
+	tile_set_or(&c->since, &c->lit[had % CHANGED_HISTORY]);
+	tile_set_or(&c->since, &c->lit[c->gen % CHANGED_HISTORY]);
 	for (uint64_t g = had + 1; g <= c->gen; g++)
 		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
 	int err = compose_patch(c->compose, out, &c->since, c->sources, n);
-	for (uint32_t p = 0; err == 0 && p < c->since.listed; p++)
-		out->images[c->since.list[p]].stamp = c->stamps[c->since.list[p]];
+	if (err == 0)
+		take_stamps(c, had, out);
 	tile_set_clear(&c->since);
 	return err;
 }
@@ -312,7 +344,7 @@ static int render_compose(struct cache *c, struct renderer *r, const struct scen
 		return err;
 	int64_t t1 = now_ns();
 	for (uint32_t i = 0; i < c->use_count; i++)
-		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, false);
+		add_part(c, &p, (struct compose_source){ .rle = c->uses[i]->vol }, c->uses[i]->engine, NULL);
 	if (p.mixed)
 		return render_whole(c, r, scene, out, t0);
 	c->engine = p.engine;
@@ -328,7 +360,7 @@ int cache_render(struct cache *c, struct renderer *r, const struct scene *scene,
 	if (!c->planned)
 		return render_moved(c, r, scene, out);
 	int64_t t0 = now_ns();
-	c->composed = c->whole = c->rest_rendered = c->turned_rendered = false;
+	c->composed = c->whole = c->turned_rendered = false;
 	/* Nothing from the cache; or a scene the renderer would hand to
 	 * another engine whole (a GL renderer, one with a turn, or too
 	 * large), whose parts would each stay native. GL draws grids itself
