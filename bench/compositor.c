@@ -96,6 +96,7 @@ struct result {
 	unsigned n;
 	double median_ms, p99_ms, vol_s;
 	double render_ms, compose_ms; /* medians of the cache's split */
+	double tiles;                 /* and of the tiles it composed */
 	struct cache_stats st;
 };
 
@@ -117,7 +118,7 @@ struct series {
 	void *arg;
 	struct volume *out[ROUND_MAX]; /* its own, passed round (volume n into out[n % round]) */
 	unsigned round;
-	double *ms, *rms, *cms, sum_ms;
+	double *ms, *rms, *cms, *tiles, sum_ms;
 };
 
 /* Volume number frame of s into its out[frame % round]; recorded as the
@@ -149,6 +150,7 @@ static void one_volume(struct renderer *r, struct series *s, uint64_t frame, uns
 		cache_get_stats(s->cache, &st);
 		s->rms[n] = st.last_render_us / 1e3;
 		s->cms[n] = st.last_compose_us / 1e3;
+		s->tiles[n] = (double)st.last_composed;
 	}
 }
 
@@ -158,6 +160,7 @@ static void summarise(struct series *s, unsigned n, struct result *res)
 	qsort(s->ms, n, sizeof(double), cmp_double);
 	qsort(s->rms, n, sizeof(double), cmp_double);
 	qsort(s->cms, n, sizeof(double), cmp_double);
+	qsort(s->tiles, n, sizeof(double), cmp_double);
 	*res = (struct result){
 		.n = n,
 		.median_ms = s->ms[n / 2],
@@ -165,6 +168,7 @@ static void summarise(struct series *s, unsigned n, struct result *res)
 		.vol_s = n / (s->sum_ms / 1e3),
 		.render_ms = s->rms[n / 2],
 		.compose_ms = s->cms[n / 2],
+		.tiles = s->tiles[n / 2],
 	};
 	if (s->cache)
 		cache_get_stats(s->cache, &res->st);
@@ -184,8 +188,9 @@ static void measure_series(struct renderer *r, struct series *s, unsigned count,
 		s[i].ms = calloc(o->volumes, sizeof(double));
 		s[i].rms = calloc(o->volumes, sizeof(double));
 		s[i].cms = calloc(o->volumes, sizeof(double));
+		s[i].tiles = calloc(o->volumes, sizeof(double));
 		s[i].sum_ms = 0;
-		if (!s[i].ms || !s[i].rms || !s[i].cms)
+		if (!s[i].ms || !s[i].rms || !s[i].cms || !s[i].tiles)
 			abort();
 	}
 	unsigned n = 0;
@@ -208,6 +213,7 @@ static void measure_series(struct renderer *r, struct series *s, unsigned count,
 		free(s[i].ms);
 		free(s[i].rms);
 		free(s[i].cms);
+		free(s[i].tiles);
 		for (unsigned v = 0; v < s[i].round; v++)
 			volume_destroy(s[i].out[v]);
 	}
@@ -368,7 +374,7 @@ static struct opts beside_opts(const struct opts *o)
 static void cached_pair(struct bench *be, const char *what, struct bscene *with, int32_t du, int32_t dv, double full)
 {
 	struct result cached[2];
-	char alone[96], beside[96], note[160], how[64];
+	char alone[96], beside[96], note[192], how[64];
 	snprintf(alone, sizeof(alone), "%s alone", what);
 	snprintf(beside, sizeof(beside), "dragon (static) + %s", what);
 	snprintf(how, sizeof(how), du || dv ? "cache, axis offset (%d, %d)" : "cache", du, dv);
@@ -392,8 +398,9 @@ static void cached_pair(struct bench *be, const char *what, struct bscene *with,
 	int at = snprintf(note, sizeof(note), "%.0f%% of the %s's solo rate through the cache",
 			  100 * cached[1].vol_s / cached[0].vol_s, what);
 	if (full > 0)
-		snprintf(note + at, sizeof(note) - (size_t)at, ", %.0f%% of its full render",
-			 100 * cached[1].vol_s / full);
+		at += snprintf(note + at, sizeof(note) - (size_t)at, ", %.0f%% of its full render",
+			       100 * cached[1].vol_s / full);
+	snprintf(note + at, sizeof(note) - (size_t)at, "; %.0f tiles composed a volume", cached[1].tiles);
 	row(beside, how, &cached[1], note);
 	cache_destroy(s[0].cache);
 	cache_destroy(s[1].cache);

@@ -545,6 +545,8 @@ void cache_done(struct cache *c, int result)
 	c->stats.last_reused = c->use_count + c->turned_count;
 	c->stats.last_render_us = c->render_us;
 	c->stats.last_compose_us = c->compose_us;
+	c->stats.last_composed = c->composed_tiles;
+	c->stats.composed += c->composed_tiles;
 	evict_to(c, c->budget);
 }
 

@@ -111,6 +111,7 @@ struct cache {
 	struct compose_source *sources;
 	uint32_t source_cap;
 	uint32_t render_us, compose_us; /* of the last render */
+	uint64_t composed_tiles;        /* and the tiles it composed */
 	/* Handing out: compositions made (gen); for each of the last
 	 * CHANGED_HISTORY (at gen % CHANGED_HISTORY), the tiles where its
 	 * entries changed (changed: the dirty marks above, or all when it was

@@ -136,6 +136,7 @@ static int render_whole(struct cache *c, struct renderer *r, const struct scene 
 	c->engine = r->stats.engine;
 	c->render_us = (uint32_t)((now_ns() - t0) / 1000);
 	c->compose_us = 0;
+	c->composed_tiles = 0;
 	return err;
 }
 
@@ -297,6 +298,7 @@ static int patch_since(struct cache *c, uint64_t had, struct volume *out, unsign
 	tile_set_or(&c->since, &c->lit[c->gen % CHANGED_HISTORY]);
 	for (uint64_t g = had + 1; g <= c->gen; g++)
 		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
+	c->composed_tiles = tile_set_count(&c->since);
 	int err = compose_patch(c->compose, out, &c->since, c->sources, n);
 	if (err == 0)
 		take_stamps(c, had, out);
@@ -320,6 +322,7 @@ static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
 	if (had) {
 		err = patch_since(c, had, out, n);
 	} else {
+		c->composed_tiles = (uint64_t)out->image_count * volume_tiles_per_image(out);
 		err = compose_volumes(c->compose, out, c->sources, n);
 		for (uint32_t k = 0; err == 0 && k < out->image_count; k++)
 			out->images[k].stamp = c->stamps[k];

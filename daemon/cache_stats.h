@@ -19,11 +19,13 @@ struct cache_stats {
 	uint64_t invalidations; /* cached volumes dropped because their object changed */
 	uint64_t evictions;     /* cached volumes dropped over the budget */
 	uint64_t expired;       /* entries dropped, their object gone from the scene */
+	uint64_t composed;      /* tiles composed into the volumes handed out, summed (not in status) */
 	/* The last volume: */
 	uint32_t last_rendered;  /* objects rendered (new entries and the rest) */
 	uint32_t last_reused;    /* objects composed from the cache */
 	uint32_t last_render_us; /* rendering them */
 	uint32_t last_compose_us;
+	uint64_t last_composed; /* tiles composed into it: all of its tiles, or those patched */
 };
 
 #endif

@@ -89,6 +89,14 @@ void tile_set_copy(struct tile_set *dst, const struct tile_set *src)
 	tile_set_or(dst, src);
 }
 
+uint64_t tile_set_count(const struct tile_set *s)
+{
+	uint64_t n = 0;
+	for (uint32_t p = 0; p < s->listed; p++)
+		n += volume_mask_count(s->mask + (size_t)s->list[p] * s->mask_bytes, s->mask_bytes);
+	return n;
+}
+
 bool tile_set_image_any(const struct tile_set *s, uint32_t k)
 {
 	return s->images[k] && !volume_all_zero(s->mask + (size_t)k * s->mask_bytes, s->mask_bytes);

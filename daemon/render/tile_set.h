@@ -35,6 +35,8 @@ void tile_set_copy(struct tile_set *dst, const struct tile_set *src);
 void tile_set_or(struct tile_set *dst, const struct tile_set *src);
 /* Image k flagged (and listed), its mask left as it is; returns the mask. */
 uint8_t *tile_set_flag(struct tile_set *s, uint32_t k);
+/* How many tiles are marked. */
+uint64_t tile_set_count(const struct tile_set *s);
 /* Whether image k has a mark (its flag, then its mask). */
 bool tile_set_image_any(const struct tile_set *s, uint32_t k);
 
