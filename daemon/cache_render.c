@@ -188,9 +188,9 @@ static uint32_t batch_creates(struct cache *c, struct renderer *r, const struct 
 }
 
 /* The tiles the parts rendered anew each time light in the composition
- * about to be made (numbered c->gen + 1 by note_changes()). No volume
- * handed out holds that one's predecessor by CHANGED_HISTORY - 1
- * (held_composition()), whose marks these were. */
+ * about to be made (numbered c->gen + 1 by note_changes()). The slot held
+ * those of composition c->gen + 1 - CHANGED_HISTORY, from which no volume
+ * is patched any more (held_composition()). */
 static struct tile_set *next_lit(struct cache *c)
 {
 	return &c->lit[(c->gen + 1) % CHANGED_HISTORY];
