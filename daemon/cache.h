@@ -69,6 +69,7 @@ struct pool;
 struct renderer;
 struct scene;
 struct snapshot;
+struct tile_set;
 struct volume;
 
 struct cache;
@@ -109,6 +110,15 @@ void cache_done(struct cache *c, int result);
  * data again, and waiting for IDLE_VOLUMES more plans would keep it (a
  * gone client's volume, say) as long as the display stays idle. */
 void cache_forget_orphans(struct cache *c);
+/* Marks in differ (empty, of the volumes' tiling) the tiles where volumes a
+ * and b may differ, when each is a volume the cache handed out, unchanged
+ * since (its origin mark), holding one of its last compositions: where
+ * objects cached changed between the two, and where what was rendered
+ * with them lit in either (as a volume handed back is patched); tiles
+ * outside are equal. Whether it could (differ untouched when not). The
+ * loop's thread, between renders: an upload's delta need not compare the
+ * rest. */
+bool cache_may_differ(const struct cache *c, const struct volume *a, const struct volume *b, struct tile_set *differ);
 
 void cache_get_stats(const struct cache *c, struct cache_stats *out);
 /* A new budget (the loop's thread): new entries are made only within it,

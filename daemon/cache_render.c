@@ -287,17 +287,33 @@ static void take_stamps(const struct cache *c, uint64_t had, struct volume *out)
 		}
 }
 
+/* set |= where compositions a <= b (both in the history) may differ:
+ * where entries changed after a up to b, and where a's and b's rendered
+ * parts lit (a small object moving every volume so counts in two places,
+ * not in one a composition between: a tile it lit and left in between is
+ * as it was). */
+static void mark_between(const struct cache *c, uint64_t a, uint64_t b, struct tile_set *set)
+{
+	tile_set_or(set, &c->lit[a % CHANGED_HISTORY]);
+	tile_set_or(set, &c->lit[b % CHANGED_HISTORY]);
+	for (uint64_t g = a + 1; g <= b; g++)
+		tile_set_or(set, &c->changed[g % CHANGED_HISTORY]);
+}
+
+bool cache_may_differ(const struct cache *c, const struct volume *a, const struct volume *b, struct tile_set *differ)
+{
+	uint64_t ga = held_composition(c, a), gb = held_composition(c, b);
+	if (!ga || !gb || differ->image_count != c->dirty.image_count || differ->mask_bytes != c->dirty.mask_bytes)
+		return false;
+	mark_between(c, ga < gb ? ga : gb, ga < gb ? gb : ga, differ);
+	return true;
+}
+
 /* Out patched from the n sources where the last composition (c->gen)
- * may differ from composition had, which out holds: where entries changed
- * after had, and where had's and the last's rendered parts lit (a small
- * object moving every volume so costs two places, not one a composition
- * between: a tile it lit and left in between is as it was). */
+ * may differ from composition had, which out holds. */
 static int patch_since(struct cache *c, uint64_t had, struct volume *out, unsigned n)
 {
-	tile_set_or(&c->since, &c->lit[had % CHANGED_HISTORY]);
-	tile_set_or(&c->since, &c->lit[c->gen % CHANGED_HISTORY]);
-	for (uint64_t g = had + 1; g <= c->gen; g++)
-		tile_set_or(&c->since, &c->changed[g % CHANGED_HISTORY]);
+	mark_between(c, had, c->gen, &c->since);
 	c->composed_tiles = tile_set_count(&c->since);
 	int err = compose_patch(c->compose, out, &c->since, c->sources, n);
 	if (err == 0)

@@ -16,6 +16,7 @@
 #include "projector.h"
 #include "render.h"
 #include "snapshot.h"
+#include "tile_set.h"
 #include "volume.h"
 
 #define MAX_BUFFERS 3
@@ -64,6 +65,7 @@ struct pipeline {
 	/* The object cache, or NULL (off), and the threads it composes on. */
 	struct cache *cache;
 	struct pool *pool;
+	struct tile_set differ; /* an upload's tiles that may differ from its base (cache_may_differ()) */
 	/* The calibration (calibration.h): its transform goes into each
 	 * scene built; its axis offset moves each volume. The object cache
 	 * moves what it renders itself (cache_set_offset()), so that it
@@ -124,11 +126,24 @@ static bool buffer_available(const struct pipeline *p, int b)
 	return b != p->shown && b != p->pending && b != p->uploaded;
 }
 
+/* The tiles where vol may differ from base, when the cache made both
+ * (cache_may_differ()); NULL: any may. Between renders only. */
+static const uint8_t *upload_differ(struct pipeline *p, const struct volume *vol, const struct volume *base)
+{
+	if (!p->cache || !base || p->busy)
+		return NULL;
+	return cache_may_differ(p->cache, base, vol, &p->differ) ? p->differ.mask : NULL;
+}
+
 /* Sends content[b] into buffer b: a delta against what b held (old),
  * when the device is known to hold that. */
 static int upload_buffer(struct pipeline *p, int b, const struct volume *old)
 {
-	int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], p->known[b] ? old : NULL);
+	const struct volume *base = p->known[b] ? old : NULL;
+	const uint8_t *differ = upload_differ(p, p->content[b], base);
+	int r = p->proj->impl->upload(p->proj, (uint32_t)b, p->content[b], base, differ);
+	if (differ)
+		tile_set_clear(&p->differ);
 	if (r < 0) {
 		p->known[b] = false;
 		if (r != -ENODEV)
@@ -479,7 +494,9 @@ static int create_cache(struct pipeline *p, const struct geometry *g)
 	if (!p->pool)
 		return -errno;
 	p->cache = cache_create(g, p->cfg.cache_budget, p->pool, p->renderer->impl->render_canvas != NULL);
-	return p->cache ? 0 : -errno;
+	if (!p->cache)
+		return -errno;
+	return tile_set_init(&p->differ, geometry_images_per_volume(g), volume_geometry_tiles(g));
 }
 
 static int create_volumes(struct pipeline *p, const struct geometry *g)
@@ -576,6 +593,7 @@ void pipeline_destroy(struct pipeline *p)
 	volume_destroy(p->work);
 	volume_destroy(p->unshifted);
 	cache_destroy(p->cache);
+	tile_set_finish(&p->differ);
 	pool_destroy(p->pool);
 	render_destroy(p->renderer);
 	pthread_mutex_destroy(&p->lock);

@@ -113,7 +113,8 @@ static bool volume_fits(const struct proj_sim *s, const struct volume *vol)
 	       vol->image_count == s->info.images_per_volume;
 }
 
-static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base)
+static int sim_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base,
+		      const uint8_t *differ)
 {
 	struct proj_sim *s = (struct proj_sim *)p;
 	struct projwire_status st;
@@ -129,7 +130,7 @@ static int sim_upload(struct projector *p, uint32_t buffer, const struct volume 
 	if (buffer == st.shown || buffer == st.pending)
 		return -EBUSY;
 	size_t size;
-	if ((r = projwire_upload_plan(vol, base, &s->plan, &size)) < 0)
+	if ((r = projwire_upload_plan(vol, base, differ, &s->plan, &size)) < 0)
 		return r;
 	if (size > s->wire_cap) {
 		uint8_t *w = realloc(s->wire, size);

@@ -270,7 +270,8 @@ static bool volume_fits(const struct proj_usb *u, const struct volume *vol)
 	       vol->image_count == u->info.images_per_volume;
 }
 
-static int usb_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base)
+static int usb_upload(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base,
+		      const uint8_t *differ)
 {
 	struct proj_usb *u = (struct proj_usb *)p;
 	if (!usbt_is_ready(u->t))
@@ -284,7 +285,7 @@ static int usb_upload(struct projector *p, uint32_t buffer, const struct volume 
 	if (u->info.version_minor < 1)
 		base = NULL; /* a 1.0 device rejects delta records */
 	size_t size;
-	int r = projwire_upload_plan(vol, base, &u->plan, &size);
+	int r = projwire_upload_plan(vol, base, differ, &u->plan, &size);
 	if (r < 0)
 		return r;
 	uint8_t *rec = usbt_out_reserve(u->t, size);

@@ -100,10 +100,13 @@ struct projector_impl {
 	 * base is what the buffer holds now as far as the caller knows (the
 	 * last volume it uploaded there, completed without error), or NULL
 	 * when unknown or empty: with a base only the tiles that differ are
-	 * sent. Returns the wire bytes queued (> 0) once queued (vol and base
-	 * need not outlive the call); -EBUSY if that buffer is not free;
-	 * -ENODEV with no device. */
-	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base);
+	 * sent. differ, with a base, may mark the tiles that may differ from
+	 * it (projwire_upload_plan(): a mask per image; NULL: any may), so
+	 * that the others are not compared. Returns the wire bytes queued
+	 * (> 0) once queued (vol, base and differ need not outlive the call);
+	 * -EBUSY if that buffer is not free; -ENODEV with no device. */
+	int (*upload)(struct projector *p, uint32_t buffer, const struct volume *vol, const struct volume *base,
+		      const uint8_t *differ);
 	/* Shows buffer from the next revolution start after its upload is
 	 * complete; swapped() reports it. 0; -EINVAL (no such buffer),
 	 * -EBUSY (buffer shown, or a swap pending: one at a time), -ENODATA

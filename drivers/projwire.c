@@ -450,8 +450,11 @@ void projwire_delta_begin_encode(uint8_t out[PROJWIRE_DELTA_BEGIN_SIZE], uint32_
  * them; returns how many. The one comparison of the two volumes; none
  * where the two images carry the same stamp (volume.h): the object
  * cache's compositions stamp what they change, so an image that no
- * object touched since base is not read at all. */
-static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, uint8_t *mask)
+ * object touched since base is not read at all; and, with differ (image
+ * k's mask of the tiles that may differ, or NULL), no tile it leaves out:
+ * the cache knows which tiles its compositions changed. */
+static uint32_t delta_tiles(const struct volume *vol, const struct volume *base, uint32_t k, const uint8_t *differ,
+			    uint8_t *mask)
 {
 	const struct volume_image *a = &vol->images[k], *b = &base->images[k];
 	const uint8_t *pa = a->tiles, *pb = b->tiles;
@@ -460,11 +463,11 @@ static uint32_t delta_tiles(const struct volume *vol, const struct volume *base,
 	if (a->stamp && a->stamp == b->stamp)
 		return 0;
 	for (uint32_t byte = 0; byte < vol->mask_bytes; byte++) {
-		uint8_t ma = a->mask[byte], mb = b->mask[byte];
+		uint8_t ma = a->mask[byte], mb = b->mask[byte], may = differ ? differ[byte] : 0xff;
 		for (uint32_t bits = ma | mb; bits; bits &= bits - 1) {
 			uint32_t bit = (uint32_t)__builtin_ctz(bits);
 			bool ia = (ma >> bit) & 1, ib = (mb >> bit) & 1;
-			if (ia != ib || memcmp(pa, pb, VOLUME_TILE_BYTES)) {
+			if (ia != ib || (((may >> bit) & 1) && memcmp(pa, pb, VOLUME_TILE_BYTES))) {
 				mask[byte] |= (uint8_t)(1u << bit);
 				n++;
 			}
@@ -539,7 +542,8 @@ void projwire_delta_free(struct projwire_delta *d)
 
 /* A delta when there is a base and it is the smaller form: a delta sends
  * removed tiles as zeros, so a volume unlike its base is cheaper whole. */
-int projwire_upload_plan(const struct volume *vol, const struct volume *base, struct projwire_delta *d, size_t *size)
+int projwire_upload_plan(const struct volume *vol, const struct volume *base, const uint8_t *differ,
+			 struct projwire_delta *d, size_t *size)
 {
 	*size = projwire_volume_size(vol);
 	d->delta = false;
@@ -550,7 +554,8 @@ int projwire_upload_plan(const struct volume *vol, const struct volume *base, st
 		return r;
 	size_t n = PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE;
 	for (uint32_t k = 0; k < vol->image_count; k++) {
-		d->tiles[k] = delta_tiles(vol, base, k, d->masks + (size_t)k * vol->mask_bytes);
+		const uint8_t *may = differ ? differ + (size_t)k * vol->mask_bytes : NULL;
+		d->tiles[k] = delta_tiles(vol, base, k, may, d->masks + (size_t)k * vol->mask_bytes);
 		n += d->tiles[k] ? delta_image_size(vol, d->tiles[k]) : 0;
 	}
 	d->delta = n < *size;

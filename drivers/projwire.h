@@ -211,8 +211,12 @@ void projwire_delta_free(struct projwire_delta *d);
  * differ from base (an unchanged volume costs 48 bytes; d->delta set) or
  * the whole volume. Compares the volumes (about 0.5 ms for 9 MB at
  * perspecta), but not images whose stamps are equal and not 0
- * (volume.h). Returns 0 or -ENOMEM. */
-int projwire_upload_plan(const struct volume *vol, const struct volume *base, struct projwire_delta *d, size_t *size);
+ * (volume.h), and, when differ is given (a mask of vol's mask_bytes per
+ * image, image after image), not the contents of tiles both volumes
+ * hold that it does not mark: the caller vouches that those are equal
+ * (a tile one of them lacks is sent all the same). Returns 0 or -ENOMEM. */
+int projwire_upload_plan(const struct volume *vol, const struct volume *base, const uint8_t *differ,
+			 struct projwire_delta *d, size_t *size);
 /* Writes the upload d plans for vol (and the same base) into out, which
  * has the planned size. Returns the bytes written. */
 size_t projwire_upload_encode(const struct volume *vol, const struct volume *base, const struct projwire_delta *d,

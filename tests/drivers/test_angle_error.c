@@ -124,7 +124,7 @@ static int rig_light(struct rig *r, bool settle)
 		CHECK(r->now < give_up);
 		step(r);
 	}
-	CHECK(r->p->impl->upload(r->p, 0, r->vol, NULL) > 0);
+	CHECK(r->p->impl->upload(r->p, 0, r->vol, NULL, NULL) > 0);
 	CHECK_EQ(r->p->impl->swap(r->p, 0), 0);
 	while (!r->swaps)
 		step(r);

@@ -112,7 +112,7 @@ static void test_upload_swap(void)
 	struct projector *p = r.p;
 	int64_t period = sim_rotor_period_ns(r.rotor);
 	random_volume(r.vol, 3, 1);
-	CHECK(p->impl->upload(p, 0, r.vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 0, r.vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 2), -ENODATA); /* never written */
 	int64_t asked = now_ns();
 	CHECK_EQ(p->impl->swap(p, 0), 0);
@@ -132,18 +132,18 @@ static void test_upload_swap(void)
 	CHECK_EQ(shown->shown_ns, (uint64_t)r.ev.time_ns);
 
 	/* The shown buffer and one awaiting a swap are not writable. */
-	CHECK_EQ(p->impl->upload(p, 0, r.vol, NULL), -EBUSY);
+	CHECK_EQ(p->impl->upload(p, 0, r.vol, NULL, NULL), -EBUSY);
 	random_volume(r.vol, 5, 2);
-	CHECK(p->impl->upload(p, 1, r.vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 1, r.vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 1), 0);
-	CHECK_EQ(p->impl->upload(p, 1, r.vol, NULL), -EBUSY);
+	CHECK_EQ(p->impl->upload(p, 1, r.vol, NULL, NULL), -EBUSY);
 	CHECK_EQ(p->impl->swap(p, 2), -EBUSY); /* one swap at a time */
 	CHECK_EQ(p->impl->swap(p, 7), -EINVAL);
 	wait_swapped(p, &r.ev);
 	CHECK_EQ(r.ev.buffer, 1);
 	CHECK(volumes_equal(p->impl->shown(p), r.vol));
-	CHECK_EQ(p->impl->swap(p, 1), -EBUSY);         /* already shown */
-	CHECK(p->impl->upload(p, 0, r.vol, NULL) > 0); /* free again */
+	CHECK_EQ(p->impl->swap(p, 1), -EBUSY);               /* already shown */
+	CHECK(p->impl->upload(p, 0, r.vol, NULL, NULL) > 0); /* free again */
 
 	struct proj_sim_stats st;
 	proj_sim_get_stats(p, &st);
@@ -164,7 +164,7 @@ static void test_underrun(void)
 	struct rig r0;
 	rig_init(&r0, 0);
 	random_volume(r0.vol, 8, 3); /* every tile of 3/4 of the images */
-	CHECK(r0.p->impl->upload(r0.p, 0, r0.vol, NULL) > 0);
+	CHECK(r0.p->impl->upload(r0.p, 0, r0.vol, NULL, NULL) > 0);
 	struct proj_sim_stats st0;
 	proj_sim_get_stats(r0.p, &st0);
 	uint64_t bytes = st0.bytes; /* the wire size of this upload */
@@ -179,7 +179,7 @@ static void test_underrun(void)
 	struct projector *p = r.p;
 	CHECK_EQ(p->impl->blank(p, false), 0);
 	int64_t t0 = now_ns();
-	CHECK(p->impl->upload(p, 2, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 2, vol, NULL, NULL) > 0);
 	int64_t asked = now_ns();
 	CHECK_EQ(p->impl->swap(p, 2), 0);
 	int64_t first_start = sim_rotor_next_index(r.rotor, asked);
@@ -382,11 +382,11 @@ static void test_half_turn_swaps(void)
 
 	/* A tenth into a revolution: the next half-turn start is its middle,
 	 * the start of image N/2. */
-	CHECK(p->impl->upload(p, 0, r.vol[0], NULL) > 0);
+	CHECK(p->impl->upload(p, 0, r.vol[0], NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 0), 0);
 	CHECK_EQ(p->impl->swap_half(p, 1), -EBUSY); /* one swap at a time */
 	CHECK_EQ(p->impl->swap(p, 1), -EBUSY);
-	CHECK_EQ(p->impl->upload(p, 0, r.vol[0], NULL), -EBUSY);
+	CHECK_EQ(p->impl->upload(p, 0, r.vol[0], NULL, NULL), -EBUSY);
 	CHECK_EQ(p->impl->swap_half(p, 7), -EINVAL);
 	bool second;
 	CHECK_EQ(sim_rotor_next_half_turn(r.rotor, R + P / 10, &second), R + half);
@@ -395,20 +395,20 @@ static void test_half_turn_swaps(void)
 
 	/* Past the middle: the next one is the revolution start. */
 	half_at(&r, R + half + P / 10);
-	CHECK(p->impl->upload(p, 1, r.vol[1], NULL) > 0);
+	CHECK(p->impl->upload(p, 1, r.vol[1], NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 1), 0);
 	check_switch(&r, R + P, false, 1, r.vol[1]);
 
 	/* Right after it: the next middle. Three volumes in one revolution. */
 	half_at(&r, R + P + 1);
-	CHECK(p->impl->upload(p, 0, r.vol[2], NULL) > 0);
+	CHECK(p->impl->upload(p, 0, r.vol[2], NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 0), 0);
 	check_switch(&r, R + P + half, true, 0, r.vol[2]);
 
 	/* swap() keeps its meaning on a 1.2 device: the revolution start, not
 	 * the middle that comes first. */
 	half_at(&r, R + 2 * P + P / 10);
-	CHECK(p->impl->upload(p, 1, r.vol[3], NULL) > 0);
+	CHECK(p->impl->upload(p, 1, r.vol[3], NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 1), 0);
 	half_at(&r, R + 2 * P + half);
 	CHECK_EQ(r.ev.swaps, 3);
@@ -438,7 +438,7 @@ static void test_half_turn_underrun(void)
 	size_t size = projwire_volume_size(r.vol[0]);
 	/* Asked at R + 0.1 P, through at R + 0.7 P: the middle (R + 0.5 P) is
 	 * missed, the revolution start R + P taken. */
-	CHECK_EQ(p->impl->upload(p, 0, r.vol[0], NULL), (int)size);
+	CHECK_EQ(p->impl->upload(p, 0, r.vol[0], NULL, NULL), (int)size);
 	CHECK_EQ(p->impl->swap_half(p, 0), 0);
 	half_at(&r, R + half);
 	CHECK_EQ(r.ev.swaps, 0);
@@ -453,8 +453,8 @@ static void test_half_turn_underrun(void)
 	CHECK_EQ(volume_copy(r.vol[1], r.vol[0]), 0);
 	r.vol[1]->seq = 201;
 	half_at(&r, R + P + P / 10);
-	CHECK_EQ(p->impl->upload(p, 1, r.vol[0], NULL), (int)size);
-	CHECK_EQ(p->impl->upload(p, 2, r.vol[1], NULL), (int)size);
+	CHECK_EQ(p->impl->upload(p, 1, r.vol[0], NULL, NULL), (int)size);
+	CHECK_EQ(p->impl->upload(p, 2, r.vol[1], NULL, NULL), (int)size);
 	CHECK_EQ(p->impl->swap_half(p, 2), 0);
 	half_at(&r, R + 2 * P);
 	CHECK_EQ(r.ev.swaps, 1);
@@ -476,7 +476,7 @@ static void check_revolution_fallback(const struct geometry *g, uint8_t minor)
 	struct projector_info info;
 	CHECK_EQ(p->impl->get_info(p, &info), 0);
 	CHECK(!info.half_turn_swaps);
-	CHECK(p->impl->upload(p, 0, r.vol[0], NULL) > 0);
+	CHECK(p->impl->upload(p, 0, r.vol[0], NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 0), 0);
 	half_at(&r, r.rev + r.period / 2 + 1);
 	CHECK_EQ(r.ev.swaps, 0);

@@ -174,7 +174,7 @@ static void upload_and_show(struct rig *r, uint32_t buffer, const struct volume 
 {
 	struct projector *p = r->p;
 	int before = r->ev.swaps;
-	CHECK(p->impl->upload(p, buffer, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, buffer, vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, buffer), 0);
 	wait_for(p, &r->ev.swaps, before, 2000);
 	CHECK_EQ(r->ev.buffer, buffer);
@@ -226,7 +226,7 @@ static void test_refuse_geometry(void)
 	CHECK(!st.present);
 	struct volume *vol = volume_create(&geom);
 	CHECK(vol);
-	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), -ENODEV);
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL, NULL), -ENODEV);
 	CHECK_EQ(p->impl->blank(p, true), -ENODEV);
 	run_for(p, 700); /* a rescan passes by: still refused, never arrived */
 	CHECK_EQ(r.ev.arrived, 0);
@@ -244,19 +244,19 @@ static void test_upload_swap(void)
 	random_volume(vol, 3, 11);
 	CHECK_EQ(p->impl->swap(p, 2), -ENODATA); /* never written: a stall, told why */
 	upload_and_show(&r, 0, vol);
-	CHECK_EQ(p->impl->upload(p, 0, vol, NULL), -EBUSY); /* shown */
+	CHECK_EQ(p->impl->upload(p, 0, vol, NULL, NULL), -EBUSY); /* shown */
 	random_volume(vol, 5, 12);
-	CHECK(p->impl->upload(p, 1, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 1, vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap(p, 1), 0);
-	CHECK_EQ(p->impl->upload(p, 1, vol, NULL), -EBUSY); /* awaiting a swap */
-	CHECK_EQ(p->impl->swap(p, 2), -EBUSY);              /* one swap at a time */
+	CHECK_EQ(p->impl->upload(p, 1, vol, NULL, NULL), -EBUSY); /* awaiting a swap */
+	CHECK_EQ(p->impl->swap(p, 2), -EBUSY);                    /* one swap at a time */
 	CHECK_EQ(p->impl->swap(p, 7), -EINVAL);
 	wait_for(p, &r.ev.swaps, 1, 2000);
 	CHECK_EQ(r.ev.buffer, 1);
 	CHECK_EQ(r.ev.seq, 12);
 	CHECK(usb_emul_shows(r.emul, vol));
-	CHECK(p->impl->upload(p, 0, vol, NULL) > 0); /* free again */
-	run_for(p, 1100);                            /* a keepalive GET_STATUS refreshes the stats */
+	CHECK(p->impl->upload(p, 0, vol, NULL, NULL) > 0); /* free again */
+	run_for(p, 1100);                                  /* a keepalive GET_STATUS refreshes the stats */
 	struct projector_stats st;
 	struct usb_emul_stats es;
 	p->impl->get_stats(p, &st);
@@ -293,7 +293,7 @@ static uint64_t upload_bytes(struct rig *r, uint32_t buffer, const struct volume
 {
 	struct projector_stats st0, st;
 	r->p->impl->get_stats(r->p, &st0);
-	CHECK(r->p->impl->upload(r->p, buffer, vol, base) > 0);
+	CHECK(r->p->impl->upload(r->p, buffer, vol, base, NULL) > 0);
 	run_for(r->p, 50);
 	r->p->impl->get_stats(r->p, &st);
 	return st.bytes_sent - st0.bytes_sent;
@@ -393,7 +393,7 @@ static void check_half_turns(uint8_t minor, bool mirrored)
 		uint64_t requests = es.swaps + es.swap_halves;
 		int swaps = r.ev.swaps;
 		int64_t asked = now_ns();
-		CHECK(p->impl->upload(p, b, v, NULL) > 0);
+		CHECK(p->impl->upload(p, b, v, NULL, NULL) > 0);
 		CHECK_EQ(p->impl->swap_half(p, b), 0);
 		/* The request goes out once VOLUME_BEGIN is through, which for
 		 * a volume of one bulk transfer is all of it: no underrun. */
@@ -451,7 +451,7 @@ static void test_half_turn_refused(void)
 	struct volume *vol = volume_create(&geom);
 	CHECK(vol);
 	random_volume(vol, 2, 401);
-	CHECK(p->impl->upload(p, 0, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 0, vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 0), 0);
 	wait_for(p, &r.ev.swaps, 0, 2000);
 	CHECK_EQ(r.ev.buffer, 0);
@@ -460,7 +460,7 @@ static void test_half_turn_refused(void)
 	CHECK_EQ(p->impl->get_info(p, &info), 0);
 	CHECK(!info.half_turn_swaps);
 	random_volume(vol, 2, 402);
-	CHECK(p->impl->upload(p, 1, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 1, vol, NULL, NULL) > 0);
 	CHECK_EQ(p->impl->swap_half(p, 1), 0);
 	wait_for(p, &r.ev.swaps, 1, 2000);
 	CHECK_EQ(r.ev.seq, 402);
@@ -543,7 +543,7 @@ static void unplug_mid_upload(struct rig *r, const struct volume *vol)
 {
 	struct projector *p = r->p;
 	int gone = r->ev.gone;
-	CHECK(p->impl->upload(p, 0, vol, NULL) > 0);
+	CHECK(p->impl->upload(p, 0, vol, NULL, NULL) > 0);
 	usb_emul_unplug(r->emul);
 	wait_for(p, &r->ev.gone, gone, 2000);
 	run_for(p, 20);
@@ -558,7 +558,7 @@ static void unplug_mid_upload(struct rig *r, const struct volume *vol)
 	CHECK_EQ(es.urbs_outstanding, 0); /* every URB reaped */
 	struct projector_info info;
 	CHECK_EQ(p->impl->get_info(p, &info), -ENODEV);
-	CHECK_EQ(p->impl->upload(p, 1, vol, NULL), -ENODEV);
+	CHECK_EQ(p->impl->upload(p, 1, vol, NULL, NULL), -ENODEV);
 	CHECK_EQ(p->impl->swap(p, 1), -ENODEV);
 	CHECK_EQ(p->impl->blank(p, true), -ENODEV);
 	CHECK_EQ(p->impl->set_timing(p, 33333333, now_ns()), -ENODEV);
@@ -861,7 +861,7 @@ static int after_drop(int udev_fd)
 	CHECK(!st.present);
 	struct projector_info info;
 	CHECK_EQ(r.p->impl->get_info(r.p, &info), -ENODEV);
-	CHECK_EQ(r.p->impl->upload(r.p, 2, large, NULL), -ENODEV);
+	CHECK_EQ(r.p->impl->upload(r.p, 2, large, NULL, NULL), -ENODEV);
 	udev.gid = gid;
 	udev.mode = 0660;
 	CHECK_EQ(usb_emul_apply_node_rule(r.emul), 0);

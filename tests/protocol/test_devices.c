@@ -57,7 +57,7 @@ static void test_delta(void)
 		size_t whole = projwire_volume_size(shown[i]);
 		struct projwire_delta plan = { 0 };
 		size_t size;
-		CHECK(projwire_upload_plan(shown[i], base, &plan, &size) == 0);
+		CHECK(projwire_upload_plan(shown[i], base, NULL, &plan, &size) == 0);
 		CHECK_EQ(sent, size);
 		CHECK(plan.delta);
 		projwire_delta_free(&plan);
