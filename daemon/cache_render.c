@@ -51,10 +51,7 @@ static int move_part(struct cache *c, struct volume **v)
 /* The scene rendered into out, moved by the axis offset. */
 static int render_moved(struct cache *c, struct renderer *r, const struct scene *scene, struct volume *out)
 {
-	if (!moving(c))
-		return render_volume(r, scene, out);
-	int err = render_volume(r, scene, c->tmp);
-	return err < 0 ? err : volume_shift(out, c->tmp, c->du, c->dv);
+	return render_volume_moved(r, scene, c->tmp, out, c->du, c->dv);
 }
 
 /* New entry i's volume (rendered side by side, coded) moved by the axis

@@ -88,11 +88,7 @@ static int render_job(struct pipeline *p, const struct scene *scene, int32_t du,
 {
 	if (p->cache)
 		return cache_render(p->cache, p->renderer, scene, p->work);
-	struct volume *to = du || dv ? p->unshifted : p->work;
-	int r = render_volume(p->renderer, scene, to);
-	if (r == 0 && to != p->work)
-		r = volume_shift(p->work, to, du, dv);
-	return r;
+	return render_volume_moved(p->renderer, scene, p->unshifted, p->work, du, dv);
 }
 
 static void *render_thread(void *data)

@@ -112,6 +112,18 @@ static inline int render_volume(struct renderer *r, const struct scene *s, struc
 	return r->impl->render(r, s, out);
 }
 
+/* s rendered into out moved by (du, dv) whole pixels (volume_shift(), the
+ * calibration's axis offset): straight into out without one, else into
+ * scratch first. */
+static inline int render_volume_moved(struct renderer *r, const struct scene *s, struct volume *scratch,
+				      struct volume *out, int32_t du, int32_t dv)
+{
+	if (!du && !dv)
+		return render_volume(r, s, out);
+	int err = render_volume(r, s, scratch);
+	return err < 0 ? err : volume_shift(out, scratch, du, dv);
+}
+
 /* Accepts NULL. */
 static inline void render_destroy(struct renderer *r)
 {

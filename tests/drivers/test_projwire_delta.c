@@ -7,6 +7,7 @@
 #include "check.h"
 #include "projwire.h"
 #include "projwire_rig.h"
+#include "volume_diff.h"
 #include "volume_util.h"
 
 /* Encodes r->src as a delta against base for buffer. */
@@ -136,28 +137,6 @@ static void test_delta_stamps(void)
 	rig_finish(&r);
 }
 
-/* Marks in differ (a mask per image, zeroed) the tiles where a and b
- * differ; returns how many of those both hold (redrawn in place). */
-static uint32_t mark_differences(const struct volume *a, const struct volume *b, uint8_t *differ)
-{
-	uint32_t in_place = 0;
-	for (uint32_t k = 0; k < a->image_count; k++) {
-		const struct volume_image *x = &a->images[k], *y = &b->images[k];
-		const uint8_t *px = x->tiles, *py = y->tiles;
-		for (uint32_t t = 0; t < volume_tiles_per_image(a); t++) {
-			bool in_x = volume_tile_present(x, t), in_y = volume_tile_present(y, t);
-			bool both = in_x && in_y,
-			     differ_here = in_x != in_y || (both && memcmp(px, py, VOLUME_TILE_BYTES));
-			if (differ_here)
-				differ[(size_t)k * a->mask_bytes + t / 8] |= (uint8_t)(1u << (t % 8));
-			in_place += differ_here && both;
-			px += in_x ? VOLUME_TILE_BYTES : 0;
-			py += in_y ? VOLUME_TILE_BYTES : 0;
-		}
-	}
-	return in_place;
-}
-
 /* Told which tiles may differ (differ), the plan compares no other tile
  * both volumes hold: told every difference it plans the same delta, and
  * the buffer edited is the volume; told none it sends only the tiles one
@@ -177,7 +156,8 @@ static void test_delta_differ(void)
 	mutate_volume(r.src, base, 100, 301);
 	uint8_t *differ = calloc(bytes, 1), *none = calloc(bytes, 1);
 	CHECK(differ && none);
-	uint32_t in_place = mark_differences(r.src, base, differ), sums[3] = { 0, 0, 0 };
+	uint64_t in_place, sums[3] = { 0, 0, 0 };
+	volume_differences(r.src, base, NULL, differ, &in_place);
 	CHECK(in_place > 0);
 	struct projwire_delta plans[3] = { { 0 } };
 	const uint8_t *told[3] = { NULL, differ, none };

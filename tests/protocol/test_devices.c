@@ -10,23 +10,7 @@
 
 #include "projwire.h"
 #include "scenes.h"
-
-/* Tiles present in a or b whose content differs between them. */
-static uint64_t tiles_changed(const struct volume *a, const struct volume *b)
-{
-	uint64_t n = 0;
-	for (uint32_t k = 0; k < a->image_count; k++) {
-		const struct volume_image *x = &a->images[k], *y = &b->images[k];
-		const uint8_t *px = x->tiles, *py = y->tiles;
-		for (uint32_t t = 0; t < volume_tiles_per_image(a); t++) {
-			int ix = volume_tile_present(x, t), iy = volume_tile_present(y, t);
-			n += (ix || iy) && (ix != iy || memcmp(px, py, VOLUME_TILE_BYTES));
-			px += ix ? VOLUME_TILE_BYTES : 0;
-			py += iy ? VOLUME_TILE_BYTES : 0;
-		}
-	}
-	return n;
-}
+#include "volume_diff.h"
 
 /* A small sphere moving past a large one: each volume is sent as a delta
  * against the free buffer's content, the volume two back, and costs
@@ -61,7 +45,8 @@ static void test_delta(void)
 		CHECK_EQ(sent, size);
 		CHECK(plan.delta);
 		projwire_delta_free(&plan);
-		double tiles = (double)tiles_changed(shown[i], base) / (double)volume_tile_count(shown[i]);
+		double tiles = (double)volume_differences(shown[i], base, NULL, NULL, NULL) /
+			       (double)volume_tile_count(shown[i]);
 		double bytes = (double)sent / (double)whole;
 		printf("volume %d: %.1f%% of %llu tiles changed, %llu of %zu bytes sent (%.1f%%)\n", i, 100 * tiles,
 		       (unsigned long long)volume_tile_count(shown[i]), (unsigned long long)sent, whole, 100 * bytes);
@@ -128,7 +113,7 @@ static void test_underrun(void)
 	       (double)(f.time_ns - committed) / 1e6, (unsigned long long)st.underruns);
 	CHECK_EQ(st.underruns, 1);
 	CHECK((double)(f.time_ns - committed) >= 1.5 * period * 1e9);
-	CHECK_EQ(tiles_changed(late, ref), 0);
+	CHECK_EQ(volume_differences(late, ref, NULL, NULL, NULL), 0);
 	CHECK_EQ(volume_tile_count(late), volume_tile_count(ref));
 	volume_destroy(ref);
 	volume_destroy(late);

@@ -24,6 +24,7 @@
 #include "render.h"
 #include "rtest.h"
 #include "snapshot.h"
+#include "volume_diff.h"
 
 #define MAX_OBJECTS 24
 #define MAX_DRAWS 2
@@ -279,26 +280,6 @@ static unsigned stamp_lies(const struct volume *a, const struct volume *b, unsig
 	return n;
 }
 
-/* Tiles where a and b differ (one lacks it, or its bytes) that marks
- * (a mask per image) leaves out: an upload of a against b told so would
- * skip them, and lose the difference. */
-static unsigned differ_lies(const struct volume *a, const struct volume *b, const uint8_t *marks)
-{
-	unsigned n = 0;
-	for (uint32_t k = 0; k < a->image_count; k++) {
-		const struct volume_image *x = &a->images[k], *y = &b->images[k];
-		const uint8_t *m = marks + (size_t)k * a->mask_bytes, *px = x->tiles, *py = y->tiles;
-		for (uint32_t t = 0; t < a->mask_bytes * 8u; t++) {
-			bool in_x = (x->mask[t / 8] >> (t % 8)) & 1, in_y = (y->mask[t / 8] >> (t % 8)) & 1;
-			bool differ = in_x != in_y || (in_x && memcmp(px, py, VOLUME_TILE_BYTES));
-			n += differ && !((m[t / 8] >> (t % 8)) & 1);
-			px += in_x ? VOLUME_TILE_BYTES : 0;
-			py += in_y ? VOLUME_TILE_BYTES : 0;
-		}
-	}
-	return n;
-}
-
 static void print_totals(const struct renderer *r, uint64_t budget, const struct run_totals *t)
 {
 	const struct geometry *g = &r->geom;
@@ -318,19 +299,6 @@ static void print_totals(const struct renderer *r, uint64_t budget, const struct
 static bool axis_moves;
 #define AXIS_STEPS 23
 static const int32_t axis_offsets[][2] = { { 3, -2 }, { 0, 0 }, { -17, 33 }, { 32, -5 } };
-
-/* The scene of w rendered whole by r into full, moved by (du, dv) through
- * raw. */
-static void render_full(struct renderer *r, const struct world *w, struct volume *full, struct volume *raw,
-			const int32_t off[2])
-{
-	if (!off[0] && !off[1]) {
-		CHECK_EQ(render_volume(r, &w->snap.scene, full), 0);
-		return;
-	}
-	CHECK_EQ(render_volume(r, &w->snap.scene, raw), 0);
-	CHECK_EQ(volume_shift(full, raw, off[0], off[1]), 0);
-}
 
 /* The volumes a run passes round: handed out in turn, as the pipeline
  * passes its own (the cache patches into one only what changed since it
@@ -366,8 +334,9 @@ static void vols_destroy(struct run_vols *v)
 
 /* stamp_lies() of composed against the other volumes handed out (outs)
  * and the copies of those sent before (sent, with their origin marks),
- * and differ_lies() against the sent ones the cache says it knows
- * (counted in *hinted). */
+ * and, against the sent ones the cache says it knows (counted in
+ * *hinted), the tiles that differ where it says they do not: an upload
+ * told so would skip them, and lose the difference. */
 static unsigned upload_lies(const struct cache *c, const struct volume *composed, struct run_vols *v, unsigned *same,
 			    unsigned *hinted)
 {
@@ -377,7 +346,7 @@ static unsigned upload_lies(const struct cache *c, const struct volume *composed
 		if (!cache_may_differ(c, v->sent[i], composed, &v->differ))
 			continue;
 		*hinted += 1;
-		lies += differ_lies(composed, v->sent[i], v->differ.mask);
+		lies += (unsigned)volume_differences(composed, v->sent[i], v->differ.mask, NULL, NULL);
 		tile_set_clear(&v->differ);
 	}
 	for (int i = 0; i < 3; i++)
@@ -447,7 +416,7 @@ static void run(struct renderer *r, struct pool *pool, uint64_t budget, unsigned
 		lies += upload_lies(c, composed, &v, &same, &hinted);
 		CHECK_EQ(volume_copy(v.sent[s % 4], composed), 0);
 		v.sent[s % 4]->origin = composed->origin; /* as the buffer holds it */
-		render_full(r, &w, v.full, v.raw, off);
+		CHECK_EQ(render_volume_moved(r, &w.snap.scene, v.raw, v.full, off[0], off[1]), 0);
 		if (!rtest_same(composed, v.full) && bad++ < 5)
 			printf("  %s: step %u (%s): composed volume differs from the full render\n", r->impl->name, s,
 			       what);
