@@ -10,12 +10,14 @@
 #include "volume_diff.h"
 #include "volume_util.h"
 
-/* Encodes r->src as a delta against base for buffer. */
-static uint8_t *encode_delta(struct rig *r, const struct volume *base, uint32_t buffer, size_t *len)
+/* Encodes r->src as a delta against base for buffer, told where tiles
+ * may differ (differ, or NULL: anywhere). */
+static uint8_t *encode_delta(struct rig *r, const struct volume *base, const uint8_t *differ, uint32_t buffer,
+			     size_t *len)
 {
 	struct projwire_delta plan = { 0 };
 	size_t size;
-	CHECK(projwire_upload_plan(r->src, base, NULL, &plan, &size) == 0);
+	CHECK(projwire_upload_plan(r->src, base, differ, &plan, &size) == 0);
 	uint8_t *out = malloc(size);
 	CHECK(out);
 	*len = projwire_upload_encode(r->src, base, &plan, buffer, out);
@@ -41,7 +43,7 @@ static void test_delta(void)
 	for (int i = 0; i < 40; i++) {
 		uint32_t permille = i == 0 ? 0 : i < 20 ? 100 : 1 + rnd_below(1000);
 		mutate_volume(r.src, base, permille, 101 + (uint64_t)i);
-		wire = encode_delta(&r, base, 2, &len);
+		wire = encode_delta(&r, base, NULL, 2, &len);
 		if (permille == 0)
 			CHECK_EQ(len, PROJWIRE_DELTA_BEGIN_SIZE + PROJWIRE_END_SIZE);
 		if (permille == 100)
@@ -55,13 +57,13 @@ static void test_delta(void)
 	/* On a base the buffer does not hold: refused, the buffer untouched. */
 	mutate_volume(r.src, base, 100, 500);
 	base->seq = 77;
-	wire = encode_delta(&r, base, 2, &len);
+	wire = encode_delta(&r, base, NULL, 2, &len);
 	CHECK_EQ(projwire_decoder_feed(r.dec, wire, len), -ENODATA);
 	CHECK(r.sink.vols[2]->seq == 140);
 	/* A corrupt delta leaves the buffer invalid, never half-edited. */
 	base->seq = 140;
 	free(wire);
-	wire = encode_delta(&r, base, 2, &len);
+	wire = encode_delta(&r, base, NULL, 2, &len);
 	wire[len - 1] ^= 1;
 	CHECK_EQ(projwire_decoder_feed(r.dec, wire, len), -EILSEQ);
 	CHECK_EQ(r.sink.result[2], -EILSEQ);
@@ -116,7 +118,7 @@ static void test_delta_stamps(void)
 	for (uint32_t k = 0; k < r.src->image_count; k++)
 		CHECK_MSG(k == 3 ? plan.tiles[k] > 0 : plan.tiles[k] == 0, "image %u: %u tiles", k, plan.tiles[k]);
 	projwire_delta_free(&plan);
-	wire = encode_delta(&r, base, 1, &len);
+	wire = encode_delta(&r, base, NULL, 1, &len);
 	CHECK_EQ(feed_chunked(r.dec, wire, len, 300), 0);
 	CHECK_EQ(r.sink.result[1], 0);
 	CHECK(volumes_equal(r.sink.vols[1], r.src));
@@ -169,8 +171,7 @@ static void test_delta_differ(void)
 	CHECK_EQ(size[1], size[0]);
 	CHECK_EQ(sums[1], sums[0]);
 	CHECK_EQ(sums[2], sums[0] - in_place);
-	CHECK((wire = malloc(size[1])) != NULL);
-	len = projwire_upload_encode(r.src, base, &plans[1], 0, wire);
+	wire = encode_delta(&r, base, differ, 0, &len);
 	CHECK_EQ(feed_chunked(r.dec, wire, len, 700), 0);
 	CHECK_EQ(r.sink.result[0], 0);
 	CHECK(volumes_equal(r.sink.vols[0], r.src));
