@@ -682,20 +682,15 @@ static void test_tile_sets(void)
 	tile_set_finish(&c);
 }
 
-int main(void)
+/* The CPU renderer's runs: on two workers, new entries rendered side by
+ * side (batch.h), as in the daemon; then on this thread alone; a tight
+ * budget, none; the axis offset; an odd geometry. */
+static void runs_cpu(struct pool *pool)
 {
-	test_tile_sets();
-	test_codec();
-	for (size_t i = 0; i < sizeof(grid_values); i++)
-		grid_values[i] = (uint8_t)rnd();
 	struct geometry small = rtest_small(), odd = rtest_odd();
 	struct run_totals t;
 	struct renderer *cpu = render_cpu_create(&small, 2);
 	CHECK(cpu != NULL);
-	/* Composed on two workers, new entries rendered side by side
-	 * (batch.h), as in the daemon; then on this thread alone. */
-	struct pool *pool = pool_create(2);
-	CHECK(pool != NULL);
 	test_patch_places(cpu, pool);
 	run(cpu, pool, 64u << 20, 160, 1, &t);
 	CHECK(t.st.hits > 0 && t.st.creates > 0 && t.st.invalidations > 0 && t.st.expired > 0);
@@ -716,19 +711,33 @@ int main(void)
 	CHECK(cpu != NULL);
 	run(cpu, pool, 64u << 20, 100, 4, &t);
 	render_destroy(cpu);
-	/* The brightness models weight and thin what primitives light
-	 * (brightness.h): composing stays exact, turned canvases included. */
+}
+
+/* The brightness models weight and thin what primitives light
+ * (brightness.h): composing stays exact, turned canvases included. */
+static void runs_brightness(struct pool *pool)
+{
+	struct geometry small = rtest_small(), odd = rtest_odd();
+	struct run_totals t;
 	small.brightness = GEOMETRY_BRIGHTNESS_EVEN;
 	odd.brightness = GEOMETRY_BRIGHTNESS_UNIFORM;
 	const struct geometry *bright[] = { &small, &odd };
 	for (int i = 0; i < 2; i++) {
-		cpu = render_cpu_create(bright[i], 2);
+		struct renderer *cpu = render_cpu_create(bright[i], 2);
 		CHECK(cpu != NULL);
 		run(cpu, pool, 64u << 20, 100, 9 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0 && t.st.turned > 0);
 		render_destroy(cpu);
 	}
-	small.brightness = odd.brightness = GEOMETRY_BRIGHTNESS_EXACT;
+}
+
+/* Each GL renderer that is here against its own full render: exact, in
+ * the even model too, with the axis offset (GL renders, the cache moves
+ * on the CPU), and over its CPU fallback. */
+static void runs_gl(struct pool *pool)
+{
+	struct geometry small = rtest_small();
+	struct run_totals t;
 	const char *gl[] = { "egl", "osmesa" };
 	for (int i = 0; i < 2; i++) {
 		struct render_gl_options o = { .backend = gl[i], .threads = 2, .no_fallback = true };
@@ -739,15 +748,15 @@ int main(void)
 		}
 		run(r, pool, 64u << 20, 60, 5 + (uint64_t)i, &t);
 		CHECK(t.st.hits > 0);
-		if (i == 0) { /* GL renders, the cache moves on the CPU */
+		if (i == 0) {
 			axis_moves = true;
 			run(r, pool, 64u << 20, 50, 15, &t);
 			CHECK(t.st.hits > 0);
 			axis_moves = false;
 		}
 		render_destroy(r);
-		/* In the even model too: GL weights and thresholds depend on
-		 * the primitive and the image only, so composing stays exact. */
+		/* GL weights and thresholds depend on the primitive and the
+		 * image only, so composing stays exact. */
 		struct geometry even = small;
 		even.brightness = GEOMETRY_BRIGHTNESS_EVEN;
 		r = render_gl_create(&even, &o);
@@ -764,6 +773,19 @@ int main(void)
 		run(r, NULL, 64u << 20, 40, 7 + (uint64_t)i, &t);
 		render_destroy(r);
 	}
+}
+
+int main(void)
+{
+	test_tile_sets();
+	test_codec();
+	for (size_t i = 0; i < sizeof(grid_values); i++)
+		grid_values[i] = (uint8_t)rnd();
+	struct pool *pool = pool_create(2);
+	CHECK(pool != NULL);
+	runs_cpu(pool);
+	runs_brightness(pool);
+	runs_gl(pool);
 	pool_destroy(pool);
 	return check_done();
 }
