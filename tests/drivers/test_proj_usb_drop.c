@@ -35,6 +35,7 @@
 #include "privilege.h"
 #include "proj_usb_rig.h"
 #include "volume_util.h"
+
 struct rule_request {
 	char path[PATH_MAX];
 	uint32_t gid, mode; /* the owner is root */
