@@ -311,7 +311,6 @@ bool cache_may_differ(const struct cache *c, const struct volume *a, const struc
 static int patch_since(struct cache *c, uint64_t had, struct volume *out, unsigned n)
 {
 	mark_between(c, had, c->gen, &c->since);
-	c->composed_tiles = tile_set_count(&c->since);
 	int err = compose_patch(c->compose, out, &c->since, c->sources, n);
 	if (err == 0)
 		take_stamps(c, had, out);
@@ -335,13 +334,13 @@ static int compose_hand_out(struct cache *c, struct volume *out, unsigned n)
 	if (had) {
 		err = patch_since(c, had, out, n);
 	} else {
-		c->composed_tiles = (uint64_t)out->image_count * volume_tiles_per_image(out);
 		err = compose_volumes(c->compose, out, c->sources, n);
 		for (uint32_t k = 0; err == 0 && k < out->image_count; k++)
 			out->images[k].stamp = c->stamps[k];
 	}
 	if (err < 0)
 		return err;
+	c->composed_tiles = compose_last_tiles(c->compose);
 	out->seq = 0; /* as a render leaves it */
 	out->shown_ns = 0;
 	out->origin = atomic_fetch_add(&origins, 1) + 1;

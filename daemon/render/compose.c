@@ -57,6 +57,7 @@ struct compose {
 	size_t img_src_cap;
 	/* Per call: */
 	const struct tile_set *dirty;
+	uint64_t dirty_tiles; /* in it (compose_last_tiles()) */
 	struct volume *out;
 	const struct compose_source *src;
 	unsigned n;
@@ -492,12 +493,9 @@ static int index_sources(struct compose *c)
 
 /* Whether so few tiles are dirty (a small object moving) that waking the
  * pool's workers would cost more than patching them on this thread. */
-static bool few_dirty(const struct compose *c, const struct tile_set *dirty)
+static bool few_dirty(const struct compose *c)
 {
-	uint32_t n = 0, few = c->awake ? c->few_awake : c->few_cold;
-	for (uint32_t p = 0; p < dirty->listed && n <= few; p++)
-		n += volume_mask_count(dirty->mask + (size_t)dirty->list[p] * dirty->mask_bytes, dirty->mask_bytes);
-	return n <= few;
+	return c->dirty_tiles <= (c->awake ? c->few_awake : c->few_cold);
 }
 
 /* A patch of few tiles, on this thread: the listed images in turn. */
@@ -520,9 +518,15 @@ int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *
 	c->src = src;
 	c->n = n;
 	c->dirty = dirty;
+	c->dirty_tiles = tile_set_count(dirty);
 	if ((err = index_sources(c)) < 0)
 		return err;
-	return few_dirty(c, dirty) ? patch_alone(c, vol) : run_images(c, vol, patch_image, dirty->listed);
+	return few_dirty(c) ? patch_alone(c, vol) : run_images(c, vol, patch_image, dirty->listed);
+}
+
+uint64_t compose_last_tiles(const struct compose *c)
+{
+	return c->dirty_tiles;
 }
 
 /* A composition from nothing is a patch of an empty volume where every

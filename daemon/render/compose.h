@@ -59,6 +59,9 @@ void compose_set_few_tiles(struct compose *c, uint32_t cold, uint32_t awake);
  * then unusable). */
 int compose_patch(struct compose *c, struct volume *vol, const struct tile_set *dirty, const struct compose_source *src,
 		  unsigned n);
+/* The tiles the last compose_patch() or compose_volumes() composed (its
+ * dirty ones; every tile of the volume for the latter). */
+uint64_t compose_last_tiles(const struct compose *c);
 
 /* A canvas volume (an object rendered unturned, before the halftone)
  * shown turned about the axis by turn images, as scene.h defines a draw's
