@@ -26,20 +26,35 @@ static uint8_t *encode_delta(struct rig *r, const struct volume *base, const uin
 	return out;
 }
 
+/* The start of each delta test: the rig, and base (returned) a random
+ * volume (seed) that r->src copies, in buffer already; with stamped, each
+ * of base's images stamped first (volume_copy() gives r->src the same). */
+static struct volume *delta_start(struct rig *r, uint64_t seed, uint32_t buffer, bool stamped)
+{
+	rig_init(r);
+	struct volume *base = volume_create(&geom);
+	CHECK(base);
+	random_volume(base, 5, seed);
+	CHECK_EQ(base->images[0].stamp, 0u); /* as a writer leaves it */
+	for (uint32_t k = 0; stamped && k < base->image_count; k++)
+		base->images[k].stamp = volume_new_stamp();
+	CHECK_EQ(volume_copy(r->src, base), 0);
+	CHECK_EQ(r->src->images[3].stamp, base->images[3].stamp);
+	size_t len;
+	uint8_t *wire = encode(r, buffer, &len);
+	CHECK_EQ(feed_chunked(r->dec, wire, len, 500), 0);
+	free(wire);
+	return base;
+}
+
 /* Delta volumes (1.1): a buffer edited into the next volume is bit for bit
  * that volume, whatever the change; the bytes scale with the change. */
 static void test_delta(void)
 {
 	struct rig r;
-	rig_init(&r);
-	struct volume *base = volume_create(&geom);
-	CHECK(base);
-	random_volume(base, 5, 100);
-	CHECK_EQ(volume_copy(r.src, base), 0);
+	struct volume *base = delta_start(&r, 100, 2, false);
 	size_t len, full = projwire_volume_size(base);
-	uint8_t *wire = encode(&r, 2, &len);
-	CHECK_EQ(feed_chunked(r.dec, wire, len, 300), 0);
-	free(wire);
+	uint8_t *wire;
 	for (int i = 0; i < 40; i++) {
 		uint32_t permille = i == 0 ? 0 : i < 20 ? 100 : 1 + rnd_below(1000);
 		mutate_volume(r.src, base, permille, 101 + (uint64_t)i);
@@ -90,20 +105,10 @@ static uint32_t planned_tiles(const struct volume *src, const struct volume *bas
 static void test_delta_stamps(void)
 {
 	struct rig r;
-	rig_init(&r);
-	struct volume *base = volume_create(&geom);
-	CHECK(base);
-	random_volume(base, 5, 200);
-	CHECK_EQ(base->images[0].stamp, 0u);
-	for (uint32_t k = 0; k < base->image_count; k++)
-		base->images[k].stamp = volume_new_stamp();
+	struct volume *base = delta_start(&r, 200, 1, true);
 	CHECK(base->images[1].stamp > base->images[0].stamp);
-	CHECK_EQ(volume_copy(r.src, base), 0);
-	CHECK_EQ(r.src->images[3].stamp, base->images[3].stamp);
 	size_t len;
-	uint8_t *wire = encode(&r, 1, &len);
-	CHECK_EQ(feed_chunked(r.dec, wire, len, 500), 0);
-	free(wire);
+	uint8_t *wire;
 	/* Image 3 redrawn: its stamp goes, the others' stay. */
 	uint8_t tile[VOLUME_TILE_BYTES];
 	volume_image_clear(r.src, 3);
@@ -146,15 +151,9 @@ static void test_delta_stamps(void)
 static void test_delta_differ(void)
 {
 	struct rig r;
-	rig_init(&r);
-	struct volume *base = volume_create(&geom);
-	CHECK(base);
-	random_volume(base, 5, 300);
-	CHECK_EQ(volume_copy(r.src, base), 0);
+	struct volume *base = delta_start(&r, 300, 0, false);
 	size_t len, size[3], bytes = (size_t)base->image_count * base->mask_bytes;
-	uint8_t *wire = encode(&r, 0, &len);
-	CHECK_EQ(feed_chunked(r.dec, wire, len, 500), 0);
-	free(wire);
+	uint8_t *wire;
 	mutate_volume(r.src, base, 100, 301);
 	uint8_t *differ = calloc(bytes, 1), *none = calloc(bytes, 1);
 	CHECK(differ && none);
