@@ -138,6 +138,110 @@ static bool check_node(struct usb_emul *e, gid_t gid, mode_t mode)
 	return access(node, R_OK | W_OK) == 0;
 }
 
+/* This process becomes nobody (uid, gid) as spindled becomes its user:
+ * no capabilities, no_new_privs, no way back; the node open to it through
+ * the group. */
+static void drop_root(struct rig *r, uid_t uid, gid_t gid)
+{
+	CHECK_EQ(privilege_drop("nobody"), 0);
+	CHECK_EQ(getuid(), uid);
+	CHECK_EQ(geteuid(), uid);
+	CHECK_EQ(getgid(), gid);
+	CHECK_EQ(status_number("CapEff", 16), 0);
+	CHECK_EQ(status_number("NoNewPrivs", 10), 1);
+	CHECK(setuid(0) < 0);
+	CHECK(check_node(r->emul, gid, 0660)); /* through the group: not the owner */
+	printf("after the drop: uid %u gid %u, CapEff 0, no_new_privs; node root:%u 0660\n", (unsigned)getuid(),
+	       (unsigned)getgid(), (unsigned)gid);
+}
+
+/* Out mid-upload and in again: a new node, which udev gives the group;
+ * the unprivileged driver finds it and shows. */
+static void replug_after_drop(struct rig *r, struct volume *large, gid_t gid)
+{
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(r->p, &dbg);
+	uint64_t events = dbg.usb.hotplug_arrivals;
+	unplug_mid_upload(r, large);
+	int64_t ms = replug(r, &big);
+	CHECK(check_node(r->emul, gid, 0660));
+	large->seq = 71;
+	upload_and_show(r, 1, large);
+	proj_usb_get_debug(r->p, &dbg);
+	if (dbg.usb.hotplug) /* the uevent reached the unprivileged driver (it or a rescan opened the device) */
+		CHECK(dbg.usb.hotplug_arrivals > events);
+	printf("hot-plug after the drop: libusb events %s; re-plug found in %lld ms; arrivals seen %llu, "
+	       "removals %llu, found by rescan %llu\n",
+	       dbg.usb.hotplug ? "on" : "off", (long long)ms, (unsigned long long)dbg.usb.hotplug_arrivals,
+	       (unsigned long long)dbg.usb.hotplug_removals, (unsigned long long)dbg.usb.rescan_opens);
+}
+
+/* The control's first half: out again, and in with a node only root may
+ * open (udev's rule so), which the hot-plug event and two rescans
+ * announce and the driver cannot open: absent, nothing of it left open.
+ * Returns the opens refused. */
+static int refused_root_only(struct rig *r, struct volume *large, struct udev_link *udev)
+{
+	unplug_mid_upload(r, large);
+	CHECK_EQ(usb_emul_wait_closed(r->emul, 2000), 0); /* the driver holds nothing of it */
+	int arrived = r->ev.arrived;
+	*udev = (struct udev_link){ .fd = udev->fd, .gid = 0, .mode = 0600 };
+	CHECK_EQ(usb_emul_plug(r->emul, &big, 3, 0), 0);
+	/* libusb's hot-plug thread reads the new device's sysfs files: let it
+	 * (the driver tries nothing until run_for() below), then count the
+	 * fds, the device model's included. */
+	struct timespec settle = { .tv_nsec = 100000000 };
+	nanosleep(&settle, NULL);
+	int fds = count_fds();
+	CHECK(!check_node(r->emul, 0, 0600));
+	CHECK_EQ(errno, EACCES);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(r->p, &dbg);
+	uint64_t events = dbg.usb.hotplug_arrivals;
+	run_for(r->p, 1200); /* the hot-plug event and two rescans */
+	CHECK_EQ(r->ev.arrived, arrived);
+	proj_usb_get_debug(r->p, &dbg);
+	if (dbg.usb.hotplug)
+		CHECK(dbg.usb.hotplug_arrivals > events); /* announced, and still refused */
+	/* Each refused open left a socket of the preload library's (see
+	 * usb_emul_close_stray_sockets()), none of the driver's. */
+	int refused = usb_emul_close_stray_sockets(r->emul);
+	CHECK(refused >= 1);
+	CHECK_EQ(usb_emul_wait_closed(r->emul, 2000), 0);
+	CHECK_EQ(count_fds(), fds);
+	struct projector_stats st;
+	r->p->impl->get_stats(r->p, &st);
+	CHECK(!st.present);
+	struct projector_info info;
+	CHECK_EQ(r->p->impl->get_info(r->p, &info), -ENODEV);
+	CHECK_EQ(r->p->impl->upload(r->p, 2, large, NULL, NULL), -ENODEV);
+	return refused;
+}
+
+/* The control's second half: once udev gives the node the group, a
+ * rescan opens it and the driver shows. */
+static void granted(struct rig *r, struct volume *large, struct udev_link *udev, gid_t gid, int refused)
+{
+	int arrived = r->ev.arrived;
+	udev->gid = gid;
+	udev->mode = 0660;
+	CHECK_EQ(usb_emul_apply_node_rule(r->emul), 0);
+	CHECK(check_node(r->emul, gid, 0660));
+	int64_t ms = wait_for(r->p, &r->ev.arrived, arrived, 2000);
+	large->seq = 72;
+	upload_and_show(r, 2, large);
+	struct proj_usb_debug dbg;
+	proj_usb_get_debug(r->p, &dbg);
+	printf("root-only node after the drop: absent through 1200 ms of hot-plug and rescans (%d opens refused); "
+	       "given the group, found in %lld ms (found by rescan %llu)\n",
+	       refused, (long long)ms, (unsigned long long)dbg.usb.rescan_opens);
+	struct projector_stats st;
+	r->p->impl->get_stats(r->p, &st);
+	CHECK_EQ(st.arrivals, 3); /* at the start, after the drop, given the group */
+	CHECK_EQ(r->ev.arrived, 2);
+	CHECK_EQ(r->ev.gone, 2);
+}
+
 /* The child, as root at first: the driver open and showing, then the drop,
  * then the device out and in again, twice. Its CHECKs exit it with 1. */
 int after_drop(int udev_fd)
@@ -152,7 +256,6 @@ int after_drop(int udev_fd)
 	CHECK(large);
 	random_volume(large, 8, 1);
 	struct udev_link udev = { .fd = udev_fd, .gid = gid, .mode = 0660 };
-
 	/* As root, as spindled at its start: the projector found (its node
 	 * given the group by udev at boot) and showing. */
 	struct rig r;
@@ -164,86 +267,9 @@ int after_drop(int udev_fd)
 	/* This process goes on playing the kernel for the testbed (see
 	 * usb_emul_chown_testbed()); only the node is left to udev. */
 	CHECK_EQ(usb_emul_chown_testbed(r.emul, uid, gid), 0);
-
-	CHECK_EQ(privilege_drop("nobody"), 0);
-	CHECK_EQ(getuid(), uid);
-	CHECK_EQ(geteuid(), uid);
-	CHECK_EQ(getgid(), gid);
-	CHECK_EQ(status_number("CapEff", 16), 0);
-	CHECK_EQ(status_number("NoNewPrivs", 10), 1);
-	CHECK(setuid(0) < 0);
-	CHECK(check_node(r.emul, gid, 0660)); /* through the group: not the owner */
-	printf("after the drop: uid %u gid %u, CapEff 0, no_new_privs; node root:%u 0660\n", (unsigned)getuid(),
-	       (unsigned)getgid(), (unsigned)gid);
-
-	/* Out mid-upload and in again: a new node, which udev gives the group. */
-	struct proj_usb_debug dbg;
-	proj_usb_get_debug(r.p, &dbg);
-	uint64_t events = dbg.usb.hotplug_arrivals;
-	unplug_mid_upload(&r, large);
-	int64_t ms = replug(&r, &big);
-	CHECK(check_node(r.emul, gid, 0660));
-	large->seq = 71;
-	upload_and_show(&r, 1, large);
-	proj_usb_get_debug(r.p, &dbg);
-	if (dbg.usb.hotplug) /* the uevent reached the unprivileged driver (it or a rescan opened the device) */
-		CHECK(dbg.usb.hotplug_arrivals > events);
-	printf("hot-plug after the drop: libusb events %s; re-plug found in %lld ms; arrivals seen %llu, "
-	       "removals %llu, found by rescan %llu\n",
-	       dbg.usb.hotplug ? "on" : "off", (long long)ms, (unsigned long long)dbg.usb.hotplug_arrivals,
-	       (unsigned long long)dbg.usb.hotplug_removals, (unsigned long long)dbg.usb.rescan_opens);
-
-	/* The control: a node only root may open is announced and rescanned,
-	 * and stays absent; once udev gives it the group, a rescan opens it. */
-	unplug_mid_upload(&r, large);
-	CHECK_EQ(usb_emul_wait_closed(r.emul, 2000), 0); /* the driver holds nothing of it */
-	int arrived = r.ev.arrived;
-	udev.gid = 0;
-	udev.mode = 0600;
-	CHECK_EQ(usb_emul_plug(r.emul, &big, 3, 0), 0);
-	/* libusb's hot-plug thread reads the new device's sysfs files: let it
-	 * (the driver tries nothing until run_for() below), then count the
-	 * fds, the device model's included. */
-	struct timespec settle = { .tv_nsec = 100000000 };
-	nanosleep(&settle, NULL);
-	int fds = count_fds();
-	CHECK(!check_node(r.emul, 0, 0600));
-	CHECK_EQ(errno, EACCES);
-	proj_usb_get_debug(r.p, &dbg);
-	events = dbg.usb.hotplug_arrivals;
-	run_for(r.p, 1200); /* the hot-plug event and two rescans */
-	CHECK_EQ(r.ev.arrived, arrived);
-	proj_usb_get_debug(r.p, &dbg);
-	if (dbg.usb.hotplug)
-		CHECK(dbg.usb.hotplug_arrivals > events); /* announced, and still refused */
-	/* Each refused open left a socket of the preload library's (see
-	 * usb_emul_close_stray_sockets()), none of the driver's. */
-	int refused = usb_emul_close_stray_sockets(r.emul);
-	CHECK(refused >= 1);
-	CHECK_EQ(usb_emul_wait_closed(r.emul, 2000), 0);
-	CHECK_EQ(count_fds(), fds);
-	struct projector_stats st;
-	r.p->impl->get_stats(r.p, &st);
-	CHECK(!st.present);
-	struct projector_info info;
-	CHECK_EQ(r.p->impl->get_info(r.p, &info), -ENODEV);
-	CHECK_EQ(r.p->impl->upload(r.p, 2, large, NULL, NULL), -ENODEV);
-	udev.gid = gid;
-	udev.mode = 0660;
-	CHECK_EQ(usb_emul_apply_node_rule(r.emul), 0);
-	CHECK(check_node(r.emul, gid, 0660));
-	ms = wait_for(r.p, &r.ev.arrived, arrived, 2000);
-	large->seq = 72;
-	upload_and_show(&r, 2, large);
-	proj_usb_get_debug(r.p, &dbg);
-	printf("root-only node after the drop: absent through 1200 ms of hot-plug and rescans (%d opens refused); "
-	       "given the group, found in %lld ms (found by rescan %llu)\n",
-	       refused, (long long)ms, (unsigned long long)dbg.usb.rescan_opens);
-	r.p->impl->get_stats(r.p, &st);
-	CHECK_EQ(st.arrivals, 3); /* at the start, after the drop, given the group */
-	CHECK_EQ(r.ev.arrived, 2);
-	CHECK_EQ(r.ev.gone, 2);
-
+	drop_root(&r, uid, gid);
+	replug_after_drop(&r, large, gid);
+	granted(&r, large, &udev, gid, refused_root_only(&r, large, &udev));
 	rig_finish(&r);
 	volume_destroy(large);
 	close(udev_fd);
